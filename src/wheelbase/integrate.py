@@ -1,0 +1,509 @@
+"""Numerical integration of kinematic models, and :func:`simulate`.
+
+Every kinematic model maps its inputs to a body twist ζ = (u, v, r) that does not depend on the
+pose, so the pose obeys η̇ = J(θ)·ζ(t). The integrators below advance a pose over one step of
+length h from the twist at the start (ζ₀), the middle (ζₘ) and the end (ζ₁) of the step:
+
+============  =======================================================================  =====
+method        update                                                                   order
+============  =======================================================================  =====
+``euler``     η += h·J(θ)ζ₀ (document 002 eq. 6/7; document 000's MATLAB loop)          1
+``midpoint``  heading at mid-step: x += h·R(θ + h·rₘ/2)(uₘ, vₘ) (doc 002 eq. 8)         2
+``rk4``       classical Runge–Kutta on η̇ = J(θ)ζ(t)                                    4
+``exact``     closed-form arc (SE(2) exponential) of ζₘ held over the step              2*
+``simpson``   θ(t) integrated exactly for a quadratic yaw rate, x = ∫u cos θ − v sin θ  4
+              and y likewise by Simpson's 1/3 rule (document 001 §III/IV)
+============  =======================================================================  =====
+
+(*) ``exact`` is exact (to rounding) whenever the inputs are constant over each step — constant
+inputs and sampled input arrays, which are zero-order holds — and second order for inputs that
+vary within a step (the twist is frozen at its mid-step value).
+
+Inputs given as an array sampled at the steps are a zero-order hold: ζ₀ = ζₘ = ζ₁ = the sample
+of that step. Inputs given as a callable of time are evaluated at t, t + h/2 and t + h.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import as_float_array, check_choice, finite, positive
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import se2_exp, to_world_frame, wrap_angle
+from wheelbase.models.base import KinematicModel
+
+__all__ = ["METHODS", "SimResult", "integrate_step", "simulate", "time_grid"]
+
+METHODS: tuple[str, ...] = ("euler", "midpoint", "rk4", "exact", "simpson")
+BACKENDS: tuple[str, ...] = ("auto", "numba", "numpy")
+_METHOD_ID = {name: index for index, name in enumerate(METHODS)}
+
+InputsLike = ArrayLike | Callable[[float], ArrayLike]
+
+
+# --------------------------------------------------------------------------- NumPy reference
+def integrate_step(
+    pose: ArrayLike,
+    twist_start: ArrayLike,
+    twist_mid: ArrayLike,
+    twist_end: ArrayLike,
+    h: float,
+    method: str = "rk4",
+) -> np.ndarray:
+    """Advance poses ``(..., 3)`` by one step of ``h`` seconds (NumPy reference).
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Poses (x [m], y [m], θ [rad]) at the start of the step.
+    twist_start, twist_mid, twist_end : array_like, shape (..., 3)
+        Body twists (u [m/s], v [m/s], r [rad/s]) at t, t + h/2 and t + h.
+    h : float
+        Step length [s].
+    method : str
+        One of :data:`METHODS`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        Poses at t + h, heading wrapped to (−π, π].
+    """
+    check_choice("method", method, METHODS)
+    pose = np.asarray(pose, dtype=np.float64)
+    z0, zm, z1 = (np.asarray(z, dtype=np.float64) for z in (twist_start, twist_mid, twist_end))
+    theta = pose[..., 2]
+    if method == "euler":
+        new = pose + h * to_world_frame(theta, z0)
+    elif method == "midpoint":
+        rate = to_world_frame(theta + 0.5 * h * zm[..., 2], zm)
+        new = pose + h * rate
+    elif method == "rk4":
+        k1 = to_world_frame(theta, z0)
+        k2 = to_world_frame(theta + 0.5 * h * k1[..., 2], zm)
+        k3 = to_world_frame(theta + 0.5 * h * k2[..., 2], zm)
+        k4 = to_world_frame(theta + h * k3[..., 2], z1)
+        new = pose + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    elif method == "exact":
+        return se2_exp(pose, zm, h)
+    else:  # simpson
+        r0, rm, r1 = z0[..., 2], zm[..., 2], z1[..., 2]
+        # θ at mid-step and end from the quadratic through (r0, rm, r1): exact for such r(t).
+        theta_mid = theta + h / 24.0 * (5.0 * r0 + 8.0 * rm - r1)
+        theta_end = theta + h / 6.0 * (r0 + 4.0 * rm + r1)
+        f0 = to_world_frame(theta, z0)
+        fm = to_world_frame(theta_mid, zm)
+        f1 = to_world_frame(theta_end, z1)
+        new = pose + h / 6.0 * (f0 + 4.0 * fm + f1)
+        new[..., 2] = theta_end
+    new[..., 2] = wrap_angle(new[..., 2])
+    return new
+
+
+# --------------------------------------------------------------------------- Numba kernels
+@numba.njit(cache=True, inline="always")
+def _wrap(angle: float) -> float:
+    wrapped = math.atan2(math.sin(angle), math.cos(angle))
+    return math.pi if wrapped <= -math.pi else wrapped
+
+
+@numba.njit(cache=True, inline="always")
+def _sinc(x: float) -> float:
+    # sin(x)/x, with its Taylor series near 0 where the quotient loses precision.
+    if abs(x) < 1e-4:
+        x2 = x * x
+        return 1.0 - x2 / 6.0 + x2 * x2 / 120.0
+    return math.sin(x) / x
+
+
+@numba.njit(cache=True)
+def _step_scalar(x, y, th, u0, v0, r0, um, vm, rm, u1, v1, r1, h, method):
+    """One step for one robot; the same arithmetic as :func:`integrate_step`."""
+    if method == 0:  # euler
+        c, s = math.cos(th), math.sin(th)
+        return x + h * (c * u0 - s * v0), y + h * (s * u0 + c * v0), th + h * r0
+    if method == 1:  # midpoint
+        tm = th + 0.5 * h * rm
+        c, s = math.cos(tm), math.sin(tm)
+        return x + h * (c * um - s * vm), y + h * (s * um + c * vm), th + h * rm
+    if method == 2:  # rk4
+        c, s = math.cos(th), math.sin(th)
+        k1x, k1y = c * u0 - s * v0, s * u0 + c * v0
+        t2 = th + 0.5 * h * r0
+        c, s = math.cos(t2), math.sin(t2)
+        k2x, k2y = c * um - s * vm, s * um + c * vm
+        t3 = th + 0.5 * h * rm
+        c, s = math.cos(t3), math.sin(t3)
+        k3x, k3y = c * um - s * vm, s * um + c * vm
+        t4 = th + h * rm
+        c, s = math.cos(t4), math.sin(t4)
+        k4x, k4y = c * u1 - s * v1, s * u1 + c * v1
+        return (
+            x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            y + h / 6.0 * (k1y + 2.0 * k2y + 2.0 * k3y + k4y),
+            th + h / 6.0 * (r0 + 4.0 * rm + r1),
+        )
+    if method == 3:  # exact arc of the mid-step twist
+        phi = rm * h
+        a = h * _sinc(phi)
+        b = h * math.sin(0.5 * phi) * _sinc(0.5 * phi)
+        dxb, dyb = um * a - vm * b, um * b + vm * a
+        c, s = math.cos(th), math.sin(th)
+        return x + c * dxb - s * dyb, y + s * dxb + c * dyb, th + phi
+    # simpson
+    tm = th + h / 24.0 * (5.0 * r0 + 8.0 * rm - r1)
+    t1 = th + h / 6.0 * (r0 + 4.0 * rm + r1)
+    c0, s0 = math.cos(th), math.sin(th)
+    cm, sm = math.cos(tm), math.sin(tm)
+    c1, s1 = math.cos(t1), math.sin(t1)
+    fx = (c0 * u0 - s0 * v0) + 4.0 * (cm * um - sm * vm) + (c1 * u1 - s1 * v1)
+    fy = (s0 * u0 + c0 * v0) + 4.0 * (sm * um + cm * vm) + (s1 * u1 + c1 * v1)
+    return x + h / 6.0 * fx, y + h / 6.0 * fy, t1
+
+
+@numba.njit(cache=True, parallel=True)
+def _roll_constant(pose0, twist, times, method, record_index, out):
+    """Integrate robots with constant twists over the whole grid; each robot is independent."""
+    n_robots = pose0.shape[0]
+    n_steps = times.shape[0] - 1
+    for i in numba.prange(n_robots):
+        x, y, th = pose0[i, 0], pose0[i, 1], pose0[i, 2]
+        u, v, r = twist[i, 0], twist[i, 1], twist[i, 2]
+        slot = 0
+        if record_index[0] == 0:
+            out[0, i, 0], out[0, i, 1], out[0, i, 2] = x, y, _wrap(th)
+            slot = 1
+        for k in range(n_steps):
+            h = times[k + 1] - times[k]
+            x, y, th = _step_scalar(x, y, th, u, v, r, u, v, r, u, v, r, h, method)
+            if slot < record_index.shape[0] and record_index[slot] == k + 1:
+                out[slot, i, 0], out[slot, i, 1], out[slot, i, 2] = x, y, _wrap(th)
+                slot += 1
+
+
+@numba.njit(cache=True, parallel=True)
+def _step_batch(pose, z0, zm, z1, h, method):
+    """Advance every robot of ``pose`` (N, 3) by one step, in place."""
+    for i in numba.prange(pose.shape[0]):
+        x, y, th = _step_scalar(
+            pose[i, 0], pose[i, 1], pose[i, 2],
+            z0[i, 0], z0[i, 1], z0[i, 2],
+            zm[i, 0], zm[i, 1], zm[i, 2],
+            z1[i, 0], z1[i, 1], z1[i, 2],
+            h, method,
+        )  # fmt: skip
+        pose[i, 0], pose[i, 1], pose[i, 2] = x, y, _wrap(th)
+
+
+# --------------------------------------------------------------------------- result
+@dataclass(frozen=True)
+class SimResult:
+    """The outcome of :func:`simulate`.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Recorded times [s].
+    poses : numpy.ndarray, shape (T, 3) or (T, N, 3)
+        Poses (x [m], y [m], θ [rad] wrapped to (−π, π]) at those times.
+    inputs : numpy.ndarray, shape (T, k) or (T, N, k)
+        The model inputs in force from each recorded time on (at the last time: its value
+        there), in the order and units of ``model.input_names``.
+    model : KinematicModel
+        The model that was simulated.
+    method : str
+        The integration method.
+    dt : float
+        The nominal step [s] (the last step is shorter when ``t_end`` is not a multiple).
+    """
+
+    t: np.ndarray
+    poses: np.ndarray
+    inputs: np.ndarray
+    model: KinematicModel
+    method: str
+    dt: float
+
+    @property
+    def is_batch(self) -> bool:
+        """Whether this result holds several robots (a middle axis N)."""
+        return self.poses.ndim == 3
+
+    def to_csv(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write ``t, x, y, theta`` and the inputs to CSV (one robot only).
+
+        Raises
+        ------
+        FileExistsError
+            If ``path`` exists and ``overwrite`` is false.
+        InputError
+            For a batch result (write one robot: ``result.robot(i).to_csv(...)``).
+        """
+        if self.is_batch:
+            raise InputError("to_csv writes one robot; select one with result.robot(i)")
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+        header = ["t", "x", "y", "theta", *self.model.input_names]
+        with path.open("w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(header)
+            for row in np.column_stack([self.t, self.poses, self.inputs]):
+                writer.writerow([repr(float(value)) for value in row])
+        return path
+
+    def robot(self, index: int) -> SimResult:
+        """The result of robot ``index`` of a batch, as a single-robot result."""
+        if not self.is_batch:
+            raise InputError("robot(i) needs a batch result")
+        return SimResult(
+            self.t,
+            self.poses[:, index],
+            self.inputs[:, index],
+            self.model,
+            self.method,
+            self.dt,
+        )
+
+    def plot(self, **kwargs: Any) -> Any:
+        """Plot the path and the states over time (see :func:`wheelbase.plot.plot_result`)."""
+        from wheelbase.plot import plot_result
+
+        return plot_result(self, **kwargs)
+
+
+# --------------------------------------------------------------------------- simulate
+def time_grid(t_end: float, dt: float) -> np.ndarray:
+    """Times 0, dt, 2·dt, …, t_end [s]; the last step is shortened to land on ``t_end``.
+
+    Raises
+    ------
+    ConfigError
+        If ``dt`` or ``t_end`` is not finite and positive, or ``dt > t_end``.
+    """
+    t_end = positive("t_end", t_end, "s")
+    dt = positive("dt", dt, "s")
+    if dt > t_end:
+        raise ConfigError(f"dt must be <= t_end (got dt={dt:g} s, t_end={t_end:g} s)")
+    n_steps = max(1, math.ceil(t_end / dt - 1e-9))
+    times = dt * np.arange(n_steps + 1, dtype=np.float64)
+    times[-1] = t_end
+    return times
+
+
+def _record_indices(n_steps: int, record_every: int) -> np.ndarray:
+    index = np.arange(0, n_steps + 1, record_every)
+    if index[-1] != n_steps:
+        index = np.append(index, n_steps)
+    return index.astype(np.int64)
+
+
+def simulate(
+    model: KinematicModel,
+    pose0: ArrayLike,
+    inputs: InputsLike,
+    t_end: float,
+    dt: float,
+    method: str = "rk4",
+    *,
+    record_every: int = 1,
+    backend: str = "auto",
+) -> SimResult:
+    """Simulate a kinematic model from ``pose0`` under ``inputs`` for ``t_end`` seconds.
+
+    Parameters
+    ----------
+    model : KinematicModel
+        Any model of :mod:`wheelbase.models` (``DiffDrive``, ``Unicycle``, ``Bicycle`` …).
+    pose0 : array_like, shape (3,) or (N, 3)
+        Initial pose(s) (x [m], y [m], θ [rad]); an (N, 3) array simulates N robots at once.
+    inputs : array_like or callable
+        Model inputs in the order and units of ``model.input_names``, as
+
+        - constants: shape (k,), or (N, k) for a batch (one row per robot);
+        - a callable ``f(t) -> (k,) or (N, k)`` of time [s];
+        - an array sampled at the steps (a zero-order hold): shape (S, k) for one robot or
+          (S, N, k) for a batch, with S = number of steps (or steps + 1, the last row unused).
+    t_end : float
+        Duration [s], > 0.
+    dt : float
+        Step [s], 0 < dt <= t_end; the last step is shortened to end at ``t_end``.
+    method : {"euler", "midpoint", "rk4", "exact", "simpson"}
+        Integration method (see the module docstring).
+    record_every : int
+        Keep every ``record_every``-th step (and always the last) so that a long batch fits in
+        memory.
+    backend : {"auto", "numba", "numpy"}
+        ``numpy`` is the reference implementation; ``numba`` runs compiled, parallel kernels
+        (same arithmetic, results equal to rounding); ``auto`` picks ``numba``.
+
+    Returns
+    -------
+    SimResult
+        With ``t`` (T,), ``poses`` (T, 3) or (T, N, 3) and the inputs used.
+
+    Raises
+    ------
+    ConfigError
+        Bad ``t_end``, ``dt``, ``method``, ``backend`` or ``record_every``.
+    InputError
+        Bad shapes, non-finite values, or inputs outside what the model allows.
+
+    Examples
+    --------
+    >>> from wheelbase import DiffDrive, simulate
+    >>> robot = DiffDrive(wheel_radius=0.05, half_track=0.2)
+    >>> result = simulate(robot, [0, 0, np.pi / 2], (0.8, 0.6), t_end=100, dt=0.1, method="euler")
+    >>> result.poses.shape
+    (1001, 3)
+    """
+    check_choice("method", method, METHODS)
+    check_choice("backend", backend, BACKENDS)
+    if isinstance(record_every, bool) or not isinstance(record_every, (int, np.integer)):
+        raise ConfigError(f"record_every must be an integer >= 1 (got {record_every!r})")
+    if record_every < 1:
+        raise ConfigError(f"record_every must be an integer >= 1 (got {record_every})")
+    times = time_grid(t_end, dt)
+    n_steps = times.size - 1
+    pose0 = as_float_array("pose0", pose0, 3, min_ndim=1, max_ndim=2)
+    batch = pose0.ndim == 2
+    poses0 = np.ascontiguousarray(pose0.reshape(-1, 3))
+    n_robots = poses0.shape[0]
+    k = len(model.input_names)
+    record = _record_indices(n_steps, int(record_every))
+    use_numba = backend != "numpy"
+
+    def per_robot(values: np.ndarray, what: str) -> np.ndarray:
+        """Broadcast validated inputs (k,) or (N, k) to (N, k)."""
+        if values.ndim == 1 or (values.ndim == 2 and values.shape[0] in (1, n_robots)):
+            return np.broadcast_to(values.reshape(-1, k), (n_robots, k))
+        raise InputError(f"{what} must have shape ({k},) or ({n_robots}, {k}) (got {values.shape})")
+
+    if callable(inputs):
+        return _simulate_callable(
+            model, poses0, inputs, times, method, record, per_robot, batch, use_numba, dt
+        )
+
+    values = model.validate_inputs(inputs)
+    sampled_ndim = 3 if batch else 2
+    if values.ndim == sampled_ndim:
+        return _simulate_sampled(
+            model, poses0, values, times, method, record, per_robot, batch, use_numba, dt
+        )
+    if values.ndim > sampled_ndim:
+        raise InputError(
+            f"inputs have too many dimensions for pose0 of shape {pose0.shape} "
+            f"(got shape {values.shape})"
+        )
+    constant = np.ascontiguousarray(per_robot(values, "inputs"))
+    twist = np.ascontiguousarray(model.twist(constant))
+    if use_numba:
+        out = np.empty((record.size, n_robots, 3))
+        _roll_constant(poses0, twist, times, _METHOD_ID[method], record, out)
+    else:
+        out = np.empty((record.size, n_robots, 3))
+        pose = poses0.copy()
+        pose[:, 2] = wrap_angle(pose[:, 2])
+        slot = 0
+        if record[0] == 0:
+            out[0] = pose
+            slot = 1
+        for step in range(n_steps):
+            pose = integrate_step(pose, twist, twist, twist, times[step + 1] - times[step], method)
+            if slot < record.size and record[slot] == step + 1:
+                out[slot] = pose
+                slot += 1
+    used = np.broadcast_to(constant, (record.size, n_robots, k))
+    return _result(times[record], out, used, model, method, batch, dt)
+
+
+def _simulate_sampled(model, poses0, values, times, method, record, per_robot, batch, numba_, dt):
+    n_steps = times.size - 1
+    if values.shape[0] not in (n_steps, n_steps + 1):
+        raise InputError(
+            f"sampled inputs need {n_steps} rows (one per step) or {n_steps + 1} "
+            f"(got {values.shape[0]})"
+        )
+    rows = [per_robot(values[i], "each row of the sampled inputs") for i in range(n_steps)]
+    twists = [np.ascontiguousarray(model.twist(row)) for row in rows]
+
+    def twist_at(step):
+        z = twists[step]
+        return z, z, z
+
+    out = _step_loop(poses0, times, method, record, twist_at, numba_)
+    used = np.stack([rows[min(i, n_steps - 1)] for i in record])
+    return _result(times[record], out, used, model, method, batch, dt)
+
+
+def _simulate_callable(
+    model, poses0, function, times, method, record, per_robot, batch, numba_, dt
+):  # noqa: E501
+    recorded_times = set(times[record].tolist())
+    used_rows: dict[float, np.ndarray] = {}
+    last: dict[float, np.ndarray] = {}  # the end of one step is the start of the next
+
+    def twist_of(t: float) -> np.ndarray:
+        if t in last:
+            return last[t]
+        try:
+            raw = function(float(t))
+        except Exception as error:  # a user callable: say where it failed
+            raise InputError(f"inputs({t:g}) raised {type(error).__name__}: {error}") from error
+        row = per_robot(model.validate_inputs(raw), f"inputs({t:g})")
+        if t in recorded_times:
+            used_rows[t] = np.array(row)
+        twist = np.ascontiguousarray(model.twist(row))
+        last.clear()
+        last[t] = twist
+        return twist
+
+    def twist_at(step):
+        t0, t1 = times[step], times[step + 1]
+        z0 = twist_of(t0)
+        zm = twist_of(0.5 * (t0 + t1))
+        return z0, zm, twist_of(t1)
+
+    out = _step_loop(poses0, times, method, record, twist_at, numba_)
+    used = np.stack([used_rows[t] for t in times[record].tolist()])
+    return _result(times[record], out, used, model, method, batch, dt)
+
+
+def _step_loop(poses0, times, method, record, twist_at, use_numba):
+    n_steps = times.size - 1
+    out = np.empty((record.size, poses0.shape[0], 3))
+    pose = poses0.copy()
+    pose[:, 2] = wrap_angle(pose[:, 2])
+    slot = 0
+    if record[0] == 0:
+        out[0] = pose
+        slot = 1
+    method_id = _METHOD_ID[method]
+    for step in range(n_steps):
+        h = times[step + 1] - times[step]
+        z0, zm, z1 = twist_at(step)
+        if use_numba:
+            _step_batch(pose, z0, zm, z1, h, method_id)
+        else:
+            pose = integrate_step(pose, z0, zm, z1, h, method)
+        if slot < record.size and record[slot] == step + 1:
+            out[slot] = pose
+            slot += 1
+    return out
+
+
+def _result(t, out, used, model, method, batch, dt):
+    used = np.array(used, dtype=np.float64)
+    if not batch:
+        out, used = out[:, 0, :], used[:, 0, :]
+    if not np.all(np.isfinite(out)):  # only reachable through overflow of huge inputs
+        raise InputError("the simulation produced non-finite poses; inputs are too large")
+    return SimResult(t=t, poses=out, inputs=used, model=model, method=method, dt=finite("dt", dt))
