@@ -446,7 +446,7 @@ def _simulate_sampled(model, poses0, values, times, method, record, per_robot, b
 
 def _simulate_callable(
     model, poses0, function, times, method, record, per_robot, batch, numba_, dt
-):  # noqa: E501
+):
     recorded_times = set(times[record].tolist())
     used_rows: dict[float, np.ndarray] = {}
     last: dict[float, np.ndarray] = {}  # the end of one step is the start of the next
