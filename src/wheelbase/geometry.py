@@ -66,6 +66,13 @@ def to_world_frame(theta: ArrayLike, twist: ArrayLike) -> np.ndarray:
     """Rotate body-frame twists ``(u, v, r)`` into world-frame pose rates ``(ẋ, ẏ, θ̇)``.
 
     This is η̇ = J(ψ)·ζ (document 000 §3.1) without building the matrix.
+
+    Parameters
+    ----------
+    theta : array_like, shape (...)
+        Headings ψ [rad].
+    twist : array_like, shape (..., 3)
+        Body twists (u [m/s], v [m/s], r [rad/s]).
     """
     theta = np.asarray(theta, dtype=np.float64)
     twist = np.asarray(twist, dtype=np.float64)
@@ -75,7 +82,15 @@ def to_world_frame(theta: ArrayLike, twist: ArrayLike) -> np.ndarray:
 
 
 def to_body_frame(theta: ArrayLike, pose_rate: ArrayLike) -> np.ndarray:
-    """Inverse of :func:`to_world_frame`: ζ = J(ψ)⁻¹ η̇ = J(ψ)ᵀ η̇."""
+    """Inverse of :func:`to_world_frame`: ζ = J(ψ)⁻¹ η̇ = J(ψ)ᵀ η̇.
+
+    Parameters
+    ----------
+    theta : array_like, shape (...)
+        Headings ψ [rad].
+    pose_rate : array_like, shape (..., 3)
+        World-frame rates (ẋ [m/s], ẏ [m/s], θ̇ [rad/s]).
+    """
     theta = np.asarray(theta, dtype=np.float64)
     pose_rate = np.asarray(pose_rate, dtype=np.float64)
     c, s = np.cos(theta), np.sin(theta)
@@ -84,7 +99,15 @@ def to_body_frame(theta: ArrayLike, pose_rate: ArrayLike) -> np.ndarray:
 
 
 def compose(a: ArrayLike, b: ArrayLike) -> np.ndarray:
-    """SE(2) composition a ⊕ b: pose ``b`` given in the frame of ``a``, expressed in the world."""
+    """SE(2) composition a ⊕ b: pose ``b`` given in the frame of ``a``, expressed in the world.
+
+    Parameters
+    ----------
+    a : array_like, shape (..., 3)
+        Poses of frame A in the world [m, m, rad].
+    b : array_like, shape (..., 3)
+        Poses given in frame A.
+    """
     a = as_float_array("a", a, 3)
     b = as_float_array("b", b, 3)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
@@ -103,12 +126,28 @@ def inverse_pose(a: ArrayLike) -> np.ndarray:
 
 
 def relative_pose(a: ArrayLike, b: ArrayLike) -> np.ndarray:
-    """Pose of ``b`` in the frame of ``a`` (⊖a ⊕ b): e.g. a goal seen from the robot."""
+    """Pose of ``b`` in the frame of ``a`` (⊖a ⊕ b): e.g. a goal seen from the robot.
+
+    Parameters
+    ----------
+    a : array_like, shape (..., 3)
+        Reference poses (the robot) in the world [m, m, rad].
+    b : array_like, shape (..., 3)
+        Poses (the goal) in the world.
+    """
     return compose(inverse_pose(a), b)
 
 
 def transform_points(pose: ArrayLike, points: ArrayLike) -> np.ndarray:
-    """Map body-frame points ``(..., M, 2)`` to the world through ``pose`` ``(..., 3)``."""
+    """Map body-frame points to the world frame.
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Body poses in the world [m, m, rad].
+    points : array_like, shape (..., M, 2)
+        Points in the body frame [m] (x forward, y left).
+    """
     pose = as_float_array("pose", pose, 3)
     points = as_float_array("points", points, 2)
     rot = rotation_2d(pose[..., 2])
@@ -120,6 +159,15 @@ def se2_exp(pose: ArrayLike, twist: ArrayLike, duration: ArrayLike) -> np.ndarra
 
     This is the closed-form arc (the exponential map of SE(2)): exact for any yaw rate, smooth
     as r → 0 (no 0/0: it uses ``sin(φ)/φ`` and ``(1 − cos φ)/φ`` through ``np.sinc``).
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Start poses [m, m, rad].
+    twist : array_like, shape (..., 3)
+        Body twists (u [m/s], v [m/s], r [rad/s]).
+    duration : array_like
+        How long the twist is held [s].
     """
     pose = np.asarray(pose, dtype=np.float64)
     twist = np.asarray(twist, dtype=np.float64)

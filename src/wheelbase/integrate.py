@@ -240,6 +240,13 @@ class SimResult:
     def to_csv(self, path: str | Path, *, overwrite: bool = False) -> Path:
         """Write ``t, x, y, theta`` and the inputs to CSV (one robot only).
 
+        Parameters
+        ----------
+        path : str or Path
+            Output file.
+        overwrite : bool
+            Replace ``path`` if it exists (default: refuse).
+
         Raises
         ------
         FileExistsError
@@ -283,6 +290,13 @@ class SimResult:
 # --------------------------------------------------------------------------- simulate
 def time_grid(t_end: float, dt: float) -> np.ndarray:
     """Times 0, dt, 2·dt, …, t_end [s]; the last step is shortened to land on ``t_end``.
+
+    Parameters
+    ----------
+    t_end : float
+        Duration [s], > 0.
+    dt : float
+        Step [s], 0 < dt <= t_end.
 
     Raises
     ------

@@ -40,7 +40,15 @@ class KinematicModel(Protocol):
         ...
 
     def derivative(self, pose: ArrayLike, inputs: ArrayLike) -> np.ndarray:
-        """Pose rate ``(..., 3)`` = (ẋ, ẏ, θ̇) for poses ``(..., 3)`` and inputs ``(..., k)``."""
+        """Pose rate η̇ = J(θ)·ζ(inputs) ``(..., 3)`` [m/s, m/s, rad/s].
+
+        Parameters
+        ----------
+        pose : array_like, shape (..., 3)
+            Poses (x [m], y [m], θ [rad]).
+        inputs : array_like, shape (..., k)
+            Model inputs in the order of ``input_names``.
+        """
         ...
 
     def validate_inputs(self, inputs: ArrayLike) -> np.ndarray:

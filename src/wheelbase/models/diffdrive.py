@@ -78,6 +78,11 @@ class DiffDrive(ModelBase):
         """Forward speed v [m/s] and yaw rate ω [rad/s] from wheel speeds [rad/s].
 
         v = a(ω_L + ω_R)/2, ω = a(ω_R − ω_L)/(2d) (doc 001 eqs. 6, 8 with eq. 9).
+
+        Parameters
+        ----------
+        left, right : array_like
+            Left and right wheel angular speeds [rad/s].
         """
         left = as_float_array("left", left)
         right = as_float_array("right", right)
@@ -88,6 +93,13 @@ class DiffDrive(ModelBase):
 
         The inverse of :meth:`body_velocity`: ω_L = (v − dω)/a, ω_R = (v + dω)/a (doc 001
         eq. 20 with its rows swapped to (left, right)).
+
+        Parameters
+        ----------
+        v : array_like
+            Forward speed [m/s].
+        omega : array_like
+            Yaw rate [rad/s], counter-clockwise positive.
         """
         v = as_float_array("v", v)
         omega = as_float_array("omega", omega)
@@ -110,6 +122,11 @@ class DiffDrive(ModelBase):
         R = d (v_R + v_L)/(v_R − v_L), positive when the ICC is on the left. It is ``inf``
         (signed by the direction of travel) when driving straight, 0 when spinning in place,
         and ``nan`` when the robot stands still; no division warning is raised.
+
+        Parameters
+        ----------
+        left, right : array_like
+            Left and right wheel angular speeds [rad/s].
         """
         left = as_float_array("left", left)
         right = as_float_array("right", right)
