@@ -1,0 +1,184 @@
+"""OccupancyGrid: loaders, writer, transforms, inflation, distance field, footprint checks."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wheelbase.errors import ConfigError, DataError, InputError, MapError
+from wheelbase.planning import Footprint, OccupancyGrid
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
+
+
+def test_from_array_orientation_and_transforms():
+    occ = np.zeros((4, 6), bool)
+    occ[0, 5] = True  # lowest y, highest x
+    grid = OccupancyGrid.from_array(occ, 0.5, origin=(1.0, -2.0))
+    assert grid.shape == (4, 6)
+    assert grid.extent == (1.0, 4.0, -2.0, 0.0)
+    assert bool(grid.is_occupied([3.9, -1.9]))
+    assert not bool(grid.is_occupied([1.1, -1.9]))
+    assert bool(grid.is_occupied([0.0, 0.0]))  # outside: occupied
+    cells = np.array([[0, 0], [3, 5], [2, 1]])
+    np.testing.assert_array_equal(grid.world_to_cell(grid.cell_to_world(cells)), cells)
+
+
+def test_numeric_array_thresholds_and_unknown():
+    grid = OccupancyGrid.from_array(np.array([[0.0, 0.7], [-1.0, np.nan]]), 1.0)
+    np.testing.assert_array_equal(grid.occupied, [[False, True], [True, True]])
+    np.testing.assert_array_equal(grid.unknown, [[False, False], [True, True]])
+
+
+def _write_pgm(path, pixels):
+    path.write_bytes(f"P5\n{pixels.shape[1]} {pixels.shape[0]}\n255\n".encode() + pixels.tobytes())
+
+
+def test_ros_yaml_modes(tmp_path):
+    pixels = np.array([[0, 100, 205, 254]], np.uint8)
+    _write_pgm(tmp_path / "m.pgm", pixels)
+    base = "image: m.pgm\nresolution: 0.1\norigin: [1, 2, 0]\noccupied_thresh: 0.65\n"
+    base += "free_thresh: 0.196\n"
+    (tmp_path / "a.yaml").write_text(base + "negate: 0\n")
+    grid = OccupancyGrid.from_ros_yaml(tmp_path / "a.yaml")
+    # p = (255 - v)/255 = 1.0, 0.61, 0.196, 0.004 -> occ, unknown, unknown, free
+    np.testing.assert_array_equal(grid.unknown[0], [False, True, True, False])
+    np.testing.assert_array_equal(grid.occupied[0], [True, True, True, False])
+    free_unknown = OccupancyGrid.from_ros_yaml(tmp_path / "a.yaml", unknown_as_occupied=False)
+    np.testing.assert_array_equal(free_unknown.occupied[0], [True, False, False, False])
+    (tmp_path / "n.yaml").write_text(base + "negate: 1\n")
+    negated = OccupancyGrid.from_ros_yaml(tmp_path / "n.yaml")
+    np.testing.assert_array_equal(negated.occupied[0], [False, True, True, True])
+    (tmp_path / "s.yaml").write_text(base + "mode: scale\n")
+    scaled = OccupancyGrid.from_ros_yaml(tmp_path / "s.yaml")
+    np.testing.assert_array_equal(scaled.occupied[0], [True, False, False, False])
+    assert grid.origin == (1.0, 2.0) and grid.resolution == 0.1
+
+
+def test_ros_writer_round_trip(tmp_path):
+    rng = np.random.default_rng(1)
+    occ = rng.random((17, 23)) < 0.3
+    unknown = rng.random((17, 23)) < 0.1
+    grid = OccupancyGrid(occ | unknown, 0.05, (-1.5, 2.25), unknown)
+    grid.to_ros_yaml(tmp_path / "map.yaml")
+    back = OccupancyGrid.from_ros_yaml(tmp_path / "map.yaml")
+    np.testing.assert_array_equal(back.occupied, grid.occupied)
+    np.testing.assert_array_equal(back.unknown, unknown)
+    assert back.origin == grid.origin and back.resolution == grid.resolution
+
+
+def test_image_loader(tmp_path):
+    from PIL import Image
+
+    pixels = np.full((3, 4), 255, np.uint8)
+    pixels[0, 0] = 0  # top-left: highest y, lowest x
+    Image.fromarray(pixels).save(tmp_path / "m.png")
+    grid = OccupancyGrid.from_image(tmp_path / "m.png", 0.2)
+    assert grid.occupied[2, 0] and grid.occupied.sum() == 1
+
+
+def test_loader_errors(tmp_path):
+    with pytest.raises(MapError, match="non-empty"):
+        OccupancyGrid.from_array(np.zeros((0, 3), bool), 1.0)
+    with pytest.raises(ConfigError, match="resolution"):
+        OccupancyGrid.from_array(np.zeros((2, 3), bool), -1.0)
+    (tmp_path / "bad.yaml").write_text("image: x.pgm\nresolution: 0.1\n")
+    with pytest.raises(MapError, match="origin"):
+        OccupancyGrid.from_ros_yaml(tmp_path / "bad.yaml")
+    (tmp_path / "bad2.yaml").write_text("image: x.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n")
+    with pytest.raises(DataError, match="not found"):
+        OccupancyGrid.from_ros_yaml(tmp_path / "bad2.yaml")
+    with pytest.raises(DataError, match="cannot read"):
+        OccupancyGrid.from_movingai(tmp_path / "none.map")
+    grid = OccupancyGrid.from_array(np.zeros((2, 3), bool), 1.0)
+    with pytest.raises(InputError, match="poses"):
+        grid.in_collision(Footprint.rectangle(1, 1), [1.0, 2.0])
+
+
+@pytest.mark.skipif(not TB3.exists(), reason="../shared/data/maps/turtlebot3_world.yaml absent")
+def test_turtlebot3_pixels_follow_map_server_rules():
+    with pytest.warns(UserWarning, match="not found"):  # its YAML names map.pgm
+        grid = OccupancyGrid.from_ros_yaml(TB3)
+    raw = np.flipud(np.asarray(__import__("PIL.Image").Image.open(TB3.with_suffix(".pgm"))))
+    np.testing.assert_array_equal(grid.occupied, raw != 254)
+    np.testing.assert_array_equal(grid.unknown, raw == 205)
+    assert grid.origin == (-10.0, -10.0) and grid.resolution == 0.05
+
+
+def test_distance_field_and_inflation_match_brute_force():
+    rng = np.random.default_rng(3)
+    occ = rng.random((15, 12)) < 0.08
+    grid = OccupancyGrid.from_array(occ, 0.25)
+    rr, cc = np.nonzero(occ)
+    ii, jj = np.mgrid[0:15, 0:12]
+    brute = np.min(np.hypot(ii[..., None] - rr, jj[..., None] - cc), axis=-1) * 0.25
+    np.testing.assert_allclose(grid.distance_field, brute)
+    inflated = grid.inflate(0.6)
+    np.testing.assert_array_equal(inflated.occupied, brute <= 0.6)
+    assert np.isinf(OccupancyGrid.from_array(np.zeros((3, 3), bool), 1.0).distance_field).all()
+
+
+def test_footprint_rectangle_and_validation():
+    fp = Footprint.rectangle(4.0, 2.0, rear_axle_to_center=1.5)
+    np.testing.assert_allclose(fp.polygon.min(0), [-0.5, -1.0])
+    np.testing.assert_allclose(fp.polygon.max(0), [3.5, 1.0])
+    assert fp.inscribed_radius == pytest.approx(0.5)
+    assert fp.max_radius == pytest.approx(math.hypot(3.5, 1.0))
+    big = fp.inflated(0.1)
+    np.testing.assert_allclose(big.polygon.max(0), [3.6, 1.1])
+    # the covering circles cover every vertex
+    d = np.hypot(*(fp.polygon[:, None, :] - fp.circles[None]).transpose(2, 0, 1))
+    assert np.all(d.min(1) <= fp.circle_radius + 1e-12)
+    with pytest.raises(ConfigError, match="length"):
+        Footprint.rectangle(-1.0, 1.0)
+    with pytest.raises(ConfigError, match="convex"):
+        Footprint(np.array([[0, 0], [2, 0], [1, 0.2], [2, 2], [0, 2]]))
+
+
+def _brute_collides(grid, footprint, pose, spacing):
+    """Fine point sampling of the polygon (interior and boundary)."""
+    poly = footprint.polygon
+    lo, hi = poly.min(0), poly.max(0)
+    xs = np.arange(lo[0], hi[0] + spacing, spacing).clip(lo[0], hi[0])
+    ys = np.arange(lo[1], hi[1] + spacing, spacing).clip(lo[1], hi[1])
+    pts = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    world = pts @ np.array([[c, s], [-s, c]]) + pose[:2]
+    return bool(np.any(grid.is_occupied(world)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_footprint_check_agrees_with_fine_sampling(seed):
+    rng = np.random.default_rng(seed)
+    occ = rng.random((30, 30)) < 0.03
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    fp = Footprint.rectangle(0.9, 0.5, rear_axle_to_center=0.3)
+    poses = np.column_stack([rng.uniform(0, 3, 20), rng.uniform(0, 3, 20), rng.uniform(-4, 4, 20)])
+    ours = grid.in_collision(fp, poses)
+    shrunk = Footprint(fp.polygon * 0.97 + np.array([0.3 * 0.03, 0]))
+    for pose, hit in zip(poses, ours, strict=True):
+        if _brute_collides(grid, fp, pose, 0.01):
+            assert hit  # a sampled point lies in an occupied cell (or outside the map)
+        if not hit:
+            assert grid.footprint_clearance(fp, pose) > 0
+        else:
+            # a collision found by the exact test is real up to the sampling spacing
+            assert _brute_collides(grid, fp.inflated(0.01), pose, 0.005)
+    assert np.all(~grid.in_collision(shrunk, poses) | ours)
+
+
+def test_footprint_clearance_known_value():
+    occ = np.zeros((40, 40), bool)
+    occ[20, 30] = True  # square [3.0, 3.1] x [2.0, 2.1]
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    fp = Footprint.rectangle(1.0, 0.6)  # centred on the reference point
+    d = grid.footprint_clearance(fp, [[2.0, 2.05, 0.0], [2.0, 2.05, math.pi / 2]])
+    np.testing.assert_allclose(d, [0.5, 0.7], atol=1e-12)
+    assert grid.in_collision(fp, [2.51, 2.05, 0.0])
+    assert not grid.in_collision(fp, [2.49, 2.05, 0.0])
+    assert grid.in_collision(fp, [2.49, 2.05, 0.0], margin=0.02)
