@@ -94,7 +94,7 @@ def test_figure_eight_feeds_the_unicycle_back_onto_the_path():
         Unicycle(), ref0.poses[0], inputs, t_end=t_end, dt=1e-3, method="rk4", backend="numpy"
     )
     expected = reference_from_derivatives(*figure_eight(result.t))
-    np.testing.assert_allclose(result.poses[:, :2], expected.poses[:, :2], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(result.poses[:, :2], expected.poses[:, :2], rtol=0, atol=1e-10)
     np.testing.assert_allclose(
         wrap_angle(result.poses[:, 2] - expected.poses[:, 2]), 0.0, atol=1e-6
     )

@@ -139,7 +139,7 @@ class WheeledBase(ModelBase):
     >>> base = mecanum4(wheel_radius=0.05, half_length=0.2, half_width=0.15)
     >>> speeds = base.inverse([0.0, 0.3, 0.0])  # straight to the left
     >>> twist, residual = base.forward(speeds)
-    >>> np.round(twist, 12).tolist(), float(residual) < 1e-12
+    >>> (np.round(twist, 12) + 0.0).tolist(), float(residual) < 1e-12
     ([0.0, 0.3, 0.0], True)
     """
 
