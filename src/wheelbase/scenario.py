@@ -1,0 +1,270 @@
+"""Scenario files: one YAML document describes a closed-loop run.
+
+A scenario names a map, a robot, the plant, the planner, the limits that time-parametrise the
+plan, the controller, the odometry, the noise seed, the start, the goal(s), the duration and the
+step. Every field has a default except ``start`` and ``goal``/``goals``; unknown keys are errors.
+Angles in files are in degrees (the edge of the system); everything is converted to radians on
+entry. :func:`load_scenario` returns a validated :class:`Scenario`; its errors name the file, the
+field path and what is allowed, e.g. ``demo.yaml: controller.gains.k_beta: must be < 0 (got 2.0)``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from wheelbase.errors import ScenarioError
+
+__all__ = [
+    "ControllerSpec",
+    "OdometrySpec",
+    "PlannerSpec",
+    "RobotSpec",
+    "Scenario",
+    "TrajectorySpec",
+    "format_validation_error",
+    "load_scenario",
+    "scenario_json_schema",
+]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+
+
+class RobotSpec(_Strict):
+    """The robot: a kinematic model with its parameters, or a preset."""
+
+    model: Literal["diffdrive", "unicycle", "rear_bicycle", "bicycle", "ackermann"] = Field(
+        "diffdrive", description="Kinematic model of the robot."
+    )
+    preset: Literal["rm100"] | None = Field(
+        None, description="A named robot; its parameters fill in the fields left unset."
+    )
+    wheel_radius: float | None = Field(None, gt=0, description="Wheel radius [m].")
+    half_track: float | None = Field(None, gt=0, description="Half the wheel separation [m].")
+    wheel_base: float | None = Field(
+        None, gt=0, description="Axle distance of car-like robots [m]."
+    )
+    track: float | None = Field(None, gt=0, description="Front track of an Ackermann car [m].")
+    max_steering_deg: float | None = Field(
+        None, gt=0, lt=90, description="Steering stop of car-like robots [deg]."
+    )
+    footprint: tuple[float, float] | None = Field(
+        None, description="Rectangle (length, width) [m] centred on the body centre."
+    )
+    center_offset: float = Field(
+        0.0,
+        description="Distance from the reference point (wheel axle centre) forward to the "
+        "footprint centre [m].",
+    )
+    max_wheel_speed: float | None = Field(
+        None, gt=0, description="Wheel angular speed limit of a differential drive [rad/s]."
+    )
+
+    @field_validator("footprint")
+    @classmethod
+    def _positive_footprint(cls, value):
+        if value is not None and (value[0] <= 0 or value[1] <= 0):
+            raise ValueError(f"must be two lengths > 0 m (got {list(value)})")
+        return value
+
+
+class PlannerSpec(_Strict):
+    """Hybrid A* options (see :class:`wheelbase.planning.HybridAStar`)."""
+
+    turning_radius: float | None = Field(
+        None,
+        ge=0,
+        description="Minimum turning radius [m]; 0 lets a differential drive turn "
+        "in place; default from the robot (0 for differential drive, wheel_base / "
+        "tan(max steering) for car-like robots).",
+    )
+    reverse: bool = Field(True, description="Allow driving backwards.")
+    options: dict[str, Any] = Field(
+        default_factory=dict, description="Further HybridAStar keyword arguments."
+    )
+
+
+class TrajectorySpec(_Strict):
+    """Limits that time-parametrise the plan (see :class:`wheelbase.timing.SpeedLimits`)."""
+
+    max_speed: float = Field(0.5, gt=0, description="[m/s]")
+    max_acceleration: float = Field(0.5, gt=0, description="[m/s²]")
+    max_yaw_rate: float = Field(1.0, gt=0, description="[rad/s]")
+    max_yaw_acceleration: float = Field(2.0, gt=0, description="[rad/s²]")
+    max_lateral_acceleration: float = Field(math.inf, gt=0, description="[m/s²]")
+    reverse_speed_factor: float = Field(1.0, gt=0, le=1, description="Reverse speed fraction.")
+
+
+class ControllerSpec(_Strict):
+    """The tracking controller: a law of :mod:`wheelbase.control` and its gains."""
+
+    law: str = Field("kanayama", description="Name of the control law.")
+    gains: dict[str, float] = Field(default_factory=dict, description="Gains of the law.")
+
+
+class OdometrySpec(_Strict):
+    """How the controller learns the pose: perfect state or wheel-encoder odometry."""
+
+    mode: Literal["perfect", "encoders"] = Field("encoders")
+    pulses_per_revolution: int = Field(2048, gt=0, description="Encoder resolution.")
+    method: Literal["euler", "midpoint", "exact"] = Field("exact")
+    tick_noise_std: float = Field(0.0, ge=0, description="Gaussian noise per reading [ticks].")
+    wheel_radius_scale: tuple[float, float] = Field(
+        (1.0, 1.0),
+        description="True (left, right) wheel radius / nominal: systematic odometry error.",
+    )
+    track_scale: float = Field(1.0, gt=0, description="True track / nominal track.")
+
+
+class Scenario(_Strict):
+    """A validated closed-loop scenario."""
+
+    name: str = Field("scenario", description="Name used in reports.")
+    map: str = Field("warehouse", description="Bundled map name or path to a map file.")
+    robot: RobotSpec = Field(default_factory=RobotSpec)
+    plant: Literal["kinematic", "dynamic"] = Field("kinematic")
+    planner: PlannerSpec = Field(default_factory=PlannerSpec)
+    trajectory: TrajectorySpec = Field(default_factory=TrajectorySpec)
+    controller: ControllerSpec = Field(default_factory=ControllerSpec)
+    odometry: OdometrySpec = Field(default_factory=OdometrySpec)
+    seed: int = Field(0, ge=0, description="Noise seed.")
+    start: tuple[float, float, float] = Field(..., description="(x [m], y [m], heading [deg]).")
+    goals: tuple[tuple[float, float, float], ...] = Field(
+        ..., min_length=1, description="Goals (x [m], y [m], heading [deg]) visited in order."
+    )
+    goal_tolerance: tuple[float, float] = Field(
+        (0.05, 5.0), description="Arrival tolerance (position [m], heading [deg])."
+    )
+    duration: float = Field(120.0, gt=0, description="Longest run [s].")
+    dt: float = Field(0.01, gt=0, description="Simulation and control step [s].")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _goal_alias(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "goal" in data:
+            if "goals" in data:
+                raise ValueError("give either goal or goals, not both")
+            data = dict(data)
+            data["goals"] = [data.pop("goal")]
+        return data
+
+    @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
+    @classmethod
+    def _finite(cls, value):
+        flat = json.dumps(value) if not isinstance(value, float) else str(value)
+        if "Infinity" in flat or "NaN" in flat or flat in ("inf", "nan", "-inf"):
+            raise ValueError(f"must be finite (got {value})")
+        return value
+
+    @model_validator(mode="after")
+    def _dt_below_duration(self):
+        if self.dt > self.duration:
+            raise ValueError(f"dt must be <= duration (got dt={self.dt}, duration={self.duration})")
+        return self
+
+    def to_yaml(self) -> str:
+        """The resolved scenario (all defaults filled) as YAML, loadable again."""
+        data = self.model_dump(mode="json")
+        return yaml.safe_dump(data, sort_keys=False)
+
+
+def format_validation_error(error: ValidationError, source: str) -> str:
+    """One line per problem: ``source: field.path: message (got value)``.
+
+    Parameters
+    ----------
+    error : pydantic.ValidationError
+        The error pydantic raised.
+    source : str
+        The file name (or ``<dict>``) to prefix.
+    """
+    lines = []
+    for item in error.errors():
+        path = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        message = item["msg"].removeprefix("Value error, ")
+        if item["type"] == "extra_forbidden":
+            message = "unknown key (check the spelling; `wheelbase schema` lists the keys)"
+        elif item["type"] == "missing":
+            message = "required field is missing"
+        elif "got" not in message and "input" in item:
+            message = f"{message} (got {item['input']!r})"
+        lines.append(f"{source}: {path}: {message}")
+    return "\n".join(lines)
+
+
+def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
+    """Load and validate a scenario from a YAML file, a bundled name, or a dict.
+
+    Parameters
+    ----------
+    source : str, Path or dict
+        A path to a YAML file, the name of a bundled scenario (``demo``, see
+        :func:`bundled_scenarios`), or the parsed mapping.
+
+    Raises
+    ------
+    ScenarioError
+        Missing file, malformed YAML, or a field that fails validation; the message names the
+        file and the field path.
+    """
+    if isinstance(source, dict):
+        label, data = "<dict>", source
+    else:
+        path = _resolve(source)
+        label = path.name
+        try:
+            data = yaml.safe_load(path.read_text())
+        except yaml.YAMLError as error:
+            mark = getattr(error, "problem_mark", None)
+            where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+            problem = getattr(error, "problem", None) or str(error)
+            raise ScenarioError(f"{label}: malformed YAML{where}: {problem}") from None
+        if not isinstance(data, dict):
+            raise ScenarioError(f"{label}: a scenario must be a mapping of keys to values")
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as error:
+        raise ScenarioError(format_validation_error(error, label)) from None
+
+
+def bundled_scenarios() -> dict[str, Path]:
+    """Names and paths of the scenarios shipped in ``wheelbase/data/scenarios/``."""
+    folder = Path(__file__).parent / "data" / "scenarios"
+    return {path.stem: path for path in sorted(folder.glob("*.yaml"))}
+
+
+def _resolve(source: str | Path) -> Path:
+    path = Path(source)
+    if path.is_file():
+        return path
+    bundled = bundled_scenarios()
+    if str(source) in bundled:
+        return bundled[str(source)]
+    if path.exists():
+        raise ScenarioError(f"{path}: not a file")
+    names = ", ".join(bundled) or "none"
+    raise ScenarioError(f"{path}: no such file (bundled scenarios: {names})")
+
+
+def scenario_json_schema() -> dict[str, Any]:
+    """The JSON Schema of scenario files (what ``wheelbase schema`` prints)."""
+    schema = Scenario.model_json_schema()
+    schema["properties"]["goal"] = {
+        "description": "A single goal (x [m], y [m], heading [deg]); alias of goals: [goal].",
+        "type": "array",
+        "items": {"type": "number"},
+        "minItems": 3,
+        "maxItems": 3,
+    }
+    schema["required"] = [name for name in schema.get("required", []) if name != "goals"]
+    schema["anyOf"] = [{"required": ["goal"]}, {"required": ["goals"]}]
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "wheelbase scenario"
+    return schema
