@@ -15,12 +15,31 @@ from wheelbase.errors import (
 )
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import METHODS, SimResult, simulate
-from wheelbase.models import BodyTwist, DiffDrive, KinematicModel, Unicycle
+from wheelbase.models import (
+    Ackermann,
+    Bicycle,
+    BodyTwist,
+    DiffDrive,
+    KinematicModel,
+    PathReference,
+    RearWheelBicycle,
+    Unicycle,
+    Wheel,
+    WheeledBase,
+    mecanum4,
+    omni3,
+    pure_motions,
+    reference_from_derivatives,
+    reference_from_xy,
+)
+from wheelbase.timing import SpeedLimits, time_parametrize
 
 __version__ = "0.1.0"
 
 __all__ = [
     "METHODS",
+    "Ackermann",
+    "Bicycle",
     "BodyTwist",
     "ConfigError",
     "DataError",
@@ -28,12 +47,23 @@ __all__ = [
     "InputError",
     "KinematicModel",
     "MapError",
+    "PathReference",
     "PlanningError",
+    "RearWheelBicycle",
     "ScenarioError",
     "SimResult",
+    "SpeedLimits",
     "Unicycle",
+    "Wheel",
     "WheelbaseError",
+    "WheeledBase",
     "__version__",
+    "mecanum4",
+    "omni3",
+    "pure_motions",
+    "reference_from_derivatives",
+    "reference_from_xy",
     "simulate",
+    "time_parametrize",
     "wrap_angle",
 ]
