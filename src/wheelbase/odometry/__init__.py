@@ -7,6 +7,7 @@ from wheelbase.odometry.dead_reckoning import (
     integrate_increments,
     pose_increment,
 )
+from wheelbase.odometry.drift import CurvyDrive, drift_table
 from wheelbase.odometry.encoder import (
     Encoder,
     rad_per_s_to_rpm,
@@ -15,13 +16,21 @@ from wheelbase.odometry.encoder import (
     ticks_to_rpm,
     unwrap_ticks,
 )
+from wheelbase.odometry.error_model import OdometryErrors
+from wheelbase.odometry.mrclam import MrclamData, dead_reckoning_errors, load_mrclam
 
 __all__ = [
     "DEAD_RECKONING_METHODS",
+    "CurvyDrive",
     "Encoder",
+    "MrclamData",
+    "OdometryErrors",
     "WheelOdometry",
     "dead_reckon",
+    "dead_reckoning_errors",
+    "drift_table",
     "integrate_increments",
+    "load_mrclam",
     "pose_increment",
     "rad_per_s_to_rpm",
     "rpm_to_rad_per_s",
