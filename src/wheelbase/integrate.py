@@ -229,6 +229,12 @@ def _step_batch(pose, z0, zm, z1, h, method):
         pose[i, 0], pose[i, 1], pose[i, 2] = x, y, th
 
 
+# A few robots do not pay for the threads of a parallel loop: a call of the parallel kernel
+# costs ~0.2 ms however small the batch, which dominated single-robot runs with callable inputs.
+_step_batch_serial = numba.njit(cache=True)(_step_batch.py_func)
+_PARALLEL_MIN_ROBOTS = 256
+
+
 # --------------------------------------------------------------------------- result
 @dataclass(frozen=True)
 class SimResult:
@@ -527,11 +533,12 @@ def _step_loop(poses0, times, method, record, twist_at, use_numba):
         out[0] = pose
         slot = 1
     method_id = _METHOD_ID[method]
+    kernel = _step_batch if poses0.shape[0] >= _PARALLEL_MIN_ROBOTS else _step_batch_serial
     for step in range(n_steps):
         h = times[step + 1] - times[step]
         z0, zm, z1 = twist_at(step)
         if use_numba:
-            _step_batch(pose, z0, zm, z1, h, method_id)
+            kernel(pose, z0, zm, z1, h, method_id)
         else:
             pose = integrate_step(pose, z0, zm, z1, h, method)
         if slot < record.size and record[slot] == step + 1:
