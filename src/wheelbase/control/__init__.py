@@ -5,6 +5,7 @@ from wheelbase.control.base import (
     STEERING_COMMAND,
     VELOCITY_COMMAND,
     Controller,
+    GoalController,
     SteeringLimits,
     VelocityLimits,
     saturate_steering,
@@ -13,13 +14,25 @@ from wheelbase.control.base import (
     velocity_to_steering,
     velocity_to_wheel_speeds,
 )
+from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
+from wheelbase.control.point import GoToPoint
+from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
 
 __all__: list[str] = [
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
+    "Aicardi",
+    "ClosedLoopResult",
     "Controller",
+    "GoToPoint",
+    "GoalController",
+    "LineArc",
+    "PolarPose",
     "SteeringLimits",
     "VelocityLimits",
+    "ViaDirection",
+    "ViaPoint",
+    "run_closed_loop",
     "saturate_steering",
     "saturate_velocity",
     "steering_to_velocity",

@@ -36,19 +36,20 @@ the vehicle cannot turn tighter than its mechanism allows — and leave v as it 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite, positive
-from wheelbase.errors import ConfigError
+from wheelbase.errors import ConfigError, InputError
 
 __all__ = [
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
     "Controller",
+    "GoalController",
     "SteeringLimits",
     "VelocityLimits",
     "saturate_steering",
@@ -304,6 +305,77 @@ def steering_to_velocity(command: ArrayLike, wheel_base: float) -> np.ndarray:
     length = positive("wheel_base", wheel_base, "m")
     v, delta = command[..., 0], command[..., 1]
     return np.stack([v, v * np.tan(delta) / length], -1)
+
+
+# --------------------------------------------------------------------------- pose-goal base
+@dataclass(frozen=True)
+class GoalController:
+    """Shared plumbing of the controllers that drive a unicycle to a goal pose.
+
+    Subclasses implement ``_law(t, x, y, theta)`` on the robot pose expressed in the goal frame
+    (goal at the origin facing +x; arrays of the batch shape) and return ``(v, ω)``; this class
+    validates the inputs, transforms them, applies :func:`saturate_velocity` and keeps the
+    per-episode state (a dict of arrays of the batch shape) that :meth:`reset` clears. A call
+    with a different batch shape than the previous one starts a new episode.
+
+    Parameters
+    ----------
+    limits : VelocityLimits, optional
+        Limits applied to every command (keyword only); ``None`` for none.
+    """
+
+    command_names: ClassVar[tuple[str, ...]] = VELOCITY_COMMAND
+    limits: VelocityLimits | None = field(default=None, kw_only=True)
+    _state: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def reset(self) -> None:
+        """Forget the episode state (phases, plans) kept between calls."""
+        self._state.clear()
+
+    def __call__(self, t: float, pose: ArrayLike, reference: ArrayLike) -> np.ndarray:
+        """Command ``(v [m/s], ω [rad/s])`` of shape ``(..., 2)``.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        pose : array_like, shape (..., 3)
+            Measured poses (x [m], y [m], θ [rad]).
+        reference : array_like, shape (3,) or (..., 3)
+            The goal pose(s), broadcast against ``pose``.
+
+        Raises
+        ------
+        InputError
+            On bad shapes or non-finite values, or when the first call of an episode finds a
+            robot already at the goal position (nothing to steer to; turn in place instead).
+        """
+        pose = as_float_array("pose", pose, 3)
+        goal = as_float_array("goal", reference, 3)
+        pose, goal = np.broadcast_arrays(pose, goal)
+        dx, dy = pose[..., 0] - goal[..., 0], pose[..., 1] - goal[..., 1]
+        c, s = np.cos(goal[..., 2]), np.sin(goal[..., 2])
+        x, y = c * dx + s * dy, -s * dx + c * dy
+        theta = np.arctan2(np.sin(pose[..., 2] - goal[..., 2]), np.cos(pose[..., 2] - goal[..., 2]))
+        if self._state.get("shape") != x.shape:
+            self._state.clear()
+            self._state["shape"] = x.shape
+            if np.any(np.hypot(x, y) < 1e-9):
+                raise InputError(
+                    "goal equals the start position; a pose controller needs a distance "
+                    "to travel (turn in place instead)"
+                )
+            self._start(x, y, theta)
+        v, omega = self._law(float(t), x, y, theta)
+        return saturate_velocity(np.stack(np.broadcast_arrays(v, omega), -1), self.limits)
+
+    def _start(self, x: np.ndarray, y: np.ndarray, theta: np.ndarray) -> None:
+        """Hook: initialise the episode state from the first poses (goal frame)."""
+
+    def _law(
+        self, t: float, x: np.ndarray, y: np.ndarray, theta: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
+        raise NotImplementedError
 
 
 def _positive_or_inf(name: str, value: float, unit: str) -> float:

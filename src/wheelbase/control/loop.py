@@ -1,0 +1,279 @@
+"""A small closed-loop runner for a batch of robots: controller → saturation → kinematic plant.
+
+:func:`run_closed_loop` steps N robots at once — the controller is called on the ``(N, 3)``
+batch of poses, the plant is any :mod:`wheelbase.models` model advanced with
+:func:`wheelbase.integrate.integrate_step` — and records poses and commands. It is what the
+control benchmarks and figures use; :func:`wheelbase.sim.run_loop` is the full single-robot
+loop with encoders and odometry.
+
+The command is a zero-order hold over each step, so the default ``exact`` integrator (the
+closed-form arc) makes the plant exact: the only error is the controller's sampling.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import as_float_array, check_choice, positive
+from wheelbase.control.base import (
+    STEERING_COMMAND,
+    VELOCITY_COMMAND,
+    Controller,
+    velocity_to_steering,
+    velocity_to_wheel_speeds,
+)
+from wheelbase.errors import ConfigError
+from wheelbase.integrate import METHODS, integrate_step, time_grid
+from wheelbase.models.base import KinematicModel
+
+__all__ = [
+    "ClosedLoopResult",
+    "command_to_inputs",
+    "evaluate_pose_law",
+    "pose_benchmark_starts",
+    "run_closed_loop",
+]
+
+
+@dataclass(frozen=True)
+class ClosedLoopResult:
+    """Trajectories of a closed-loop batch run.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Times [s].
+    poses : numpy.ndarray, shape (T, N, 3)
+        Poses (x [m], y [m], θ [rad]).
+    commands : numpy.ndarray, shape (T, N, 2)
+        The (saturated) command in force from each time on; the last row repeats the one before.
+        Zero after a robot has arrived when the run stops robots on arrival.
+    command_names : tuple of str
+        The meaning of the commands' last axis.
+    arrival_time : numpy.ndarray, shape (N,)
+        First time [s] each robot was within the goal tolerance; NaN if never (or no goal).
+    """
+
+    t: np.ndarray
+    poses: np.ndarray
+    commands: np.ndarray
+    command_names: tuple[str, ...]
+    arrival_time: np.ndarray
+
+    @property
+    def arrived(self) -> np.ndarray:
+        """Whether each robot reached the goal tolerance, shape (N,)."""
+        return ~np.isnan(self.arrival_time)
+
+    @property
+    def path_length(self) -> np.ndarray:
+        """Length [m] of each robot's path (sum of the step chords), shape (N,)."""
+        steps = np.diff(self.poses[..., :2], axis=0)
+        return np.sum(np.hypot(steps[..., 0], steps[..., 1]), axis=0)
+
+    @property
+    def reversals(self) -> np.ndarray:
+        """How often each robot changed its direction of travel (sign of v), shape (N,).
+
+        Speeds below 1e-6 m/s (stops, turns in place) do not count as a direction.
+        """
+        v = self.commands[:-1, :, 0]
+        sign = np.where(np.abs(v) > 1e-6, np.sign(v), 0.0)
+        counts = np.zeros(v.shape[1], dtype=np.int64)
+        last = np.zeros(v.shape[1])
+        for row in sign:
+            moving = row != 0.0
+            counts += (moving & (last != 0.0) & (row != last)).astype(np.int64)
+            last = np.where(moving, row, last)
+        return counts
+
+    def final_error(self, goal: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """Final position error [m] and absolute heading error [rad] against ``goal`` (3,)."""
+        goal = as_float_array("goal", goal, 3)
+        last = self.poses[-1]
+        position = np.hypot(last[:, 0] - goal[..., 0], last[:, 1] - goal[..., 1])
+        heading = np.abs(np.angle(np.exp(1j * (last[:, 2] - goal[..., 2]))))
+        return position, heading
+
+
+def command_to_inputs(
+    command: np.ndarray, command_names: tuple[str, ...], model: KinematicModel
+) -> np.ndarray:
+    """Model inputs ``(..., k)`` for controller commands ``(..., 2)``.
+
+    ``(v, ω)`` drives a :class:`~wheelbase.models.Unicycle` directly, a
+    :class:`~wheelbase.models.DiffDrive` through its wheel speeds and a steered model
+    (inputs ``(speed, steering)``) through δ = atan(L·ω/v) clipped to its steering stop;
+    ``(v, δ)`` drives a steered model directly. Any other model gets ``model.inverse`` of the
+    twist (v, 0, ω).
+    """
+    names = tuple(model.input_names)
+    if tuple(command_names) == STEERING_COMMAND:
+        if names != STEERING_COMMAND:
+            raise ConfigError(
+                f"a (speed, steering) controller needs a steered model (got {type(model).__name__})"
+            )
+        return command
+    if names == VELOCITY_COMMAND:
+        return command
+    if names == ("omega_left", "omega_right"):
+        return velocity_to_wheel_speeds(command, model)
+    if names == STEERING_COMMAND:
+        steering = velocity_to_steering(command, model.wheel_base)  # type: ignore[attr-defined]
+        limit = model.max_steering  # type: ignore[attr-defined]
+        steering[..., 1] = np.clip(steering[..., 1], -limit, limit)
+        return steering
+    twist = np.stack([command[..., 0], np.zeros_like(command[..., 0]), command[..., 1]], -1)
+    return model.inverse(twist)  # type: ignore[attr-defined]
+
+
+def run_closed_loop(
+    controller: Controller,
+    model: KinematicModel,
+    pose0: ArrayLike,
+    reference: Any,
+    t_end: float,
+    dt: float,
+    *,
+    method: str = "exact",
+    goal_tolerance: tuple[float, float] | None = None,
+    stop_on_arrival: bool = True,
+) -> ClosedLoopResult:
+    """Run ``controller`` on ``model`` from ``pose0`` for ``t_end`` seconds.
+
+    Parameters
+    ----------
+    controller : Controller
+        Called once per step as ``controller(t, poses (N, 3), reference)``; it is
+        :meth:`~Controller.reset` first.
+    model : KinematicModel
+        The plant (any :mod:`wheelbase.models` model).
+    pose0 : array_like, shape (3,) or (N, 3)
+        Initial poses (x [m], y [m], θ [rad]).
+    reference : object
+        Passed to the controller unchanged (a goal pose, a path, a trajectory).
+    t_end : float
+        Duration [s], > 0.
+    dt : float
+        Control period and integration step [s], 0 < dt <= t_end.
+    method : str
+        Integrator of :data:`wheelbase.integrate.METHODS` (default ``exact``).
+    goal_tolerance : (float, float), optional
+        (position [m], heading [rad]): a robot within both of the goal pose ``reference``
+        has arrived; its arrival time is recorded.
+    stop_on_arrival : bool
+        Hold arrived robots still (zero command) and end the run once all have arrived.
+
+    Returns
+    -------
+    ClosedLoopResult
+    """
+    check_choice("method", method, METHODS)
+    times = time_grid(t_end, dt)
+    pose = as_float_array("pose0", pose0, 3, min_ndim=1, max_ndim=2).reshape(-1, 3).copy()
+    n = pose.shape[0]
+    goal = None
+    if goal_tolerance is not None:
+        tol_position = positive("position tolerance", goal_tolerance[0], "m")
+        tol_heading = positive("heading tolerance", goal_tolerance[1], "rad")
+        goal = as_float_array("goal", reference, 3)
+    names = tuple(getattr(controller, "command_names", VELOCITY_COMMAND))
+    controller.reset()
+    poses = np.empty((times.size, n, 3))
+    commands = np.zeros((times.size, n, 2))
+    arrival = np.full(n, np.nan)
+    poses[0] = pose
+    last = times.size - 1
+    for k in range(times.size - 1):
+        t = float(times[k])
+        if goal is not None:
+            dx, dy = pose[:, 0] - goal[..., 0], pose[:, 1] - goal[..., 1]
+            dth = np.abs(np.angle(np.exp(1j * (pose[:, 2] - goal[..., 2]))))
+            inside = (np.hypot(dx, dy) <= tol_position) & (dth <= tol_heading)
+            arrival = np.where(np.isnan(arrival) & inside, t, arrival)
+            if stop_on_arrival and not np.any(np.isnan(arrival)):
+                last = k
+                break
+        command = np.asarray(controller(t, pose, reference), dtype=np.float64).reshape(n, 2)
+        if goal is not None and stop_on_arrival:
+            command = np.where(np.isnan(arrival)[:, None], command, 0.0)
+        commands[k] = command
+        twist = model.twist(command_to_inputs(command, names, model))
+        pose = integrate_step(pose, twist, twist, twist, float(times[k + 1] - t), method)
+        poses[k + 1] = pose
+    else:
+        if goal is not None:
+            dx, dy = pose[:, 0] - goal[..., 0], pose[:, 1] - goal[..., 1]
+            dth = np.abs(np.angle(np.exp(1j * (pose[:, 2] - goal[..., 2]))))
+            inside = (np.hypot(dx, dy) <= tol_position) & (dth <= tol_heading)
+            arrival = np.where(np.isnan(arrival) & inside, times[-1], arrival)
+    commands[last] = commands[last - 1] if last > 0 else commands[0]
+    return ClosedLoopResult(
+        t=times[: last + 1],
+        poses=poses[: last + 1],
+        commands=commands[: last + 1],
+        command_names=names,
+        arrival_time=arrival,
+    )
+
+
+def pose_benchmark_starts(radius: float = 2.0, bearings: int = 16, headings: int = 8) -> np.ndarray:
+    """Start poses of the pose-control benchmark, shape ``(bearings·headings, 3)``.
+
+    The goal is the origin facing +x; the starts lie on a circle of ``radius`` [m] at
+    ``bearings`` equally spaced bearings (from 0), each with ``headings`` equally spaced
+    headings (from 0) — 16 × 8 = 128 cases by default, bearing-major.
+    """
+    radius = positive("radius", radius, "m")
+    for name, count in (("bearings", bearings), ("headings", headings)):
+        if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+            raise ConfigError(f"{name} must be an integer >= 1 (got {count!r})")
+    bearing = 2.0 * np.pi * np.arange(bearings) / bearings
+    heading = 2.0 * np.pi * np.arange(headings) / headings
+    b, h = np.meshgrid(bearing, heading, indexing="ij")
+    heading = np.arctan2(np.sin(h.ravel()), np.cos(h.ravel()))
+    heading = np.where(heading <= -np.pi, np.pi, heading)
+    return np.stack([radius * np.cos(b.ravel()), radius * np.sin(b.ravel()), heading], -1)
+
+
+def evaluate_pose_law(
+    controller: Controller,
+    model: KinematicModel,
+    starts: ArrayLike,
+    goal: ArrayLike = (0.0, 0.0, 0.0),
+    *,
+    t_end: float = 60.0,
+    dt: float = 0.01,
+    tolerance: tuple[float, float] = (0.01, math.radians(1.0)),
+) -> tuple[dict[str, float], ClosedLoopResult]:
+    """Run a pose law from every start and summarise it (the issue-5 pose benchmark).
+
+    Returns
+    -------
+    metrics : dict
+        ``success_rate`` (fraction within ``tolerance`` of the goal before ``t_end``),
+        ``mean_time_s`` and ``mean_path_length_m`` (over the successful runs; NaN if none),
+        ``reversals`` (mean number of direction changes per run), ``position_success_rate``
+        (within the position tolerance at the end, whatever the heading),
+        ``max_final_position_error_m`` and ``max_final_heading_error_deg``.
+    result : ClosedLoopResult
+        The trajectories.
+    """
+    result = run_closed_loop(controller, model, starts, goal, t_end, dt, goal_tolerance=tolerance)
+    position, heading = result.final_error(goal)
+    ok = result.arrived
+    metrics = {
+        "success_rate": float(np.mean(ok)),
+        "mean_time_s": float(np.mean(result.arrival_time[ok])) if ok.any() else math.nan,
+        "mean_path_length_m": float(np.mean(result.path_length[ok])) if ok.any() else math.nan,
+        "reversals": float(np.mean(result.reversals)),
+        "position_success_rate": float(np.mean(position <= tolerance[0])),
+        "max_final_position_error_m": float(np.max(position)),
+        "max_final_heading_error_deg": float(np.degrees(np.max(heading))),
+    }
+    return metrics, result
