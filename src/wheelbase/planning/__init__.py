@@ -5,19 +5,35 @@ document 002 (smooth path planning with Hybrid A*).
 """
 
 from wheelbase.planning.astar import GridPath, astar, dijkstra
+from wheelbase.planning.dubins import dubins_candidates, dubins_length, dubins_path
 from wheelbase.planning.grid import (
     Footprint,
     MovingAIScenario,
     OccupancyGrid,
     read_movingai_scenarios,
 )
+from wheelbase.planning.path import CurvePath, Path, PlanningStats
+from wheelbase.planning.reeds_shepp import (
+    reeds_shepp_candidates,
+    reeds_shepp_length,
+    reeds_shepp_path,
+)
 
 __all__ = [
+    "CurvePath",
     "Footprint",
     "GridPath",
     "MovingAIScenario",
     "OccupancyGrid",
+    "Path",
+    "PlanningStats",
     "astar",
     "dijkstra",
+    "dubins_candidates",
+    "dubins_length",
+    "dubins_path",
     "read_movingai_scenarios",
+    "reeds_shepp_candidates",
+    "reeds_shepp_length",
+    "reeds_shepp_path",
 ]
