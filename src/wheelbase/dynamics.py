@@ -89,7 +89,9 @@ __all__ = [
     "RM100_HALF_TRACK",
     "DiffDriveDynamics",
     "DynamicsResult",
+    "InverseDynamicsResult",
     "RigidBody",
+    "inverse_dynamics",
     "simulate_dynamics",
 ]
 
@@ -808,3 +810,48 @@ def _simulate_callable(dynamics, function, times, s0, method, rtol, atol):
     if not np.all(np.isfinite(out)):
         raise InputError("the simulation produced non-finite states; torques are too large")
     return DynamicsResult(times, out, used, fy, method)
+
+
+# --------------------------------------------------------------------------- inverse dynamics
+@dataclass(frozen=True)
+class InverseDynamicsResult:
+    """Forces and wheel torques along a trajectory (document 000 §5.2, figures 5.10–5.11).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Times [s].
+    force : numpy.ndarray, shape (T, 3)
+        Body force (F_x [N], F_y [N], M_z [N·m]); F_y is the lateral ground force.
+    torques : numpy.ndarray, shape (T, 2)
+        Wheel torques (τ_L, τ_R) [N·m].
+    """
+
+    t: np.ndarray
+    force: np.ndarray
+    torques: np.ndarray
+
+
+def inverse_dynamics(dynamics: DiffDriveDynamics, reference: Any) -> InverseDynamicsResult:
+    """Forces and wheel torques that make ``dynamics`` follow ``reference`` (document 000 §5.2).
+
+    τ = M·V̇ + C(V)·V with V and V̇ the reference twist and twist rate, then τ* = Wᵀτ.
+
+    Parameters
+    ----------
+    dynamics : DiffDriveDynamics
+        The robot.
+    reference : PoseTrajectory
+        Anything with ``t`` (T,), ``twist`` (T, 3) and ``twist_rate`` (T, 3), e.g. from
+        :func:`wheelbase.trajectory.feasible_trajectory`.
+
+    Returns
+    -------
+    InverseDynamicsResult
+    """
+    try:
+        t, twist, rate = reference.t, reference.twist, reference.twist_rate
+    except AttributeError:
+        raise InputError("reference needs t, twist and twist_rate (a PoseTrajectory)") from None
+    force, torques = dynamics.inverse(twist, rate)
+    return InverseDynamicsResult(np.asarray(t, dtype=np.float64), force, torques)
