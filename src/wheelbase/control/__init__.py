@@ -14,16 +14,28 @@ from wheelbase.control.base import (
     velocity_to_steering,
     velocity_to_wheel_speeds,
 )
+from wheelbase.control.goal import (
+    FIGURE8_GOALS,
+    DriveTrain,
+    GoToGoal,
+    GoToGoalLog,
+    run_go_to_goal,
+    saturate_keep_turn_rate,
+)
 from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
 from wheelbase.control.point import GoToPoint
 from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
 
 __all__: list[str] = [
+    "FIGURE8_GOALS",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
     "Aicardi",
     "ClosedLoopResult",
     "Controller",
+    "DriveTrain",
+    "GoToGoal",
+    "GoToGoalLog",
     "GoToPoint",
     "GoalController",
     "LineArc",
@@ -33,6 +45,8 @@ __all__: list[str] = [
     "ViaDirection",
     "ViaPoint",
     "run_closed_loop",
+    "run_go_to_goal",
+    "saturate_keep_turn_rate",
     "saturate_steering",
     "saturate_velocity",
     "steering_to_velocity",
