@@ -1,5 +1,13 @@
 """Wheel encoders, dead reckoning, real odometry data and odometry calibration (document 003)."""
 
+from wheelbase.odometry.calibration import (
+    UMBmarkCalibration,
+    UMBmarkCorrection,
+    UMBmarkResult,
+    calibrate_umbmark,
+    umbmark_correction,
+    umbmark_test,
+)
 from wheelbase.odometry.dead_reckoning import (
     DEAD_RECKONING_METHODS,
     WheelOdometry,
@@ -25,7 +33,11 @@ __all__ = [
     "Encoder",
     "MrclamData",
     "OdometryErrors",
+    "UMBmarkCalibration",
+    "UMBmarkCorrection",
+    "UMBmarkResult",
     "WheelOdometry",
+    "calibrate_umbmark",
     "dead_reckon",
     "dead_reckoning_errors",
     "drift_table",
@@ -36,5 +48,7 @@ __all__ = [
     "rpm_to_rad_per_s",
     "ticks_to_distance",
     "ticks_to_rpm",
+    "umbmark_correction",
+    "umbmark_test",
     "unwrap_ticks",
 ]
