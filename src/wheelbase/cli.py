@@ -21,8 +21,7 @@ import importlib
 import math
 import pkgutil
 import sys
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -63,7 +62,11 @@ def _error_line(message: str) -> None:
 
 
 class _OneLineErrors(TyperGroup):
-    """Turns usage errors and wheelbase errors of any command into one line and exit code 2."""
+    """Turns usage errors and wheelbase errors of any command into one line and exit code 2.
+
+    Commands raise; this wrapper (the group's ``main``, which both the console script and
+    typer's CliRunner call) reports. Other exceptions are bugs and keep their traceback.
+    """
 
     def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
         if not standalone_mode:
@@ -102,16 +105,6 @@ app = typer.Typer(
     pretty_exceptions_show_locals=False,
     rich_markup_mode=None,  # help texts hold units in brackets, e.g. [rad/s]: not markup
 )
-
-
-@contextmanager
-def _errors() -> Iterator[None]:
-    """Inside a command: the same one-line handling, for callers that bypass ``main``."""
-    try:
-        yield
-    except (WheelbaseError, FileExistsError) as error:
-        _error_line(str(error))
-        raise typer.Exit(2) from None
 
 
 def _version(value: bool) -> None:
@@ -346,7 +339,6 @@ def _check_outputs(out: Path, names: Sequence[str], force: bool) -> list[Path]:
             f"{out} already holds {', '.join(existing)}; pass --force to replace "
             f"{'it' if len(existing) == 1 else 'them'}"
         )
-    out.mkdir(parents=True, exist_ok=True)
     return paths
 
 
@@ -464,47 +456,47 @@ def simulate_command(
     Example (document 000 §3.2, case 1): wheelbase simulate --model diffdrive --left 0.8
     --right 0.6 --t-end 100 --dt 0.1 --method euler --pose0 0 0 90deg --out DIR
     """
-    with _errors():
-        given = {
-            "wheel_radius": wheel_radius,
-            "half_track": half_track,
-            "left": left,
-            "right": right,
-            "v": v,
-            "omega": omega,
-            "u": u,
-            "r": r,
-            "wheel_base": wheel_base,
-            "track": track,
-            "speed": speed,
-            "steering": steering,
-            "max_steering": max_steering,
-            "half_length": half_length,
-            "half_width": half_width,
-            "base_radius": base_radius,
-        }
-        check_choice("method", method, METHODS)
-        built = build_model(model, given)
-        start = (
-            _parse_length(pose0[0], "pose0 x"),
-            _parse_length(pose0[1], "pose0 y"),
-            parse_angle(pose0[2], "pose0 heading"),
-        )
-        footprint = (
-            positive("length", length, "m") if length is not None else built.footprint[0],
-            positive("width", width, "m") if width is not None else built.footprint[1],
-        )
-        names = SIMULATE_FILES if gif else SIMULATE_FILES[:-1]
-        result = simulate(built.model, start, built.inputs, t_end, dt, method)
-        paths = dict(zip(names, _check_outputs(Path(out), names, force), strict=True))
-        result.to_csv(paths["trajectory.csv"], overwrite=True)
-        title = f"{model}, {method}, dt = {dt:g} s"
-        _write_figures(result, paths, footprint, title, gif=gif)
-        console = Console()
-        console.print(_summary(result, model, "wheelbase simulate"))
-        console.print(
-            f"wrote {len(paths)} files to {out}/: " + ", ".join(names), soft_wrap=True, markup=False
-        )
+    given = {
+        "wheel_radius": wheel_radius,
+        "half_track": half_track,
+        "left": left,
+        "right": right,
+        "v": v,
+        "omega": omega,
+        "u": u,
+        "r": r,
+        "wheel_base": wheel_base,
+        "track": track,
+        "speed": speed,
+        "steering": steering,
+        "max_steering": max_steering,
+        "half_length": half_length,
+        "half_width": half_width,
+        "base_radius": base_radius,
+    }
+    check_choice("method", method, METHODS)
+    built = build_model(model, given)
+    start = (
+        _parse_length(pose0[0], "pose0 x"),
+        _parse_length(pose0[1], "pose0 y"),
+        parse_angle(pose0[2], "pose0 heading"),
+    )
+    footprint = (
+        positive("length", length, "m") if length is not None else built.footprint[0],
+        positive("width", width, "m") if width is not None else built.footprint[1],
+    )
+    names = SIMULATE_FILES if gif else SIMULATE_FILES[:-1]
+    paths = dict(zip(names, _check_outputs(Path(out), names, force), strict=True))
+    result = simulate(built.model, start, built.inputs, t_end, dt, method)
+    Path(out).mkdir(parents=True, exist_ok=True)
+    result.to_csv(paths["trajectory.csv"], overwrite=True)
+    title = f"{model}, {method}, dt = {dt:g} s"
+    _write_figures(result, paths, footprint, title, gif=gif)
+    console = Console()
+    console.print(_summary(result, model, "wheelbase simulate"))
+    console.print(
+        f"wrote {len(paths)} files to {out}/: " + ", ".join(names), soft_wrap=True, markup=False
+    )
 
 
 # --------------------------------------------------------------------------- demo
@@ -535,6 +527,7 @@ def run_demo(out: str | Path = DEMO_DIR) -> tuple[SimResult, dict[str, Path]]:
     from wheelbase.plot import animate, plot_path, plot_states, save_figure
 
     paths = dict(zip(DEMO_FILES, _check_outputs(Path(out), DEMO_FILES, True), strict=True))
+    Path(out).mkdir(parents=True, exist_ok=True)
     robot = DiffDrive(wheel_radius=0.05, half_track=0.2)
     pose0 = np.tile([0.0, 0.0, math.pi / 2], (len(DEMO_CASES), 1))
     batch = simulate(robot, pose0, np.array(DEMO_CASES), t_end=100.0, dt=0.1, method="euler")
@@ -565,18 +558,17 @@ def demo_command(
 ) -> None:
     """Run document 000 §3.2's kinematics demo: three wheel-speed cases on one plot [SI units]
     and the animation of case 1."""
-    with _errors():
-        batch, paths = run_demo(out)
-        console = Console()
-        table = Table(title="document 000 §3.2, Euler, dt = 0.1 s, 100 s")
-        for column in ("ω_L, ω_R [rad/s]", "final x [m]", "final y [m]", "final θ [rad]"):
-            table.add_column(Text(column), justify="right")
-        for case, pose in zip(DEMO_CASES, batch.poses[-1], strict=True):
-            table.add_row(f"{case[0]:g}, {case[1]:g}", *(f"{value:.4f}" for value in pose))
-        console.print(table)
-        console.print(
-            f"wrote {', '.join(str(p) for p in paths.values())}", soft_wrap=True, markup=False
-        )
+    batch, paths = run_demo(out)
+    console = Console()
+    table = Table(title="document 000 §3.2, Euler, dt = 0.1 s, 100 s")
+    for column in ("ω_L, ω_R [rad/s]", "final x [m]", "final y [m]", "final θ [rad]"):
+        table.add_column(Text(column), justify="right")
+    for case, pose in zip(DEMO_CASES, batch.poses[-1], strict=True):
+        table.add_row(f"{case[0]:g}, {case[1]:g}", *(f"{value:.4f}" for value in pose))
+    console.print(table)
+    console.print(
+        f"wrote {', '.join(str(p) for p in paths.values())}", soft_wrap=True, markup=False
+    )
 
 
 # --------------------------------------------------------------------------- other areas
