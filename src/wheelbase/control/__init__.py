@@ -23,15 +23,26 @@ from wheelbase.control.goal import (
     saturate_keep_turn_rate,
 )
 from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
+from wheelbase.control.pid import ANTI_WINDUP, PID
 from wheelbase.control.point import GoToPoint
 from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
+from wheelbase.control.torque import (
+    ComputedTorquePID,
+    TorqueGains,
+    TrackingResult,
+    track_trajectory,
+    tune_computed_torque,
+)
 
 __all__: list[str] = [
+    "ANTI_WINDUP",
     "FIGURE8_GOALS",
+    "PID",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
     "Aicardi",
     "ClosedLoopResult",
+    "ComputedTorquePID",
     "Controller",
     "DriveTrain",
     "GoToGoal",
@@ -41,6 +52,8 @@ __all__: list[str] = [
     "LineArc",
     "PolarPose",
     "SteeringLimits",
+    "TorqueGains",
+    "TrackingResult",
     "VelocityLimits",
     "ViaDirection",
     "ViaPoint",
@@ -50,6 +63,8 @@ __all__: list[str] = [
     "saturate_steering",
     "saturate_velocity",
     "steering_to_velocity",
+    "track_trajectory",
+    "tune_computed_torque",
     "velocity_to_steering",
     "velocity_to_wheel_speeds",
 ]
