@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 import wheelbase
 from wheelbase import BodyTwist, ConfigError, DiffDrive, Unicycle, simulate
 from wheelbase.cli import DEMO_FILES, app, parse_angle
+from wheelbase.models import Ackermann, Bicycle, RearWheelBicycle
 
 RUNNER = CliRunner()
 DOC000 = [
@@ -121,11 +122,10 @@ def test_other_models_match_the_python_call(tmp_path, args, model, inputs, colum
 
 
 def test_steered_models(tmp_path):
-    bicycle = pytest.importorskip("wheelbase.models.bicycle")
     cases = [
-        ("bicycle", [], bicycle.Bicycle(1.0)),
-        ("rear-bicycle", [], bicycle.RearWheelBicycle(1.0)),
-        ("ackermann", ["--track", "0.5", "--wheel-base", "1.2"], bicycle.Ackermann(1.2, 0.5)),
+        ("bicycle", [], Bicycle(1.0)),
+        ("rear-bicycle", [], RearWheelBicycle(1.0)),
+        ("ackermann", ["--track", "0.5", "--wheel-base", "1.2"], Ackermann(1.2, 0.5)),
     ]
     for name, extra, model in cases:
         out = tmp_path / name
@@ -145,7 +145,6 @@ def test_steered_models(tmp_path):
 
 
 def test_holonomic_bases_drive_sideways(tmp_path):
-    pytest.importorskip("wheelbase.models.wheeled")
     for name in ("mecanum", "omni"):
         out = tmp_path / name
         result = run("simulate", "--model", name, "--v", "0.2", "--t-end", "10", "--no-gif",

@@ -158,6 +158,10 @@ def test_bad_every_is_a_config_error(arc, every):
 def test_non_finite_poses_are_an_input_error():
     with pytest.raises(InputError, match="finite"):
         plot_path(np.array([[0.0, 0.0, 0.0], [np.nan, 1.0, 0.0]]))
+    with pytest.raises(InputError, match="at least one pose"):
+        plot_path(np.zeros((0, 3)))
+    with pytest.raises(InputError, match="at least one pose"):
+        plot_path(np.zeros((5, 0, 3)))
 
 
 # --------------------------------------------------------------------------- result

@@ -140,8 +140,8 @@ def _poses(result: Any) -> np.ndarray:
         poses = poses[None, :]
     if poses.ndim == 2:
         poses = poses[:, None, :]
-    if poses.shape[0] == 0:
-        raise InputError("poses must hold at least one pose (got none)")
+    if poses.shape[0] == 0 or poses.shape[1] == 0:
+        raise InputError(f"poses must hold at least one pose (got shape {poses.shape})")
     return poses
 
 
