@@ -1,0 +1,291 @@
+"""``wheelbase goto`` and ``wheelbase calibrate``: document 003's go-to-goal loop and UMBmark.
+
+``wheelbase goto --goal 100 100 [--goal -100 100 ...] --out DIR`` drives the simulated robot of
+:class:`~wheelbase.control.goal.DriveTrain` to each goal through the full loop (set-points in
+RPM → PI speed loop → PWM → motor → encoder ticks → odometry) and writes ``routes.png``,
+``log.csv``, ``route.gif`` and ``metrics.json``. Goals are read in ``--unit`` (default ``cm``,
+the unit in which document 003 Fig. 8's (±100, ±100) are read); everything written is in metres.
+
+``wheelbase calibrate --ed 1.005 --eb 1.02 --out DIR`` runs UMBmark on a robot with those errors
+and writes ``before_after.png`` and ``metrics.json`` (E_max,syst before/after and the
+corrections).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+
+from wheelbase._validate import check_choice, finite
+from wheelbase.errors import ConfigError
+
+__all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
+
+GOTO_FILES: tuple[str, ...] = ("routes.png", "log.csv", "route.gif", "metrics.json")
+CALIBRATE_FILES: tuple[str, ...] = ("before_after.png", "metrics.json")
+_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+
+def _prepare(out: Path, names: tuple[str, ...], force: bool) -> dict[str, Path]:
+    """Output paths in ``out``; refuse to overwrite unless ``force``."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out must be a folder (got the file {out})")
+    paths = {name: out / name for name in names}
+    existing = [str(p) for p in paths.values() if p.exists()]
+    if existing and not force:
+        raise FileExistsError(f"{', '.join(existing)} exists; pass --force to overwrite")
+    out.mkdir(parents=True, exist_ok=True)
+    return paths
+
+
+def _goals(values: list[str] | None, extra: list[str], unit: str) -> list[tuple[float, float]]:
+    """Pair each ``--goal X`` with the Y that follows it on the command line."""
+    from wheelbase.control.goal import FIGURE8_GOALS
+
+    check_choice("unit", unit, tuple(_UNITS))
+    stray = [token for token in extra if token.startswith("--")]
+    if stray:
+        raise ConfigError(f"unknown option {stray[0]} (see 'wheelbase goto --help')")
+    if not values:
+        if extra:
+            raise ConfigError(f"unexpected argument {extra[0]!r}; goals are given as --goal X Y")
+        return list(FIGURE8_GOALS)
+    if len(extra) != len(values):
+        raise ConfigError("each --goal needs two numbers, X and Y (e.g. --goal 100 100)")
+    scale = _UNITS[unit]
+    goals = []
+    for x_text, y_text in zip(values, extra, strict=True):
+        coords = []
+        for text in (x_text, y_text):
+            try:
+                number = float(text)
+            except ValueError:
+                raise ConfigError(f"goal must be two numbers (got {text!r})") from None
+            coords.append(finite("goal", number, unit) * scale)
+        goals.append((coords[0], coords[1]))
+    return goals
+
+
+def _plot_routes(logs: list[Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 6.0))
+    for index, log in enumerate(logs):
+        colour = f"C{index % 10}"
+        goal = log.goal
+        ax.plot(
+            *log.true_pose[:, :2].T, color=colour, lw=2, label=f"goal ({goal[0]:g}, {goal[1]:g}) m"
+        )
+        ax.plot(*log.estimated_pose[:, :2].T, color=colour, lw=1, ls="--")
+        ax.plot(*goal, marker="*", ms=12, color=colour)
+    ax.plot(0, 0, "ko")
+    ax.plot([], [], "k--", lw=1, label="odometry estimate")
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("Go-to-goal through speed loop, motors, encoders and odometry")
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def _write_log(logs: list[Any], path: Path) -> None:
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        header = None
+        for index, log in enumerate(logs):
+            columns = log.columns()
+            if header is None:
+                header = ["goal_index", "goal_x", "goal_y", *columns]
+                writer.writerow(header)
+            table = np.column_stack(list(columns.values()))
+            for row in table:
+                writer.writerow(
+                    [index, repr(float(log.goal[0])), repr(float(log.goal[1]))]
+                    + [repr(float(v)) for v in row]
+                )
+
+
+def _animate(logs: list[Any], path: Path, overwrite: bool) -> None:
+    from wheelbase.plot import animate
+
+    length = max(log.t.size for log in logs)
+    longest = max(logs, key=lambda log: log.t.size)
+    poses = np.stack(
+        [
+            np.concatenate([log.true_pose, np.repeat(log.true_pose[-1:], length - log.t.size, 0)])
+            for log in logs
+        ],
+        axis=1,
+    )
+    result = SimpleNamespace(t=longest.t, poses=poses)
+    animate(result, path, footprint=(0.2, 0.17), overwrite=overwrite, max_frames=60, title="goto")
+
+
+def _plot_calibration(cal: Any, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 5))
+    for name, result, style in (("before", cal.before, "-"), ("after", cal.after, ":")):
+        for paths, colour in ((result.paths_cw, "tab:red"), (result.paths_ccw, "tab:blue")):
+            for k, run in enumerate(paths):
+                label = f"{'cw' if colour == 'tab:red' else 'ccw'} {name}" if k == 0 else None
+                left.plot(*run[:, :2].T, style, color=colour, lw=1, alpha=0.7, label=label)
+    left.set_aspect("equal")
+    left.grid(True, alpha=0.3)
+    left.set_xlabel("x [m]")
+    left.set_ylabel("y [m]")
+    left.set_title("True paths of the square test")
+    left.legend(fontsize=8)
+    for name, result, marker in (("before", cal.before, "o"), ("after", cal.after, "^")):
+        for errors, cg, colour, tag in (
+            (result.errors_cw, result.cg_cw, "tab:red", "cw"),
+            (result.errors_ccw, result.cg_ccw, "tab:blue", "ccw"),
+        ):
+            right.scatter(*errors.T, marker=marker, color=colour, alpha=0.6, label=f"{tag} {name}")
+            right.plot(*cg, marker="x", ms=12, mew=2, color=colour)
+    right.axhline(0, color="k", lw=0.5)
+    right.axvline(0, color="k", lw=0.5)
+    right.set_aspect("equal", adjustable="datalim")
+    right.grid(True, alpha=0.3)
+    right.set_xlabel("return error x [m]")
+    right.set_ylabel("return error y [m]")
+    right.set_title(
+        f"E_max,syst {cal.before.e_max_syst:.3f} m → {cal.after.e_max_syst:.4f} m "
+        f"({cal.reduction:.0f}×)"
+    )
+    right.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``goto`` and ``calibrate`` to the ``wheelbase`` app.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The main application (or a test app).
+    """
+
+    @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+    def goto(
+        ctx: typer.Context,
+        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        goal: Annotated[
+            list[str] | None,
+            typer.Option(
+                "--goal",
+                help="Goal X Y in --unit (repeat for several goals; default: document 003 "
+                "Fig. 8's (100, 100), (-100, 100), (-100, -100), (100, -100) cm).",
+            ),
+        ] = None,
+        unit: str = typer.Option("cm", "--unit", help="Unit of --goal: m, cm or mm."),
+        ed: float = typer.Option(1.0, "--ed", help="Real wheel-diameter ratio E_d = D_R/D_L [-]."),
+        eb: float = typer.Option(1.0, "--eb", help="Real/nominal track ratio E_b [-]."),
+        method: str = typer.Option(
+            "exact", "--method", help="Odometry update: euler (doc 003), midpoint or exact."
+        ),
+        seed: int = typer.Option(0, "--seed", help="Seed of the random encoder errors."),
+        force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
+    ) -> None:
+        """Drive to goals with document 003's go-to-goal loop; write routes, log, GIF, metrics."""
+        from wheelbase.control.goal import DriveTrain, run_go_to_goal
+        from wheelbase.odometry.error_model import OdometryErrors
+
+        goals = _goals(goal, list(ctx.args), unit)
+        drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
+        paths = _prepare(out, GOTO_FILES, force)
+        logs = [run_go_to_goal(g, drive=drive, seed=seed) for g in goals]
+        _plot_routes(logs, paths["routes.png"])
+        _write_log(logs, paths["log.csv"])
+        _animate(logs, paths["route.gif"], overwrite=True)
+        metrics = {
+            "goals": [
+                {
+                    "goal": [float(log.goal[0]), float(log.goal[1])],
+                    "true_final_error_m": log.true_final_error,
+                    "odometry_final_error_m": log.odometry_final_error,
+                    "odometry_drift_m": log.odometry_drift,
+                    "reached": log.reached,
+                    "time_s": float(log.t[-1]),
+                }
+                for log in logs
+            ],
+            "robot": {
+                "wheel_radius_m": drive.model.wheel_radius,
+                "half_track_m": drive.model.half_track,
+                "pulses_per_revolution": drive.encoder.pulses_per_revolution,
+                "diameter_ratio": ed,
+                "track_ratio": eb,
+                "odometry_method": method,
+            },
+        }
+        paths["metrics.json"].write_text(json.dumps(metrics, indent=2) + "\n")
+        for entry in metrics["goals"]:
+            x, y = entry["goal"]
+            typer.echo(
+                f"goal ({x:g}, {y:g}) m: true error {entry['true_final_error_m']:.4f} m, "
+                f"odometry error {entry['odometry_final_error_m']:.4f} m"
+            )
+        typer.echo(f"wrote {', '.join(str(p) for p in paths.values())}")
+
+    @app.command()
+    def calibrate(
+        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        ed: float = typer.Option(1.005, "--ed", help="Injected wheel-diameter ratio E_d [-]."),
+        eb: float = typer.Option(1.02, "--eb", help="Injected track ratio E_b [-]."),
+        side: float = typer.Option(4.0, "--side", help="Side of the square [m]."),
+        runs: int = typer.Option(5, "--runs", help="Runs in each direction."),
+        slip: float = typer.Option(0.0, "--slip", help="Random wheel slip per segment [-]."),
+        iterations: int = typer.Option(1, "--iterations", help="Test-and-correct rounds."),
+        seed: int = typer.Option(0, "--seed", help="Seed of the random errors."),
+        force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
+    ) -> None:
+        """UMBmark: square test with injected E_d, E_b; corrections; test again."""
+        from wheelbase.odometry.calibration import calibrate_umbmark
+
+        cal = calibrate_umbmark(
+            ed, eb, side=side, runs=runs, slip_std=slip, iterations=iterations, seed=seed
+        )
+        paths = _prepare(out, CALIBRATE_FILES, force)
+        _plot_calibration(cal, paths["before_after.png"])
+        corr = cal.correction
+        metrics = {
+            "e_max_syst_before_m": cal.before.e_max_syst,
+            "e_max_syst_after_m": cal.after.e_max_syst,
+            "reduction": cal.reduction,
+            "track_m": corr.track,
+            "scale_left": corr.scale_left,
+            "scale_right": corr.scale_right,
+            "diameter_ratio_estimate": corr.diameter_ratio,
+            "track_ratio_estimate": corr.track_ratio,
+            "alpha_rad": corr.alpha,
+            "beta_rad": corr.beta,
+        }
+        if not all(math.isfinite(v) for v in metrics.values()):
+            raise ConfigError("the calibration produced non-finite figures")
+        paths["metrics.json"].write_text(json.dumps(metrics, indent=2) + "\n")
+        typer.echo(
+            f"E_max,syst {cal.before.e_max_syst:.4f} m -> {cal.after.e_max_syst:.5f} m "
+            f"({cal.reduction:.1f}x); track {corr.track:.5f} m, scale left {corr.scale_left:.6f}, "
+            f"right {corr.scale_right:.6f}"
+        )
+        typer.echo(f"wrote {', '.join(str(p) for p in paths.values())}")

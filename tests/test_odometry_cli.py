@@ -1,0 +1,77 @@
+"""``wheelbase goto`` and ``wheelbase calibrate`` (typer CliRunner on a local app)."""
+
+import json
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from wheelbase.commands.odometry import CALIBRATE_FILES, GOTO_FILES, register
+from wheelbase.errors import ConfigError
+
+app = typer.Typer()
+
+
+@app.callback()
+def _main() -> None:
+    """Test app."""
+
+
+register(app)
+runner = CliRunner()
+
+
+def test_goto_writes_files_and_metrics(tmp_path):
+    out = tmp_path / "run"
+    result = runner.invoke(
+        app, ["goto", "--goal", "100", "100", "--goal", "-100", "-50", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    for name in GOTO_FILES:
+        assert (out / name).stat().st_size > 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    goals = metrics["goals"]
+    assert [g["goal"] for g in goals] == [[1.0, 1.0], [-1.0, -0.5]]  # cm → m
+    for g in goals:
+        assert g["true_final_error_m"] < 0.02 and g["odometry_final_error_m"] < 0.015
+    header = (out / "log.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["goal_index", "goal_x", "goal_y", "t"]
+    # No overwrite without --force.
+    again = runner.invoke(app, ["goto", "--goal", "1", "1", "--unit", "m", "--out", str(out)])
+    assert again.exit_code != 0 and isinstance(again.exception, FileExistsError)
+    forced = runner.invoke(
+        app, ["goto", "--goal", "0.5", "0", "--unit", "m", "--out", str(out), "--force"]
+    )
+    assert forced.exit_code == 0, forced.output
+    assert json.loads((out / "metrics.json").read_text())["goals"][0]["goal"] == [0.5, 0.0]
+
+
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
+        (["--goal", "nan", "1"], "goal"),
+        (["--goal", "1"], "two numbers"),
+        (["--goal", "1", "abc"], "goal"),
+        (["--goal", "1", "1", "--unit", "km"], "unit"),
+        (["--goal", "1", "1", "--bogus", "3"], "unknown option"),
+    ],
+)
+def test_goto_bad_input(tmp_path, argv, match):
+    result = runner.invoke(app, ["goto", *argv, "--out", str(tmp_path / "x")])
+    assert result.exit_code != 0
+    assert isinstance(result.exception, ConfigError)
+    assert match in str(result.exception)
+
+
+def test_calibrate_writes_metrics(tmp_path):
+    out = tmp_path / "cal"
+    result = runner.invoke(app, ["calibrate", "--ed", "1.005", "--eb", "1.02", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    for name in CALIBRATE_FILES:
+        assert (out / name).stat().st_size > 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["e_max_syst_before_m"] / metrics["e_max_syst_after_m"] >= 10
+    assert metrics["track_m"] == pytest.approx(0.408, abs=2e-3)
+    assert metrics["scale_right"] / metrics["scale_left"] == pytest.approx(1.005, abs=1e-4)
+    bad = runner.invoke(app, ["calibrate", "--ed", "-1", "--out", str(tmp_path / "bad")])
+    assert isinstance(bad.exception, ConfigError) and "diameter_ratio" in str(bad.exception)
