@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from wheelbase.errors import ConfigError, DataError
-from wheelbase.odometry import MrclamData, dead_reckoning_errors, load_mrclam
+from wheelbase.odometry import MrclamData, dead_reckoning_errors, load_mrclam, yaw_rate_fit
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"
 ODOMETRY = DATA / "Dataset6_Robot1_Odometry.dat"
@@ -54,6 +54,27 @@ def test_dead_reckoning_errors_on_real_data(data):
     # Over 300 s the heading error dominates: with the true heading the error is far smaller.
     with_true_heading = np.median([r["true_heading_position_error_m"] for r in by[300.0, "exact"]])
     assert with_true_heading < 0.3 * long
+
+
+@needs_data
+def test_yaw_rate_of_the_odometry_is_late_and_too_large(data):
+    # What dominates the heading error: the odometry yaw rate leads the Vicon one by about
+    # 0.2 s and over-reports turning by about 15-20 % (an effective-track error, UMBmark type A).
+    fit = yaw_rate_fit(data)
+    assert 0.1 <= fit["lag_s"] <= 0.4
+    assert fit["correlation"] > 0.85
+    assert 0.75 < fit["scale"] < 0.92
+
+
+def test_yaw_rate_fit_recovers_a_synthetic_lag_and_scale():
+    t = np.arange(0.0, 60.0, 0.01)
+    omega = 0.3 * np.sin(0.7 * t) + 0.2 * np.sin(2.1 * t)
+    lag, scale = 0.3, 0.8
+    heading = scale * (-0.3 / 0.7 * np.cos(0.7 * (t - lag)) - 0.2 / 2.1 * np.cos(2.1 * (t - lag)))
+    pose = np.column_stack([np.zeros_like(t), np.zeros_like(t), np.angle(np.exp(1j * heading))])
+    fit = yaw_rate_fit(MrclamData(t, np.zeros_like(t), omega, pose))
+    assert fit["lag_s"] == pytest.approx(lag, abs=0.051)
+    assert fit["scale"] == pytest.approx(scale, rel=0.03)
 
 
 def write(path, rows, header="# comment\n"):

@@ -25,7 +25,12 @@ from wheelbase.odometry.encoder import (
     unwrap_ticks,
 )
 from wheelbase.odometry.error_model import OdometryErrors
-from wheelbase.odometry.mrclam import MrclamData, dead_reckoning_errors, load_mrclam
+from wheelbase.odometry.mrclam import (
+    MrclamData,
+    dead_reckoning_errors,
+    load_mrclam,
+    yaw_rate_fit,
+)
 
 __all__ = [
     "DEAD_RECKONING_METHODS",
@@ -51,4 +56,5 @@ __all__ = [
     "umbmark_correction",
     "umbmark_test",
     "unwrap_ticks",
+    "yaw_rate_fit",
 ]

@@ -27,7 +27,7 @@ from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import wrap_angle
 from wheelbase.odometry.dead_reckoning import DEAD_RECKONING_METHODS, dead_reckon
 
-__all__ = ["MrclamData", "dead_reckoning_errors", "load_mrclam"]
+__all__ = ["MrclamData", "dead_reckoning_errors", "load_mrclam", "yaw_rate_fit"]
 
 
 @dataclass(frozen=True)
@@ -205,3 +205,43 @@ def dead_reckoning_errors(
                     }
                 )
     return records
+
+
+def yaw_rate_fit(data: MrclamData, max_lag: float = 1.0, step: float = 0.05) -> dict[str, float]:
+    """Compare the odometry yaw rate with the motion-capture one: lag, scale and bias.
+
+    The ground-truth heading is unwrapped, resampled every ``step`` seconds, differentiated and
+    smoothed over 5 samples; the odometry yaw rate (a zero-order hold) is resampled likewise.
+    For each lag in [0, max_lag] the correlation is computed; at the best lag the least-squares
+    scale ω_true ≈ s·ω_odometry and the median bias ω_odometry − ω_true are reported.
+
+    Parameters
+    ----------
+    data : MrclamData
+        Aligned odometry and ground truth.
+    max_lag : float
+        Largest lag of the ground truth behind the odometry to try [s], >= 0.
+    step : float
+        Resampling period [s], > 0.
+
+    Returns
+    -------
+    dict
+        ``lag_s`` (ground truth behind odometry), ``correlation``, ``scale`` (true/odometry)
+        and ``bias_rad_per_s`` (odometry − true, median) at the best lag.
+    """
+    step = positive("step", step, "s")
+    grid = np.arange(data.t[0], data.t[-1], step)
+    index = np.searchsorted(data.t, grid, side="right") - 1  # zero-order hold of the odometry
+    omega = data.omega[index]
+    heading = np.interp(grid, data.t, np.unwrap(data.true_pose[:, 2]))
+    truth = np.convolve(np.gradient(heading, step), np.ones(5) / 5.0, mode="same")
+    best = (-np.inf, 0, 1.0, 0.0)
+    for lag in range(int(max_lag / step) + 1):
+        a = omega[: omega.size - lag] if lag else omega
+        b = truth[lag:]
+        corr = float(np.corrcoef(a, b)[0, 1])
+        if corr > best[0]:
+            best = (corr, lag, float(a @ b / (a @ a)), float(np.median(a - b)))
+    corr, lag, scale, bias = best
+    return {"lag_s": lag * step, "correlation": corr, "scale": scale, "bias_rad_per_s": bias}
