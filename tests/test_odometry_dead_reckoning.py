@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from wheelbase.errors import ConfigError, InputError
@@ -98,8 +98,7 @@ def test_exact_update_is_the_icc_arc(theta, d_left, d_right):
     odo = WheelOdometry(R, D, ppr, method="exact")
     d_l, d_r = odo.wheel_distances(ticks)
     v, omega = (d_l + d_r) / 2, (d_r - d_l) / (2 * D)
-    if abs(omega) < 1e-6:
-        omega = 0.0 if abs(omega) < 1e-12 else omega
+    assume(abs(omega) > 1e-3)  # the ICC formula cancels badly near straight lines (tested apart)
     expected = arc([0.0, 0.0, theta], v, omega, 1.0)
     got = odo.update([0.0, 0.0, theta], ticks)
     np.testing.assert_allclose(got[:2], expected[:2], atol=1e-9)
