@@ -20,7 +20,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +32,7 @@ from matplotlib.patches import Polygon
 from numpy.typing import ArrayLike
 from PIL import Image
 
-from wheelbase._validate import as_float_array, positive
+from wheelbase._validate import as_float_array, finite, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import transform_points
 
@@ -52,7 +52,9 @@ _FOOTPRINT_COLOUR = "tab:green"
 
 
 # --------------------------------------------------------------------------- helpers
-def footprint_outline(pose: ArrayLike, footprint: tuple[float, float]) -> np.ndarray:
+def footprint_outline(
+    pose: ArrayLike, footprint: tuple[float, float], center_offset: float = 0.0
+) -> np.ndarray:
     """Corners of the robot rectangle in the world frame, closed (first corner repeated).
 
     Parameters
@@ -62,6 +64,9 @@ def footprint_outline(pose: ArrayLike, footprint: tuple[float, float]) -> np.nda
     footprint : (float, float)
         Length along the body x axis and width along the body y axis [m], both > 0
         (document 000 §3.2 draws 0.6 × 0.4 m and 0.75 × 2d m).
+    center_offset : float
+        Distance [m] from the pose's point forward to the rectangle's centre (e.g. from the
+        rear axle of a car); 0 centres the rectangle on (x, y).
 
     Returns
     -------
@@ -72,6 +77,7 @@ def footprint_outline(pose: ArrayLike, footprint: tuple[float, float]) -> np.nda
     corners = 0.5 * np.array(
         [[-length, -width], [length, -width], [length, width], [-length, width], [-length, -width]]
     )
+    corners[:, 0] += finite("center_offset", center_offset, "m")
     return transform_points(as_float_array("pose", pose, 3), corners)
 
 
@@ -424,6 +430,8 @@ def animate(
     dpi: float = 80.0,
     max_robots: int = 20,
     title: str | None = None,
+    center_offset: float = 0.0,
+    background: Callable[[Axes], None] | None = None,
 ) -> Path:
     """Write a GIF of the robot footprint moving along its path, with the path trace.
 
@@ -452,6 +460,11 @@ def animate(
         For a batch, animate at most this many robots.
     title : str, optional
         Axes title, shown before the running time.
+    center_offset : float
+        Reference point to footprint centre [m] (see :func:`footprint_outline`).
+    background : callable, optional
+        ``background(ax)`` draws the static part (a map, a plan) once, after the axes limits
+        are set from the path; it may change the limits.
 
     Returns
     -------
@@ -496,7 +509,9 @@ def animate(
     trails = [
         ax.plot([], [], "b-", lw=1.2, label="path" if i == 0 else None)[0] for i in range(n_robots)
     ]
-    corners = footprint_outline(poses, footprint)  # (T, N, 5, 2)
+    if background is not None:
+        background(ax)
+    corners = footprint_outline(poses, footprint, center_offset)  # (T, N, 5, 2)
     bodies = [
         Polygon(corners[0, i, :-1], closed=True, facecolor=_FOOTPRINT_COLOUR, edgecolor="k",
                 label="robot" if i == 0 else None)

@@ -1,0 +1,326 @@
+"""Metrics and figures of a closed-loop run (what ``wheelbase run`` writes into its report).
+
+Algorithms return data; this module turns a :class:`~wheelbase.sim.Log` (and the map and plan it
+ran on) into numbers and pictures. Nothing here changes a result.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from wheelbase.geometry import transform_points, wrap_angle
+from wheelbase.sim import Log
+
+__all__ = [
+    "animate_run",
+    "figure_commands",
+    "figure_errors",
+    "figure_map",
+    "tracking_metrics",
+    "write_report",
+]
+
+
+def tracking_metrics(log: Log, goal: np.ndarray) -> dict[str, Any]:
+    """Numbers that summarise a run.
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    goal : numpy.ndarray, shape (3,)
+        Final goal pose [m, m, rad].
+
+    Returns
+    -------
+    dict
+        ``status``, ``duration_s``, ``distance_travelled_m``, tracking errors (RMS and max of
+        the distance between the true pose and the reference, RMS heading error in degrees),
+        final pose errors of the true and the estimated pose against the goal, the odometry
+        drift at the end (|true − estimated|) and per metre travelled, and the collision flag.
+    """
+    true, est, ref = log.true_pose, log.estimated_pose, log.reference_pose
+    position_error = np.hypot(*(true[:, :2] - ref[:, :2]).T)
+    heading_error = np.degrees(wrap_angle(true[:, 2] - ref[:, 2]))
+    travelled = float(np.sum(np.hypot(*np.diff(true[:, :2], axis=0).T)))
+    drift = float(np.hypot(*(true[-1, :2] - est[-1, :2])))
+    return {
+        "status": log.status,
+        "collision": log.status == "collision",
+        "duration_s": float(log.t[-1]),
+        "distance_travelled_m": travelled,
+        "tracking_rms_position_error_m": float(np.sqrt(np.mean(position_error**2))),
+        "tracking_max_position_error_m": float(np.max(position_error)),
+        "tracking_rms_heading_error_deg": float(np.sqrt(np.mean(heading_error**2))),
+        "final_position_error_true_m": float(np.hypot(*(true[-1, :2] - goal[:2]))),
+        "final_heading_error_true_deg": float(np.degrees(abs(wrap_angle(true[-1, 2] - goal[2])))),
+        "final_position_error_estimated_m": float(np.hypot(*(est[-1, :2] - goal[:2]))),
+        "odometry_drift_m": drift,
+        "odometry_drift_heading_deg": float(np.degrees(abs(wrap_angle(true[-1, 2] - est[-1, 2])))),
+        "odometry_drift_per_metre": drift / travelled if travelled > 0 else 0.0,
+    }
+
+
+def _draw_map(ax, grid) -> None:
+    if grid is None:
+        return
+    x0, y0 = grid.origin
+    rows, cols = grid.occupied.shape
+    extent = (x0, x0 + cols * grid.resolution, y0, y0 + rows * grid.resolution)
+    ax.imshow(
+        grid.occupied, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.6,
+        interpolation="nearest",
+    )  # fmt: skip
+
+
+def _outline(pose: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    closed = np.vstack([polygon, polygon[:1]])
+    return transform_points(pose, closed)
+
+
+def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
+    """Map with the plan, the driven path, the odometry estimate and footprints.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or None
+        The map (None: blank background).
+    plan_poses : numpy.ndarray, shape (N, 3) or None
+        The planned path.
+    log : Log
+        The recorded run.
+    polygon : numpy.ndarray, shape (M, 2), optional
+        Footprint outline in the body frame, drawn at the start, the end and along the way.
+    title : str
+        Figure title.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 7))
+    _draw_map(ax, grid)
+    if plan_poses is not None:
+        ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.5, label="plan")
+    ax.plot(log.true_pose[:, 0], log.true_pose[:, 1], "-", color="tab:blue", lw=1.5, label="driven")
+    ax.plot(
+        log.estimated_pose[:, 0], log.estimated_pose[:, 1], ":", color="tab:green", lw=1.2,
+        label="odometry estimate",
+    )  # fmt: skip
+    if polygon is not None:
+        indices = np.unique(np.linspace(0, len(log.t) - 1, 12).astype(int))
+        for index in indices:
+            outline = _outline(log.true_pose[index], polygon)
+            ax.plot(outline[:, 0], outline[:, 1], "-", color="tab:blue", lw=0.6, alpha=0.6)
+    ax.plot(*log.true_pose[0, :2], "o", color="tab:green", label="start")
+    ax.plot(*log.true_pose[-1, :2], "s", color="tab:red", label=f"end ({log.status})")
+    _zoom(ax, grid, plan_poses, log)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title or "plan and driven path")
+    fig.tight_layout()
+    return fig
+
+
+def _zoom(ax, grid, plan_poses, log: Log, margin: float = 2.0) -> None:
+    points = [log.true_pose[:, :2]]
+    if plan_poses is not None:
+        points.append(plan_poses[:, :2])
+    xy = np.vstack(points)
+    lo, hi = xy.min(0) - margin, xy.max(0) + margin
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+
+
+def figure_errors(log: Log):
+    """Tracking error (position, heading) and odometry drift against time.
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
+    error = np.hypot(*(log.true_pose[:, :2] - log.reference_pose[:, :2]).T)
+    heading = np.degrees(wrap_angle(log.true_pose[:, 2] - log.reference_pose[:, 2]))
+    drift = np.hypot(*(log.true_pose[:, :2] - log.estimated_pose[:, :2]).T)
+    axes[0].plot(log.t, 100 * error)
+    axes[0].set_ylabel("position error [cm]")
+    axes[1].plot(log.t, heading)
+    axes[1].set_ylabel("heading error [deg]")
+    axes[2].plot(log.t, 100 * drift, color="tab:green")
+    axes[2].set_ylabel("odometry drift [cm]")
+    axes[2].set_xlabel("t [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    axes[0].set_title("true pose vs reference, and odometry vs true pose")
+    fig.tight_layout()
+    return fig
+
+
+def figure_commands(log: Log):
+    """Commands, wheel rates and (on a dynamic plant) wheel torques against time.
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    """
+    import matplotlib.pyplot as plt
+
+    rows = 3 if log.torques is not None else 2
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.4 * rows + 1), sharex=True)
+    for index, name in enumerate(log.command_names):
+        axes[0].plot(log.t, log.command[:, index], label=name)
+    axes[0].set_ylabel("command")
+    axes[0].legend(fontsize=8)
+    axes[1].plot(log.t, log.wheel_rates[:, 0], label="left")
+    axes[1].plot(log.t, log.wheel_rates[:, 1], label="right")
+    axes[1].set_ylabel("wheel rate [rad/s]")
+    axes[1].legend(fontsize=8)
+    if log.torques is not None:
+        axes[2].plot(log.t, log.torques[:, 0], label="left")
+        axes[2].plot(log.t, log.torques[:, 1], label="right")
+        axes[2].set_ylabel("wheel torque [N·m]")
+        axes[2].legend(fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def animate_run(
+    grid, plan_poses, log: Log, robot_footprint, path, *, frames: int = 120, fps: int = 15
+):
+    """GIF of the footprint moving over the map with the plan and the trace.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or None
+        The map.
+    plan_poses : numpy.ndarray, shape (N, 3) or None
+        The planned path.
+    log : Log
+        The recorded run.
+    robot_footprint : tuple
+        ``(length, width, center_offset)`` [m] of the rectangular footprint.
+    path : str or Path
+        Output GIF (replaced if it exists: the caller decides about overwriting).
+    frames : int
+        Number of frames (the run is subsampled evenly).
+    fps : int
+        Frames per second.
+    """
+    from types import SimpleNamespace
+
+    from wheelbase.plot import animate
+
+    length, width, offset = robot_footprint
+
+    def background(ax) -> None:
+        _draw_map(ax, grid)
+        if plan_poses is not None:
+            ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.2)
+        _zoom(ax, grid, plan_poses, log)
+
+    run = SimpleNamespace(t=log.t, poses=log.true_pose)
+    return animate(
+        run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
+        overwrite=True, background=background, title=log.status,
+    )  # fmt: skip
+
+
+def heading_deg(value: float) -> float:
+    """Degrees of an angle in radians, wrapped to (−180, 180]."""
+    return math.degrees(float(wrap_angle(value)))
+
+
+REPORT_FILES = (
+    "metrics.json",
+    "log.csv",
+    "scenario.yaml",
+    "map.png",
+    "errors.png",
+    "commands.png",
+    "animation.gif",
+)
+"""Files a closed-loop report folder holds."""
+
+
+def write_report(result, folder, *, force: bool = False, gif: bool = True) -> list:
+    """Write a run's report: metrics, log, resolved scenario, figures and animation.
+
+    Parameters
+    ----------
+    result : wheelbase.runner.RunResult
+        The run.
+    folder : str or Path
+        Output folder, created if missing.
+    force : bool
+        Overwrite an existing report (default: raise FileExistsError if any report file
+        exists there).
+    gif : bool
+        Also render ``animation.gif`` (the slowest part).
+
+    Returns
+    -------
+    list of Path
+        The files written. A run whose planning failed gets ``metrics.json`` (status
+        ``planning_failed``) and ``scenario.yaml`` only.
+    """
+    import json
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    folder = Path(folder)
+    existing = [folder / name for name in REPORT_FILES if (folder / name).exists()]
+    if existing and not force:
+        raise FileExistsError(f"{existing[0]} exists: a report is already there (use --force)")
+    folder.mkdir(parents=True, exist_ok=True)
+    for path in existing:
+        path.unlink()
+    written = []
+    metrics_path = folder / "metrics.json"
+    metrics_path.write_text(json.dumps(result.metrics, indent=2, default=_json_default) + "\n")
+    written.append(metrics_path)
+    scenario_path = folder / "scenario.yaml"
+    scenario_path.write_text(result.scenario.to_yaml())
+    written.append(scenario_path)
+    if result.log is None:
+        return written
+    written.append(result.log.to_csv(folder / "log.csv"))
+    plan = None if result.plan is None else result.plan.poses
+    polygon = result.footprint_polygon
+    figures = {
+        "map.png": figure_map(result.grid, plan, result.log, polygon, title=result.scenario.name),
+        "errors.png": figure_errors(result.log),
+        "commands.png": figure_commands(result.log),
+    }
+    for name, fig in figures.items():
+        fig.savefig(folder / name, dpi=110)
+        plt.close(fig)
+        written.append(folder / name)
+    if gif:
+        geometry = (*result.robot.footprint, result.robot.center_offset)
+        written.append(
+            animate_run(result.grid, plan, result.log, geometry, folder / "animation.gif")
+        )
+    return written
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")
