@@ -204,6 +204,7 @@ def run_loop(
     integrator: str = "rk4",
     settle_time: float = 0.0,
     progress: Callable[[float], None] | None = None,
+    dynamics: Any = None,
 ) -> Log:
     """Run a kinematic closed loop from ``pose0`` until arrival, collision or ``duration``.
 
@@ -231,7 +232,7 @@ def run_loop(
         Final pose [m, m, rad].
     tolerance : tuple of float
         Arrival tolerance (position [m], heading [rad]); the robot must also be at rest
-        (commanded speed below 1 mm/s) once the reference has ended.
+        (forward speed below 1 cm/s) once the reference has ended.
     in_collision : callable, optional
         ``in_collision(pose) -> bool``; a collision ends the run with status ``collision``.
     command_names : tuple of str
@@ -243,6 +244,11 @@ def run_loop(
         the run ends as ``timeout`` when it has not arrived by then.
     progress : callable, optional
         Called with the simulated time now and then (for progress bars).
+    dynamics : DiffDriveDynamics, optional
+        A dynamic plant: the controller then returns wheel torques (left, right) [N·m] and is
+        called with the estimated state (x, y, θ, u, v, r) of shape (6,) — the twist estimated
+        from the encoder ticks of the last step (or the true one with perfect state); the
+        state (pose, twist) is integrated with RK4 under torques held over the step, from rest.
 
     Returns
     -------
@@ -262,6 +268,8 @@ def run_loop(
 
     rows_t, rows_true, rows_est, rows_ref = [], [], [], []
     rows_cmd, rows_rates, rows_ticks = [], [], []
+    twist_true = np.zeros(3)
+    twist_estimate = np.zeros(3)
     status = "timeout"
     end_time = getattr(reference, "t", None)
     end_time = float(end_time[-1]) if end_time is not None else 0.0
@@ -269,14 +277,20 @@ def run_loop(
 
     for step in range(n_max + 1):
         t = step * dt
-        command = np.asarray(controller(t, estimate.copy(), reference), dtype=np.float64)
+        measured = estimate if dynamics is None else np.concatenate([estimate, twist_estimate])
+        command = np.asarray(controller(t, measured.copy(), reference), dtype=np.float64)
         if command.shape != (2,) or not np.all(np.isfinite(command)):
             status = "diverged"
             command = np.zeros(2)
-        inputs = command_to_inputs(command)
-        twist = np.asarray(model.twist(inputs), dtype=np.float64)
-        rates = odometry.true_wheel_rates(twist)
-        if odometry.radius_scale != (1.0, 1.0) or odometry.track_scale != 1.0:
+        if dynamics is not None:
+            twist = twist_true
+            rates = odometry.true_wheel_rates(twist)
+        else:
+            twist = np.asarray(model.twist(command_to_inputs(command)), dtype=np.float64)
+            rates = odometry.true_wheel_rates(twist)
+        if dynamics is None and (
+            odometry.radius_scale != (1.0, 1.0) or odometry.track_scale != 1.0
+        ):
             # The command was computed for the nominal geometry; the true wheels turn at the
             # rates the nominal geometry asks for, and the true geometry decides the motion.
             nominal = OdometrySetup(odometry.wheel_radius, odometry.half_track)
@@ -297,35 +311,55 @@ def run_loop(
         if in_collision is not None and in_collision(pose):
             status = "collision"
             break
-        if t >= end_time and _arrived(pose, goal, tolerance) and abs(command[0]) < 1e-3:
+        if t >= end_time and _arrived(pose, goal, tolerance) and abs(twist[0]) < 0.01:
             status = "arrived"
             break
         if step == n_max or t >= limit:
             break
 
-        pose = integrate_step(pose, twist, twist, twist, dt, integrator)
-        new_angle = wheel_angle + rates * dt
+        if dynamics is None:
+            pose = integrate_step(pose, twist, twist, twist, dt, integrator)
+            new_angle = wheel_angle + rates * dt
+        else:
+            state = _rk4_dynamics(dynamics, np.concatenate([pose, twist_true]), command, dt)
+            pose, twist_true = state[:3], state[3:]
+            pose[2] = wrap_angle(pose[2])
+            # The wheels turn by the integral of their rate: trapezoid of the step's two ends.
+            new_angle = wheel_angle + 0.5 * (rates + odometry.true_wheel_rates(twist_true)) * dt
         if use_encoders:
             delta = odometry.encoder.tick_deltas(wheel_angle, new_angle, rng)
             ticks = ticks + delta
             estimate = odometry.odometry.update(estimate, delta)
+            v_est, w_est = odometry.odometry.velocity(delta, dt)
+            twist_estimate = np.array([float(v_est), 0.0, float(w_est)])
         else:
             estimate = pose.copy()
+            twist_estimate = twist_true.copy()
         wheel_angle = new_angle
 
     if progress is not None:
         progress(rows_t[-1])
+    commands = np.asarray(rows_cmd)
     return Log(
         t=np.asarray(rows_t),
         true_pose=np.asarray(rows_true),
         estimated_pose=np.asarray(rows_est),
         reference_pose=np.asarray(rows_ref),
-        command=np.asarray(rows_cmd),
+        command=commands,
         wheel_rates=np.asarray(rows_rates),
         ticks=np.asarray(rows_ticks, dtype=np.int64),
+        torques=commands if dynamics is not None else None,
         command_names=command_names,
         status=status,
     )
+
+
+def _rk4_dynamics(dynamics: Any, state: np.ndarray, torques: np.ndarray, h: float) -> np.ndarray:
+    k1 = dynamics.derivative(state, torques)
+    k2 = dynamics.derivative(state + 0.5 * h * k1, torques)
+    k3 = dynamics.derivative(state + 0.5 * h * k2, torques)
+    k4 = dynamics.derivative(state + h * k3, torques)
+    return state + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
 def _arrived(pose: np.ndarray, goal: np.ndarray, tolerance: tuple[float, float]) -> bool:
