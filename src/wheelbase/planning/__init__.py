@@ -12,6 +12,7 @@ from wheelbase.planning.grid import (
     OccupancyGrid,
     read_movingai_scenarios,
 )
+from wheelbase.planning.hybrid_astar import HybridAStar
 from wheelbase.planning.path import CurvePath, Path, PlanningStats
 from wheelbase.planning.reeds_shepp import (
     reeds_shepp_candidates,
@@ -23,6 +24,7 @@ __all__ = [
     "CurvePath",
     "Footprint",
     "GridPath",
+    "HybridAStar",
     "MovingAIScenario",
     "OccupancyGrid",
     "Path",

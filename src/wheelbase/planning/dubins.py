@@ -31,7 +31,7 @@ _NAMES = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
 def _m(x):
     """Wrap to [0, 2π)."""
     v = x - _TWO_PI * math.floor(x / _TWO_PI)
-    return 0.0 if v >= _TWO_PI - _TOL else v
+    return 0.0 if (v >= _TWO_PI - _TOL or v < 0.0) else v
 
 
 @numba.njit(cache=True)

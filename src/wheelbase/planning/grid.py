@@ -301,7 +301,7 @@ class OccupancyGrid:
         path : str or pathlib.Path
             The YAML file to write; the image goes beside it.
         image : str or None
-            Image file name; default: the YAML's stem + ``.pgm``.
+            Image file name (``.pgm`` or ``.png``); default: the YAML's stem + ``.pgm``.
 
         Returns
         -------
@@ -314,9 +314,14 @@ class OccupancyGrid:
         if self.unknown is not None:
             pixels[self.unknown] = 205
         pixels[self.occupied & (self.unknown is None or ~self.unknown)] = 0
-        pixels = np.flipud(pixels)
-        header = f"P5\n{self.shape[1]} {self.shape[0]}\n255\n".encode()
-        image_path.write_bytes(header + pixels.tobytes())
+        pixels = np.ascontiguousarray(np.flipud(pixels))
+        if image_path.suffix.lower() == ".png":
+            from PIL import Image
+
+            Image.fromarray(pixels, mode="L").save(image_path, optimize=True)
+        else:
+            header = f"P5\n{self.shape[1]} {self.shape[0]}\n255\n".encode()
+            image_path.write_bytes(header + pixels.tobytes())
         meta = {
             "image": image_path.name,
             "mode": "trinary",
@@ -446,6 +451,16 @@ class OccupancyGrid:
         out.setflags(write=False)
         return out
 
+    @cached_property
+    def occupancy_prefix(self) -> np.ndarray:
+        """Per-row prefix counts of occupied cells, shape ``(rows, cols + 1)`` (int32): the
+        number of occupied cells in row ``i`` and columns ``j0..j1`` is
+        ``prefix[i, j1 + 1] − prefix[i, j0]``."""
+        out = np.zeros((self.shape[0], self.shape[1] + 1), np.int32)
+        np.cumsum(self.occupied, axis=1, out=out[:, 1:])
+        out.setflags(write=False)
+        return out
+
     def clearance(self, xy: ArrayLike) -> np.ndarray:
         """Distance [m] from world points to the nearest occupied cell (its square).
 
@@ -518,6 +533,7 @@ class OccupancyGrid:
         flat = poses.reshape(-1, 3)
         out = _collides_batch(
             self.occupied.view(np.uint8),
+            self.occupancy_prefix,
             np.asarray(self.distance_field),
             self.resolution,
             self.origin[0],
@@ -551,6 +567,7 @@ class OccupancyGrid:
         flat = poses.reshape(-1, 3)
         out = _clearance_batch(
             self.occupied.view(np.uint8),
+            self.occupancy_prefix,
             np.asarray(self.distance_field),
             self.resolution,
             self.origin[0],
@@ -579,8 +596,8 @@ class Footprint:
     Examples
     --------
     >>> fp = Footprint.rectangle(4.5, 1.8, rear_axle_to_center=1.35)
-    >>> fp.polygon[:, 0].min(), fp.polygon[:, 0].max()
-    (-0.9, 3.6)
+    >>> [round(float(v), 3) for v in (fp.polygon[:, 0].min(), fp.polygon[:, 0].max())]
+    [-0.9, 3.6]
     """
 
     polygon: np.ndarray
@@ -745,7 +762,7 @@ def _poly_square_separated(wp, sx0, sy0, side, gap):
 
 
 @numba.njit(cache=True)
-def _collides_one(occ, dist, res, x0, y0, poly, circles, radius, x, y, th):
+def _collides_one(occ, prefix, dist, res, x0, y0, poly, circles, radius, x, y, th):
     rows, cols = occ.shape
     wp = _world_polygon(poly, x, y, th)
     xmax_map = x0 + cols * res
@@ -770,24 +787,70 @@ def _collides_one(occ, dist, res, x0, y0, poly, circles, radius, x, y, th):
             all_clear = False
     if all_clear:
         return False
-    # exact fallback: every occupied cell under the polygon's bounding box
-    j0 = max(0, math.floor((wp[:, 0].min() - x0) / res))
-    j1 = min(cols - 1, math.floor((wp[:, 0].max() - x0) / res))
-    i0 = max(0, math.floor((wp[:, 1].min() - y0) / res))
-    i1 = min(rows - 1, math.floor((wp[:, 1].max() - y0) / res))
+    return _polygon_hits_cells(prefix, res, x0, y0, wp)
+
+
+@numba.njit(cache=True)
+def _polygon_hits_cells(prefix, res, x0, y0, wp):
+    """Exact test: does convex polygon ``wp`` meet any occupied (closed) cell square?
+
+    Row band by row band: the polygon's x-extent inside the band [y_i, y_i + r] is an interval
+    (convexity), and a square of that row meets the polygon iff its x-range meets that interval;
+    per-row prefix sums of occupancy answer "any occupied cell in columns j0..j1" in O(1).
+    """
+    rows = prefix.shape[0]
+    cols = prefix.shape[1] - 1
+    m = wp.shape[0]
+    ymin = wp[:, 1].min()
+    ymax = wp[:, 1].max()
+    i0 = max(0, math.ceil((ymin - y0) / res) - 1)
+    i1 = min(rows - 1, math.floor((ymax - y0) / res))
     for i in range(i0, i1 + 1):
-        for j in range(j0, j1 + 1):
-            if occ[i, j] and not _poly_square_separated(wp, x0 + j * res, y0 + i * res, res, 0.0):
-                return True
+        yb0 = y0 + i * res
+        yb1 = yb0 + res
+        lo = np.inf
+        hi = -np.inf
+        for k in range(m):
+            vx = wp[k, 0]
+            vy = wp[k, 1]
+            if yb0 <= vy <= yb1:
+                lo = min(lo, vx)
+                hi = max(hi, vx)
+            ax, ay = vx, vy
+            bx = wp[(k + 1) % m, 0]
+            by = wp[(k + 1) % m, 1]
+            if ay != by:
+                for yl in (yb0, yb1):
+                    if (ay - yl) * (by - yl) <= 0.0:
+                        xl = ax + (yl - ay) * (bx - ax) / (by - ay)
+                        lo = min(lo, xl)
+                        hi = max(hi, xl)
+        if lo > hi:
+            continue
+        j0 = max(0, math.ceil((lo - x0) / res) - 1)
+        j1 = min(cols - 1, math.floor((hi - x0) / res))
+        if j1 >= j0 and prefix[i, j1 + 1] - prefix[i, j0] > 0:
+            return True
     return False
 
 
 @numba.njit(cache=True)
-def _collides_batch(occ, dist, res, x0, y0, poly, circles, radius, poses):
+def _collides_batch(occ, prefix, dist, res, x0, y0, poly, circles, radius, poses):
     out = np.empty(poses.shape[0], dtype=np.bool_)
     for n in range(poses.shape[0]):
         out[n] = _collides_one(
-            occ, dist, res, x0, y0, poly, circles, radius, poses[n, 0], poses[n, 1], poses[n, 2]
+            occ,
+            prefix,
+            dist,
+            res,
+            x0,
+            y0,
+            poly,
+            circles,
+            radius,
+            poses[n, 0],
+            poses[n, 1],
+            poses[n, 2],
         )
     return out
 
@@ -827,13 +890,13 @@ def _poly_square_distance(wp, sx, sy, side):
 
 
 @numba.njit(cache=True)
-def _clearance_batch(occ, dist, res, x0, y0, poly, circles, radius, poses):
+def _clearance_batch(occ, prefix, dist, res, x0, y0, poly, circles, radius, poses):
     rows, cols = occ.shape
     out = np.empty(poses.shape[0])
     slack = math.sqrt(2.0) * res
     for n in range(poses.shape[0]):
         x, y, th = poses[n, 0], poses[n, 1], poses[n, 2]
-        if _collides_one(occ, dist, res, x0, y0, poly, circles, radius, x, y, th):
+        if _collides_one(occ, prefix, dist, res, x0, y0, poly, circles, radius, x, y, th):
             out[n] = 0.0
             continue
         wp = _world_polygon(poly, x, y, th)

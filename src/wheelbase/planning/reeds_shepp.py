@@ -62,9 +62,9 @@ def _tau_omega(u, v, xi, eta, phi):
 
 # Each base formula returns (ok, t, u, v) for the goal (x, y, φ) in normalised coordinates.
 @numba.njit(cache=True)
-def _lp_sp_lp(x, y, phi):  # 8.1
-    xi = x - math.sin(phi)
-    eta = y - 1.0 + math.cos(phi)
+def _lp_sp_lp(x, y, phi, sp, cp):  # 8.1
+    xi = x - sp
+    eta = y - 1.0 + cp
     u = math.hypot(xi, eta)
     t = math.atan2(eta, xi)
     if t >= -_ZERO:
@@ -75,9 +75,9 @@ def _lp_sp_lp(x, y, phi):  # 8.1
 
 
 @numba.njit(cache=True)
-def _lp_sp_rp(x, y, phi):  # 8.2
-    xi = x + math.sin(phi)
-    eta = y - 1.0 - math.cos(phi)
+def _lp_sp_rp(x, y, phi, sp, cp):  # 8.2
+    xi = x + sp
+    eta = y - 1.0 - cp
     u1 = xi * xi + eta * eta
     if u1 >= 4.0:
         t1 = math.atan2(eta, xi)
@@ -90,9 +90,9 @@ def _lp_sp_rp(x, y, phi):  # 8.2
 
 
 @numba.njit(cache=True)
-def _lp_rm_l(x, y, phi):  # 8.3 / 8.4 (corrected)
-    xi = x - math.sin(phi)
-    eta = y - 1.0 + math.cos(phi)
+def _lp_rm_l(x, y, phi, sp, cp):  # 8.3 / 8.4 (corrected)
+    xi = x - sp
+    eta = y - 1.0 + cp
     u1 = math.hypot(xi, eta)
     if u1 <= 4.0:
         theta = math.atan2(eta, xi)
@@ -105,9 +105,9 @@ def _lp_rm_l(x, y, phi):  # 8.3 / 8.4 (corrected)
 
 
 @numba.njit(cache=True)
-def _lp_rup_lum_rm(x, y, phi):  # 8.7
-    xi = x + math.sin(phi)
-    eta = y - 1.0 - math.cos(phi)
+def _lp_rup_lum_rm(x, y, phi, sp, cp):  # 8.7
+    xi = x + sp
+    eta = y - 1.0 - cp
     rho = 0.25 * (2.0 + math.hypot(xi, eta))
     if rho <= 1.0:
         u = math.acos(rho)
@@ -118,9 +118,9 @@ def _lp_rup_lum_rm(x, y, phi):  # 8.7
 
 
 @numba.njit(cache=True)
-def _lp_rum_lum_rp(x, y, phi):  # 8.8
-    xi = x + math.sin(phi)
-    eta = y - 1.0 - math.cos(phi)
+def _lp_rum_lum_rp(x, y, phi, sp, cp):  # 8.8
+    xi = x + sp
+    eta = y - 1.0 - cp
     rho = (20.0 - xi * xi - eta * eta) / 16.0
     if 0.0 <= rho <= 1.0:
         u = -math.acos(rho)
@@ -132,9 +132,9 @@ def _lp_rum_lum_rp(x, y, phi):  # 8.8
 
 
 @numba.njit(cache=True)
-def _lp_rm_sm_lm(x, y, phi):  # 8.9
-    xi = x - math.sin(phi)
-    eta = y - 1.0 + math.cos(phi)
+def _lp_rm_sm_lm(x, y, phi, sp, cp):  # 8.9
+    xi = x - sp
+    eta = y - 1.0 + cp
     rho = math.hypot(xi, eta)
     if rho >= 2.0:
         theta = math.atan2(eta, xi)
@@ -148,9 +148,9 @@ def _lp_rm_sm_lm(x, y, phi):  # 8.9
 
 
 @numba.njit(cache=True)
-def _lp_rm_sm_rm(x, y, phi):  # 8.10
-    xi = x + math.sin(phi)
-    eta = y - 1.0 - math.cos(phi)
+def _lp_rm_sm_rm(x, y, phi, sp, cp):  # 8.10
+    xi = x + sp
+    eta = y - 1.0 - cp
     rho = math.hypot(-eta, xi)
     if rho >= 2.0:
         t = math.atan2(xi, -eta)
@@ -162,9 +162,9 @@ def _lp_rm_sm_rm(x, y, phi):  # 8.10
 
 
 @numba.njit(cache=True)
-def _lp_rm_s_lm_rp(x, y, phi):  # 8.11 (corrected)
-    xi = x + math.sin(phi)
-    eta = y - 1.0 - math.cos(phi)
+def _lp_rm_s_lm_rp(x, y, phi, sp, cp):  # 8.11 (corrected)
+    xi = x + sp
+    eta = y - 1.0 - cp
     rho = math.hypot(xi, eta)
     if rho >= 2.0:
         u = 4.0 - math.sqrt(rho * rho - 4.0)
@@ -177,22 +177,22 @@ def _lp_rm_s_lm_rp(x, y, phi):  # 8.11 (corrected)
 
 
 @numba.njit(cache=True)
-def _base(formula, x, y, phi):
+def _base(formula, x, y, phi, sp, cp):
     if formula == 0:
-        return _lp_sp_lp(x, y, phi)
+        return _lp_sp_lp(x, y, phi, sp, cp)
     if formula == 1:
-        return _lp_sp_rp(x, y, phi)
+        return _lp_sp_rp(x, y, phi, sp, cp)
     if formula == 2:
-        return _lp_rm_l(x, y, phi)
+        return _lp_rm_l(x, y, phi, sp, cp)
     if formula == 3:
-        return _lp_rup_lum_rm(x, y, phi)
+        return _lp_rup_lum_rm(x, y, phi, sp, cp)
     if formula == 4:
-        return _lp_rum_lum_rp(x, y, phi)
+        return _lp_rum_lum_rp(x, y, phi, sp, cp)
     if formula == 5:
-        return _lp_rm_sm_lm(x, y, phi)
+        return _lp_rm_sm_lm(x, y, phi, sp, cp)
     if formula == 6:
-        return _lp_rm_sm_rm(x, y, phi)
-    return _lp_rm_s_lm_rp(x, y, phi)
+        return _lp_rm_sm_rm(x, y, phi, sp, cp)
+    return _lp_rm_s_lm_rp(x, y, phi, sp, cp)
 
 
 # Families: (formula, backwards, segment types (0 = unused slot marker handled by count),
@@ -237,8 +237,10 @@ def _enumerate(x, y, phi, families, types, lengths):
     """Fill ``types`` and ``lengths`` (capacity 48 × 5) with every feasible candidate word;
     return their number. Unused slots have length 0."""
     count = 0
-    xb = x * math.cos(phi) + y * math.sin(phi)
-    yb = x * math.sin(phi) - y * math.cos(phi)
+    sphi = math.sin(phi)
+    cphi = math.cos(phi)
+    xb = x * cphi + y * sphi
+    yb = x * sphi - y * cphi
     for f in range(families.shape[0]):
         formula = families[f, 0]
         backwards = families[f, 1]
@@ -251,7 +253,8 @@ def _enumerate(x, y, phi, families, types, lengths):
             xx = -bx if sign < 0 else bx
             yy = -by if reflect else by
             pp = phi if k == 3 or k == 0 else -phi
-            ok, t, u, v = _base(formula, xx, yy, pp)
+            sp = sphi if k == 3 or k == 0 else -sphi
+            ok, t, u, v = _base(formula, xx, yy, pp, sp, cphi)
             if not ok:
                 continue
             for s in range(5):
@@ -264,6 +267,39 @@ def _enumerate(x, y, phi, families, types, lengths):
                     lengths[count, s] = 0.0
             count += 1
     return count
+
+
+@numba.njit(cache=True)
+def _min_length(x, y, phi, families):
+    """Length of the shortest word for the normalised goal (no allocation; for heuristics)."""
+    sphi = math.sin(phi)
+    cphi = math.cos(phi)
+    xb = x * cphi + y * sphi
+    yb = x * sphi - y * cphi
+    best = np.inf
+    for f in range(families.shape[0]):
+        formula = families[f, 0]
+        bx = xb if families[f, 1] else x
+        by = yb if families[f, 1] else y
+        nseg = families[f, 2]
+        for k in range(4):
+            flip = k == 1 or k == 3
+            same = k == 0 or k == 3
+            ok, t, u, v = _base(
+                formula,
+                -bx if flip else bx,
+                -by if k >= 2 else by,
+                phi if same else -phi,
+                sphi if same else -sphi,
+                cphi,
+            )
+            if not ok:
+                continue
+            total = 0.0
+            for s in range(nseg):
+                total += abs(_template_value(families[f, 8 + s], t, u, v))
+            best = min(best, total)
+    return best
 
 
 @numba.njit(cache=True)
@@ -299,7 +335,7 @@ def _normalise(x0, y0, th0, x1, y1, th1, radius):
 def _rs_length(x0, y0, th0, x1, y1, th1, radius, families):
     """Reeds–Shepp length [m] between two poses (Numba, for Hybrid A*)."""
     x, y, phi = _normalise(x0, y0, th0, x1, y1, th1, radius)
-    return _best(x, y, phi, families)[2] * radius
+    return _min_length(x, y, phi, families) * radius
 
 
 def _poses(start: ArrayLike, goal: ArrayLike) -> tuple[np.ndarray, np.ndarray]:

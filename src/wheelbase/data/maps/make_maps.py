@@ -1,0 +1,153 @@
+"""Generate the bundled planning maps (ROS ``map_server`` YAML + PNG) and their scenarios.
+
+Run ``python src/wheelbase/data/maps/make_maps.py`` to rebuild them; the output is
+deterministic. Each map is drawn with axis-aligned rectangles in world coordinates [m]:
+
+* ``parking_lot``: 40 × 30 m at 0.1 m, three rows of 5 m bays with parked cars and free bays,
+  7 m aisles; a car drives from the entrance into a bay (forward and reverse parking).
+* ``corridor_uturn``: 30 × 14 m, two 4 m corridors joined by a 12 m turning area; a car drives
+  out along one and back along the other.
+* ``maze``: 20 × 20 m at 0.1 m with 2 m corridors for a differential-drive robot (RM100
+  size, turning in place).
+* ``warehouse``: 30 × 20 m at 0.1 m, racks with 2.4 m aisles for a small car-like tug.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from wheelbase.planning.grid import OccupancyGrid
+
+HERE = Path(__file__).resolve().parent
+
+
+def _canvas(width: float, height: float, res: float) -> np.ndarray:
+    occ = np.zeros((round(height / res), round(width / res)), bool)
+    occ[0, :] = occ[-1, :] = occ[:, 0] = occ[:, -1] = True
+    return occ
+
+
+def _box(occ: np.ndarray, res: float, x0: float, y0: float, x1: float, y1: float) -> None:
+    occ[round(y0 / res) : round(y1 / res), round(x0 / res) : round(x1 / res)] = True
+
+
+def parking_lot() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.1
+    occ = _canvas(40.0, 30.0, res)
+    bay_w, car_l, car_w = 2.6, 4.6, 1.9
+    # rows of 5 m deep bays: A (y 0.5-5.5) faces aisle 1 (y 5.5-12.5); B (12.5-17.5) and C
+    # (17.5-22.5) are back to back, B facing aisle 1 and C facing aisle 2 (22.5-29.5)
+    rows = {"A": (0.5, 5.5), "B": (12.5, 17.5), "C": (17.5, 22.5)}
+    free_bays = {("A", 2), ("A", 9), ("B", 3), ("C", 5), ("C", 10)}
+    for row, (y0, y1) in rows.items():
+        for k in range(12):
+            if (row, k) in free_bays:
+                continue
+            x = 6.0 + k * bay_w + (bay_w - car_w) / 2
+            yc = (y0 + y1) / 2
+            _box(occ, res, x, yc - car_l / 2, x + car_w, yc + car_l / 2)
+    _box(occ, res, 6.0, 17.4, 37.2, 17.6)  # kerb between rows B and C
+    car = {"footprint": [4.5, 1.8], "rear_axle_to_center": 1.35, "turning_radius": 5.0}
+
+    def bay(k: int) -> float:
+        return 6.0 + k * bay_w + bay_w / 2
+
+    scenarios = [
+        {
+            "name": "enter_and_park_forward",
+            "start": [2.5, 9.0, 0.0],
+            "goal": [bay(9), 4.5, -90.0],
+            **car,
+        },
+        {
+            "name": "reverse_into_bay",
+            "start": [2.5, 9.0, 0.0],
+            "goal": [bay(3), 16.3, -90.0],
+            **car,
+        },
+        {"name": "bay_to_bay", "start": [bay(5), 21.5, -90.0], "goal": [bay(2), 1.5, 90.0], **car},
+    ]
+    return occ, res, scenarios
+
+
+def corridor_uturn() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.1
+    occ = _canvas(30.0, 14.0, res)
+    _box(occ, res, 0.0, 5.0, 18.0, 9.0)  # the divider between the two 4 m corridors
+    car = {"footprint": [4.5, 1.8], "rear_axle_to_center": 1.35, "turning_radius": 5.0}
+    scenarios = [
+        {"name": "u_turn", "start": [3.0, 3.0, 0.0], "goal": [5.0, 11.0, 180.0], **car},
+    ]
+    return occ, res, scenarios
+
+
+def maze() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.1
+    occ = _canvas(20.0, 20.0, res)
+    t = 0.3  # wall thickness
+    for i, y in enumerate((4.0, 8.0, 12.0, 16.0)):
+        if i % 2 == 0:
+            _box(occ, res, 0.0, y, 17.0, y + t)  # gap on the right
+        else:
+            _box(occ, res, 3.0, y, 20.0, y + t)  # gap on the left
+    for x, y0, y1 in ((8.0, 0.0, 2.0), (12.0, 6.3, 8.0), (8.0, 8.3, 10.0), (14.0, 16.3, 18.0)):
+        _box(occ, res, x, y0, x + t, y1)
+    robot = {"footprint": [0.66, 0.5], "rear_axle_to_center": 0.0, "turning_radius": 0.0}
+    scenarios = [
+        {
+            "name": "maze_bottom_to_top",
+            "start": [2.0, 2.0, 0.0],
+            "goal": [18.0, 18.0, 90.0],
+            **robot,
+        },
+        {"name": "maze_middle", "start": [10.0, 6.0, 180.0], "goal": [4.0, 14.0, 0.0], **robot},
+    ]
+    return occ, res, scenarios
+
+
+def warehouse() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.1
+    occ = _canvas(30.0, 20.0, res)
+    for k in range(6):
+        x = 4.0 + k * 3.6
+        _box(occ, res, x, 4.0, x + 1.2, 16.0)
+    _box(occ, res, 0.0, 9.0, 1.5, 11.0)  # a dock
+    tug = {"footprint": [1.6, 1.0], "rear_axle_to_center": 0.5, "turning_radius": 1.5}
+    scenarios = [
+        {"name": "aisle_to_aisle", "start": [6.2, 6.0, 90.0], "goal": [16.9, 14.0, 270.0], **tug},
+        {"name": "dock_to_far_aisle", "start": [3.0, 2.0, 0.0], "goal": [24.2, 10.0, 90.0], **tug},
+    ]
+    return occ, res, scenarios
+
+
+MAPS = {
+    "parking_lot": parking_lot,
+    "corridor_uturn": corridor_uturn,
+    "maze": maze,
+    "warehouse": warehouse,
+}
+
+
+def main() -> None:
+    scenarios: dict[str, list[dict]] = {}
+    for name, build in MAPS.items():
+        occ, res, scen = build()
+        grid = OccupancyGrid.from_array(occ, res)
+        grid.to_ros_yaml(HERE / f"{name}.yaml", image=f"{name}.png")
+        scenarios[name] = [
+            {
+                k: ([round(v, 3) for v in val] if isinstance(val, list) else val)
+                for k, val in item.items()
+            }
+            for item in scen
+        ]
+    text = "# start/goal: [x m, y m, heading deg] of the reference point (rear-axle centre)\n"
+    text += yaml.safe_dump(scenarios, sort_keys=False, default_flow_style=None)
+    (HERE / "scenarios.yaml").write_text(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,177 @@
+"""Hybrid A*: exact end poses, continuous collision freedom, curvature limits, failures."""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from wheelbase.errors import ConfigError, PlanningError
+from wheelbase.geometry import wrap_angle
+from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid
+from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
+
+
+def densify(poses, spacing=0.02):
+    """Linear interpolation in (x, y, θ) between samples (sagitta < 0.1 mm here)."""
+    out = [poses[:1]]
+    for a, b in itertools.pairwise(poses):
+        dth = float(wrap_angle(b[2] - a[2]))
+        n = max(1, math.ceil(max(math.dist(a[:2], b[:2]), abs(dth) * 3.0) / spacing))
+        t = np.arange(1, n + 1)[:, None] / n
+        seg = a + t * np.array([b[0] - a[0], b[1] - a[1], dth])
+        out.append(seg)
+    return np.concatenate(out)
+
+
+def independent_collisions(grid, footprint, poses, spacing=0.02):
+    """Count poses whose footprint, sampled as a point lattice, touches an occupied cell."""
+    poly = footprint.polygon
+    lo, hi = poly.min(0), poly.max(0)
+    xs = np.linspace(lo[0], hi[0], math.ceil((hi[0] - lo[0]) / spacing) + 1)
+    ys = np.linspace(lo[1], hi[1], math.ceil((hi[1] - lo[1]) / spacing) + 1)
+    pts = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
+    # keep lattice points inside the (convex) polygon
+    edges = np.roll(poly, -1, 0) - poly
+    cross = edges[:, 0] * (pts[:, None, 1] - poly[:, 1]) - edges[:, 1] * (
+        pts[:, None, 0] - poly[:, 0]
+    )
+    pts = pts[np.all(cross >= -1e-12, axis=1)]
+    hits = 0
+    for chunk in np.array_split(poses, max(1, len(poses) // 500)):
+        c, s = np.cos(chunk[:, 2]), np.sin(chunk[:, 2])
+        wx = chunk[:, None, 0] + c[:, None] * pts[:, 0] - s[:, None] * pts[:, 1]
+        wy = chunk[:, None, 1] + s[:, None] * pts[:, 0] + c[:, None] * pts[:, 1]
+        hits += int(np.any(grid.is_occupied(np.stack([wx, wy], -1)), axis=1).sum())
+    return hits
+
+
+def check_path(grid, planner, path, start, goal, spacing=0.05):
+    assert path.success
+    np.testing.assert_allclose(path.poses[0], start, atol=1e-9)
+    assert abs(path.poses[-1, 0] - goal[0]) < 1e-6 and abs(path.poses[-1, 1] - goal[1]) < 1e-6
+    assert abs(float(wrap_angle(path.poses[-1, 2] - goal[2]))) < 1e-6
+    assert not planner.grid.in_collision(planner.footprint, path.poses).any()
+    dense = densify(path.poses, spacing)
+    assert independent_collisions(grid, planner.footprint, dense, spacing) == 0
+    ds = np.diff(path.arc_length)
+    chords = np.hypot(*np.diff(path.poses[:, :2], axis=0).T)
+    assert np.all(chords <= ds + 1e-9)
+    assert path.length == pytest.approx(path.arc_length[-1])
+    moving = ds > 0
+    if planner.turning_radius > 0:
+        assert np.all(np.abs(path.curvatures) <= 1 / planner.turning_radius + 1e-12)
+        dth = wrap_angle(np.diff(path.poses[:, 2]))
+        expected = path.curvatures[1:] * path.directions[1:] * ds
+        np.testing.assert_allclose(dth, expected, atol=1e-9)
+    assert set(np.unique(path.directions)) <= {-1, 1}
+    changes = np.count_nonzero(np.diff(path.directions[1:][moving]) != 0)
+    assert path.cusps == changes
+
+
+def test_open_space_car_reaches_goal_exactly():
+    grid = OccupancyGrid.from_array(np.zeros((150, 200), bool), 0.1)
+    planner = HybridAStar(grid, (0.9, 0.5), 1.2, rear_axle_to_center=0.25)
+    start, goal = np.array([3.0, 3.0, 0.0]), np.array([15.0, 10.0, math.pi / 2])
+    path = planner.plan(start, goal)
+    check_path(grid, planner, path, start, goal)
+    assert path.stats.expanded_nodes >= 1 and path.stats.message == "goal reached"
+    # in free space the analytic shot is the Reeds-Shepp path itself
+    from wheelbase.planning import reeds_shepp_length
+
+    assert path.length >= reeds_shepp_length(start, goal, 1.2) - 1e-9
+
+
+def test_wall_forces_detour_and_forward_only_has_no_reverse():
+    occ = np.zeros((120, 160), bool)
+    occ[0:90, 78:82] = True  # a wall with a gap at the top
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    start, goal = np.array([2.0, 2.0, 0.0]), np.array([14.0, 2.0, -math.pi / 2])
+    planner = HybridAStar(grid, (0.9, 0.5), 1.0, reverse=False, rear_axle_to_center=0.25)
+    path = planner.plan(start, goal)
+    check_path(grid, planner, path, start, goal)
+    assert np.all(path.directions == 1) and path.cusps == 0
+    assert path.poses[:, 1].max() > 9.0  # went over the wall through the gap
+    assert path.length > 2 * math.hypot(6.0, 7.0)  # via the gap (x = 8, y >= 9)
+
+
+def test_differential_drive_turns_in_place():
+    occ = np.zeros((60, 60), bool)
+    occ[25:35, 0:40] = True
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    planner = HybridAStar(grid, (0.6, 0.4), 0.0)
+    start, goal = np.array([1.0, 1.0, math.pi / 2]), np.array([1.0, 5.0, -math.pi / 2])
+    path = planner.plan(start, goal)
+    check_path(grid, planner, path, start, goal)
+    rotating = np.isinf(path.curvatures)
+    assert rotating.any()
+    # a turn in place does not move the reference point
+    idx = np.nonzero(rotating[1:])[0] + 1
+    np.testing.assert_allclose(path.poses[idx, :2], path.poses[idx - 1, :2], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", BUNDLED_MAPS)
+def test_bundled_scenarios_all_succeed_collision_free(name):
+    grid = load_map(name)
+    for sc in [s for s in bundled_scenarios() if s.map_name == name]:
+        planner = HybridAStar(
+            grid, sc.footprint, sc.turning_radius, rear_axle_to_center=sc.rear_axle_to_center
+        )
+        path = planner.plan(sc.start, sc.goal)
+        check_path(grid, planner, path, sc.start, sc.goal)
+
+
+def test_random_queries_independent_collision_check():
+    """A few seconds' worth of the 1,000-query benchmark (benchmarks/planning.py)."""
+    grid = load_map("warehouse")
+    fp = Footprint.rectangle(1.6, 1.0, 0.5)
+    planner = HybridAStar(grid, fp, 1.5, rear_axle_to_center=0.5, time_limit=1.0)
+    rng = np.random.default_rng(11)
+    found = 0
+    while found < 25:
+        poses = np.column_stack(
+            [rng.uniform(1, 29, 2), rng.uniform(1, 19, 2), rng.uniform(-np.pi, np.pi, 2)]
+        )
+        if grid.in_collision(fp, poses).any():
+            continue
+        path = planner.plan(poses[0], poses[1])
+        if path.success:
+            found += 1
+            assert independent_collisions(grid, fp, densify(path.poses, 0.03), 0.03) == 0
+
+
+def test_unreachable_goal_returns_failure_with_statistics():
+    occ = np.zeros((60, 60), bool)
+    occ[35:37, 30:60] = True
+    occ[35:60, 30:32] = True  # the goal corner is walled off
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    planner = HybridAStar(grid, (0.6, 0.4), 0.8)
+    path = planner.plan((1.0, 1.0, 0.0), (4.5, 4.8, 0.0))
+    assert not path.success and len(path) == 0 and math.isinf(path.length)
+    assert path.stats.message == "search space exhausted"
+    walled = np.zeros((60, 60), bool)
+    walled[0:50, 20:22] = True
+    limited = HybridAStar(OccupancyGrid.from_array(walled, 0.1), (0.6, 0.4), 0.8, max_iterations=5)
+    result = limited.plan((1.0, 1.0, math.pi / 2), (3.5, 1.0, -math.pi / 2))
+    assert not result.success and result.stats.message == "iteration limit reached"
+
+
+def test_start_goal_and_parameter_errors():
+    occ = np.zeros((50, 50), bool)
+    occ[20:30, 20:30] = True
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    planner = HybridAStar(grid, (0.6, 0.4), 1.0)
+    with pytest.raises(PlanningError, match=r"start .* in collision"):
+        planner.plan((2.5, 2.5, 0.0), (1.0, 1.0, 0.0))
+    with pytest.raises(PlanningError, match=r"goal .* outside the map"):
+        planner.plan((1.0, 1.0, 0.0), (9.0, 1.0, 0.0))
+    with pytest.raises(PlanningError, match=r"goal .* in collision"):
+        planner.plan((1.0, 1.0, 0.0), (4.8, 1.0, 0.0))  # the footprint leaves the map
+    with pytest.raises(ConfigError, match="turning_radius"):
+        HybridAStar(grid, (0.6, 0.4), -1.0)
+    with pytest.raises(ConfigError, match="footprint"):
+        HybridAStar(grid, (0.6, 0.4, 1.0), 1.0)
+    with pytest.raises(ConfigError, match="curvatures"):
+        HybridAStar(grid, (0.6, 0.4), 1.0, curvatures=4)
+    with pytest.raises(ConfigError, match="reverse_penalty"):
+        HybridAStar(grid, (0.6, 0.4), 1.0, reverse_penalty=0.5)
