@@ -206,13 +206,13 @@ def test_demo_writes_its_files_and_reruns(tmp_path):
     out = tmp_path / "demo"
     out.mkdir()
     (out / "notes.txt").write_text("user file")
-    first = run("demo", "--out", out)
+    first = run("kinematics-demo", "--out", out)
     assert first.exit_code == 0, first.output
     for name in DEMO_FILES:
         assert (out / name).stat().st_size > 0
     assert (out / "animation.gif").stat().st_size < 2_000_000
     assert "2.5206" in first.stdout and "3.0000" in first.stdout  # case 1 x, case 2 y
-    second = run("demo", "--out", out)  # a previous demo's files do not stop it
+    second = run("kinematics-demo", "--out", out)  # a previous demo's files do not stop it
     assert second.exit_code == 0, second.output
     assert sorted(p.name for p in out.iterdir()) == sorted([*DEMO_FILES, "notes.txt"])
     assert (out / "notes.txt").read_text() == "user file"
@@ -227,7 +227,7 @@ def test_version_and_help():
     help_text = run("simulate", "--help").stdout
     for unit in ("[m]", "[rad/s]", "[m/s]", "[s]", "90deg"):
         assert unit in help_text
-    assert run("demo", "--help").exit_code == 0
+    assert run("kinematics-demo", "--help").exit_code == 0
     bare = run()
     assert bare.exit_code == 0 and "Usage" in bare.stdout
 

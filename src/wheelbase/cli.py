@@ -5,8 +5,10 @@ Commands
 ``wheelbase simulate``
     Simulate one kinematic model under constant inputs (one :func:`wheelbase.simulate` call) and
     write ``trajectory.csv``, ``states.png``, ``path.png`` and ``animation.gif``.
-``wheelbase demo``
+``wheelbase kinematics-demo``
     Document 000 §3.2's three wheel-speed cases on one plot and the animation of case 1.
+``wheelbase demo`` / ``run`` / ``batch`` / ``schema``
+    The closed loop on scenario files (:mod:`wheelbase.commands.run`).
 
 Degrees are accepted at this edge only (``90deg``, ``1.57``, ``1.57rad``) and converted to
 radians on entry. Every :class:`~wheelbase.errors.WheelbaseError`, ``FileExistsError`` and
@@ -51,7 +53,7 @@ MODELS: tuple[str, ...] = (
 )
 SIMULATE_FILES: tuple[str, ...] = ("trajectory.csv", "states.png", "path.png", "animation.gif")
 DEMO_FILES: tuple[str, ...] = ("paths.png", "states.png", "animation.gif")
-DEMO_DIR = "wheelbase-demo"
+DEMO_DIR = "wheelbase-kinematics-demo"
 
 
 # --------------------------------------------------------------------------- errors
@@ -550,7 +552,7 @@ def run_demo(out: str | Path = DEMO_DIR) -> tuple[SimResult, dict[str, Path]]:
     return batch, paths
 
 
-@app.command("demo")
+@app.command("kinematics-demo")
 def demo_command(
     out: str = typer.Option(
         DEMO_DIR, help="Output folder; the demo replaces only its own files there."

@@ -510,6 +510,27 @@ class DiffDriveDynamics:
         rate, acc = np.broadcast_arrays(rate, acc)
         return np.concatenate([rate, acc], -1)
 
+    def step(self, state: ArrayLike, torques: ArrayLike, h: float) -> np.ndarray:
+        """One RK4 step of length ``h`` [s] from a state (6,) under torques held constant.
+
+        The compiled single-robot step of :func:`simulate_dynamics`, for closed loops that
+        step the plant themselves (:func:`wheelbase.sim.run_loop`).
+
+        Parameters
+        ----------
+        state : array_like, shape (6,)
+            (x [m], y [m], ψ [rad], u [m/s], v [m/s], r [rad/s]).
+        torques : array_like, shape (2,)
+            Wheel torques (left, right) [N·m].
+        h : float
+            Step [s], > 0.
+        """
+        s = np.array(as_float_array("state", state, 6, max_ndim=1))
+        tau = as_float_array("torques", torques, 2, max_ndim=1)
+        work = np.empty((5, 6))
+        _step(s, tau[0], tau[1], self._params, positive("h", h, "s"), 1, *work)
+        return s
+
     def inverse(self, velocity: ArrayLike, acceleration: ArrayLike) -> tuple[np.ndarray, Any]:
         """Inverse dynamics: body force (F_x, F_y, M_z) and wheel torques (τ_L, τ_R).
 

@@ -16,6 +16,7 @@ from wheelbase.sim import Log
 
 __all__ = [
     "animate_run",
+    "distance_to_polyline",
     "figure_commands",
     "figure_errors",
     "figure_map",
@@ -62,6 +63,30 @@ def tracking_metrics(log: Log, goal: np.ndarray) -> dict[str, Any]:
         "odometry_drift_heading_deg": float(np.degrees(abs(wrap_angle(true[-1, 2] - est[-1, 2])))),
         "odometry_drift_per_metre": drift / travelled if travelled > 0 else 0.0,
     }
+
+
+def distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """Distance [m] from each point ``(T, 2)`` to a polyline ``(N, 2)`` (nearest segment).
+
+    Parameters
+    ----------
+    points : numpy.ndarray, shape (T, 2)
+        Query points [m].
+    polyline : numpy.ndarray, shape (N, 2)
+        Vertices [m], N >= 1.
+    """
+    a, b = polyline[:-1], polyline[1:]
+    if len(a) == 0:
+        return np.hypot(*(points - polyline[0]).T)
+    ab = b - a
+    length2 = np.maximum(np.sum(ab * ab, axis=1), 1e-300)
+    out = np.empty(len(points))
+    for start in range(0, len(points), 512):  # chunks keep the (T, N) table small
+        p = points[start : start + 512, None, :]
+        u = np.clip(np.sum((p - a) * ab, axis=2) / length2, 0.0, 1.0)
+        nearest = a + u[..., None] * ab
+        out[start : start + 512] = np.min(np.hypot(*(p - nearest).transpose(2, 0, 1)), axis=1)
+    return out
 
 
 def _draw_map(ax, grid) -> None:

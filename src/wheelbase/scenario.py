@@ -86,6 +86,12 @@ class PlannerSpec(_Strict):
         "tan(max steering) for car-like robots).",
     )
     reverse: bool = Field(True, description="Allow driving backwards.")
+    margin: float = Field(
+        0.1,
+        ge=0,
+        description="Clearance [m] added around the footprint while planning, so that "
+        "tracking and odometry errors do not touch obstacles.",
+    )
     options: dict[str, Any] = Field(
         default_factory=dict, description="Further HybridAStar keyword arguments."
     )
@@ -127,7 +133,11 @@ class Scenario(_Strict):
     """A validated closed-loop scenario."""
 
     name: str = Field("scenario", description="Name used in reports.")
-    map: str = Field("warehouse", description="Bundled map name or path to a map file.")
+    map: str = Field(
+        "warehouse",
+        description="Bundled map name, path to a ROS YAML / Moving AI .map / image map, or "
+        "'empty' for an obstacle-free field around the start and goals.",
+    )
     robot: RobotSpec = Field(default_factory=RobotSpec)
     plant: Literal["kinematic", "dynamic"] = Field("kinematic")
     planner: PlannerSpec = Field(default_factory=PlannerSpec)

@@ -39,7 +39,7 @@ from wheelbase.models.base import KinematicModel
 
 __all__ = ["STATUSES", "Log", "OdometrySetup", "run_loop"]
 
-STATUSES = ("arrived", "collision", "timeout", "diverged")
+STATUSES = ("arrived", "missed_goal", "collision", "timeout", "diverged")
 
 
 @dataclass(frozen=True)
@@ -202,11 +202,18 @@ def run_loop(
     in_collision: Callable[[np.ndarray], bool] | None = None,
     command_names: tuple[str, ...] = ("v", "omega"),
     integrator: str = "rk4",
+    end_time: float = 0.0,
     settle_time: float = 0.0,
     progress: Callable[[float], None] | None = None,
     dynamics: Any = None,
 ) -> Log:
-    """Run a kinematic closed loop from ``pose0`` until arrival, collision or ``duration``.
+    """Run a closed loop from ``pose0`` until arrival, collision or ``duration``.
+
+    The run ends ``arrived`` when, after ``end_time``, the robot has (nearly) stopped and its
+    *estimated* pose is within tolerance of the goal — a robot stops when it believes it is
+    there — and the true pose is too; ``missed_goal`` when only the estimate is (odometry
+    drift); ``collision`` when the footprint touches an obstacle; ``timeout`` at the time
+    limit; ``diverged`` on a non-finite command.
 
     Parameters
     ----------
@@ -239,8 +246,10 @@ def run_loop(
         Names of the two command components, for the log.
     integrator : str
         Integration method for the plant (:data:`wheelbase.integrate.METHODS`).
+    end_time : float
+        When the reference ends [s]: arrival is only judged after it.
     settle_time : float
-        Time after the end of the reference during which the robot may still converge [s];
+        Time after ``end_time`` during which the robot may still converge [s];
         the run ends as ``timeout`` when it has not arrived by then.
     progress : callable, optional
         Called with the simulated time now and then (for progress bars).
@@ -271,8 +280,6 @@ def run_loop(
     twist_true = np.zeros(3)
     twist_estimate = np.zeros(3)
     status = "timeout"
-    end_time = getattr(reference, "t", None)
-    end_time = float(end_time[-1]) if end_time is not None else 0.0
     limit = min(duration, end_time + settle_time) if settle_time > 0 else duration
 
     for step in range(n_max + 1):
@@ -311,8 +318,9 @@ def run_loop(
         if in_collision is not None and in_collision(pose):
             status = "collision"
             break
-        if t >= end_time and _arrived(pose, goal, tolerance) and abs(twist[0]) < 0.01:
-            status = "arrived"
+        if t >= end_time and abs(twist[0]) < 0.01 and _arrived(estimate, goal, tolerance):
+            # The robot stops when it believes it has arrived; the truth may differ.
+            status = "arrived" if _arrived(pose, goal, tolerance) else "missed_goal"
             break
         if step == n_max or t >= limit:
             break
@@ -321,7 +329,7 @@ def run_loop(
             pose = integrate_step(pose, twist, twist, twist, dt, integrator)
             new_angle = wheel_angle + rates * dt
         else:
-            state = _rk4_dynamics(dynamics, np.concatenate([pose, twist_true]), command, dt)
+            state = dynamics.step(np.concatenate([pose, twist_true]), command, dt)
             pose, twist_true = state[:3], state[3:]
             pose[2] = wrap_angle(pose[2])
             # The wheels turn by the integral of their rate: trapezoid of the step's two ends.
@@ -352,14 +360,6 @@ def run_loop(
         command_names=command_names,
         status=status,
     )
-
-
-def _rk4_dynamics(dynamics: Any, state: np.ndarray, torques: np.ndarray, h: float) -> np.ndarray:
-    k1 = dynamics.derivative(state, torques)
-    k2 = dynamics.derivative(state + 0.5 * h * k1, torques)
-    k3 = dynamics.derivative(state + 0.5 * h * k2, torques)
-    k4 = dynamics.derivative(state + h * k3, torques)
-    return state + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
 def _arrived(pose: np.ndarray, goal: np.ndarray, tolerance: tuple[float, float]) -> bool:

@@ -1,0 +1,213 @@
+"""``wheelbase demo``, ``run``, ``batch`` and ``schema``: the closed loop from scenario files."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from wheelbase.errors import WheelbaseError
+
+__all__ = ["DEMO_SCENARIO", "register"]
+
+DEMO_SCENARIO = "demo"
+DEMO_DIR = "wheelbase-demo"
+
+SUMMARY_KEYS = (
+    ("status", "status", "{}"),
+    ("planning_time_s", "planning time [s]", "{:.3f}"),
+    ("path_length_m", "path length [m]", "{:.2f}"),
+    ("cusps", "cusps", "{}"),
+    ("duration_s", "run time (simulated) [s]", "{:.1f}"),
+    ("tracking_rms_position_error_m", "tracking RMS error [m]", "{:.4f}"),
+    ("tracking_max_position_error_m", "tracking max error [m]", "{:.4f}"),
+    ("final_position_error_true_m", "final error, true [m]", "{:.4f}"),
+    ("final_position_error_estimated_m", "final error, odometry [m]", "{:.4f}"),
+    ("odometry_drift_m", "odometry drift [m]", "{:.4f}"),
+    ("min_clearance_m", "min clearance [m]", "{:.3f}"),
+    ("wheel_energy_j", "wheel energy [J]", "{:.1f}"),
+)
+
+
+def _summary(metrics: dict, title: str) -> Table:
+    table = Table(title=title)
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    for key, label, form in SUMMARY_KEYS:
+        if key in metrics:
+            table.add_row(escape(label), form.format(metrics[key]))
+    return table
+
+
+def _run_and_report(source, out: Path, *, force: bool, gif: bool, console: Console) -> dict:
+    from wheelbase.report import write_report
+    from wheelbase.runner import run
+    from wheelbase.scenario import load_scenario
+
+    scenario = load_scenario(source)
+    if not force:
+        from wheelbase.report import REPORT_FILES
+
+        for name in REPORT_FILES:
+            if (out / name).exists():
+                raise FileExistsError(
+                    f"{out / name} exists: a report is already there (use --force)"
+                )
+    started = time.perf_counter()
+    with Progress(
+        TextColumn("[progress.description]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed:.0f}/{task.total:.0f} s simulated"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(f"running {scenario.name}", total=None, visible=False)
+
+        def progress(t: float, end: float) -> None:
+            # Only runs that take more than a second get a bar.
+            if time.perf_counter() - started > 1.0:
+                bar.update(task, completed=t, total=max(end, t), visible=True)
+
+        try:
+            result = run(scenario, progress=progress)
+        except WheelbaseError as error:
+            _write_failure(out, scenario, error, force=force)
+            raise
+    written = write_report(result, out, force=force, gif=gif)
+    console.print(
+        _summary(result.metrics, f"{scenario.name} ({time.perf_counter() - started:.1f} s)")
+    )
+    console.print(f"report written to {out.resolve()}/ ({len(written)} files)", markup=False)
+    return result.metrics
+
+
+def _write_failure(out: Path, scenario, error: Exception, *, force: bool) -> None:
+    """A partial report marked as failed: metrics.json with the error, and the scenario."""
+    path = out / "metrics.json"
+    if path.exists() and not force:
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    payload = {"name": scenario.name, "status": "failed", "error": str(error)}
+    path.write_text(json.dumps(payload, indent=2) + "\n")
+    (out / "scenario.yaml").write_text(scenario.to_yaml())
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``demo``, ``run``, ``batch`` and ``schema`` to the ``wheelbase`` app.
+
+    Parameters
+    ----------
+    app : typer.Typer
+        The main application.
+    """
+
+    @app.command("demo")
+    def demo_command(
+        out: Path = typer.Option(
+            Path(DEMO_DIR), help="Report folder; the demo replaces its own previous report there."
+        ),
+        gif: bool = typer.Option(True, help="Render animation.gif."),
+    ) -> None:
+        """Run the bundled demo: the RM100 reverse-parks into a warehouse bay (Hybrid A*,
+        dynamic plant, computed-torque tracking, encoder odometry) and writes a report."""
+        console = Console()
+        _run_and_report(DEMO_SCENARIO, out, force=True, gif=gif, console=console)
+
+    @app.command("run")
+    def run_command(
+        scenario: str = typer.Argument(..., help="Scenario YAML file or bundled scenario name."),
+        out: Path = typer.Option(None, help="Report folder [default: ./<scenario name>/]."),
+        force: bool = typer.Option(False, help="Overwrite an existing report."),
+        gif: bool = typer.Option(True, help="Render animation.gif."),
+    ) -> None:
+        """Run a closed-loop scenario and write its report (metrics.json, log.csv,
+        scenario.yaml, PNG figures, animation.gif)."""
+        from wheelbase.scenario import load_scenario
+
+        name = load_scenario(scenario).name
+        target = out if out is not None else Path(name)
+        _run_and_report(scenario, target, force=force, gif=gif, console=Console())
+
+    @app.command("schema")
+    def schema_command() -> None:
+        """Print the JSON Schema of scenario files (for editors that validate YAML)."""
+        from wheelbase.scenario import scenario_json_schema
+
+        typer.echo(json.dumps(scenario_json_schema(), indent=2))
+
+    @app.command("scenarios")
+    def scenarios_command() -> None:
+        """List the bundled scenarios (usable by name with `wheelbase run NAME`)."""
+        from wheelbase.scenario import bundled_scenarios, load_scenario
+
+        table = Table(title="bundled scenarios")
+        for column in ("name", "map", "robot", "plant", "law", "goals"):
+            table.add_column(column)
+        for name, path in bundled_scenarios().items():
+            s = load_scenario(path)
+            robot = s.robot.preset or s.robot.model
+            table.add_row(name, s.map, robot, s.plant, s.controller.law, str(len(s.goals)))
+        Console().print(table)
+
+    @app.command("batch")
+    def batch_command(
+        scenarios: list[str] = typer.Argument(..., help="Scenario files or bundled names."),
+        seeds: int = typer.Option(None, help="Run each scenario with noise seeds 0..N-1."),
+        workers: int = typer.Option(2, help="Local worker processes."),
+        scheduler: str = typer.Option(
+            None, help="Dask scheduler address (needs the 'dask' extra): run on that cluster."
+        ),
+        out: Path = typer.Option(Path("wheelbase-batch"), help="Folder for batch.csv/json."),
+        force: bool = typer.Option(False, help="Overwrite an existing batch table."),
+    ) -> None:
+        """Run many scenarios (or one over many seeds) in parallel; write one table."""
+        from wheelbase.batch import run_batch
+
+        for name in ("batch.csv", "batch.json"):
+            if (out / name).exists() and not force:
+                raise FileExistsError(f"{out / name} exists; use --force to overwrite")
+        console = Console()
+        executor = None
+        client = None
+        if scheduler:
+            try:
+                from dask.distributed import Client
+            except ImportError:
+                raise WheelbaseError(
+                    "--scheduler needs Dask: pip install 'wheelbase[dask]'"
+                ) from None
+            client = Client(scheduler)
+            executor = client.get_executor()
+        try:
+            with Progress(console=console, transient=True) as bar:
+                task = bar.add_task("runs", total=None)
+                result = run_batch(
+                    scenarios,
+                    seeds=seeds,
+                    executor=executor,
+                    workers=workers,
+                    progress=lambda done, total: bar.update(task, completed=done, total=total),
+                )
+        finally:
+            if client is not None:
+                client.close()
+        result.write(out, force=force)
+        summary = result.summary()
+        table = Table(title=f"{len(result.rows)} runs in {result.wall_time_s:.1f} s "
+                      f"({result.runs_per_second:.2f} runs/s)")  # fmt: skip
+        for column in ("metric", "mean", "p50", "p90", "max"):
+            table.add_column(column, justify="right" if column != "metric" else "left")
+        for key, _, form in SUMMARY_KEYS[1:]:
+            if key in summary:
+                stats = summary[key]
+                table.add_row(key, *(form.format(stats[s]) for s in ("mean", "p50", "p90", "max")))
+        table.add_row("success rate", f"{summary['success_rate']['mean']:.0%}", "", "", "")
+        console.print(table)
+        console.print(f"wrote {out / 'batch.csv'} and {out / 'batch.json'}", markup=False)

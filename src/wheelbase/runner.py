@@ -1,0 +1,641 @@
+"""``wheelbase.run``: a scenario in, a closed-loop result out (the main job of wheelbase).
+
+The data flow of ``../shared/DESIGN.md``:
+
+    scenario → map + robot + limits → Hybrid A* plan → time-parametrised trajectory
+             → controller(estimate) → plant → encoders → odometry → controller …
+             → Log → metrics, CSV, figures, animation
+
+Each step is a plain call on plain data; this module only wires them and resolves the scenario's
+names (robot presets, control laws) to objects. Decisions made here, where the scenario is
+silent:
+
+- A differential drive (and the unicycle) plans with turning radius 0 (turns in place allowed);
+  a car-like robot plans with R = wheel_base / tan(max_steering) × 1.2, leaving the controller
+  20 % of steering authority to correct errors.
+- Multiple goals are planned leg by leg (each from the previous goal) and tracked as one
+  trajectory that stops at every goal.
+- The run ends when the true pose is within the goal tolerance after the trajectory has ended
+  and the robot has (nearly) stopped, at a collision, or ``settle_time`` = 15 s after the
+  trajectory has ended (status ``timeout``), whichever comes first, and never after ``duration``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from wheelbase.errors import ConfigError, MapError, PlanningError, ScenarioError
+from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
+from wheelbase.models.bicycle import Ackermann
+from wheelbase.models.path import PathReference
+from wheelbase.report import distance_to_polyline, tracking_metrics
+from wheelbase.scenario import Scenario, load_scenario
+from wheelbase.sim import Log, OdometrySetup, run_loop
+from wheelbase.timing import SpeedLimits, time_parametrize
+
+__all__ = ["LAWS", "Robot", "RunResult", "build_robot", "run"]
+
+SETTLE_TIME = 15.0  # s after the end of the trajectory
+TURNING_MARGIN = 1.2
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A scenario's robot resolved to objects.
+
+    Attributes
+    ----------
+    model : KinematicModel
+        The kinematics the plant integrates.
+    kind : str
+        ``"diff"`` (commands (v, ω)) or ``"car"`` (commands (v, δ)).
+    footprint : tuple of float
+        (length, width) [m].
+    center_offset : float
+        Reference point to footprint centre [m].
+    wheel_radius, half_track : float
+        Geometry of the encoder axle [m].
+    wheel_base : float
+        Axle distance of a car [m] (0 for a differential drive).
+    max_steering : float
+        Steering stop [rad] (0 for a differential drive).
+    max_wheel_speed : float
+        Wheel angular speed limit [rad/s] (inf for none).
+    dynamics : DiffDriveDynamics or None
+        Rigid-body model of a preset (RM100), used by a dynamic plant.
+    """
+
+    model: Any
+    kind: str
+    footprint: tuple[float, float]
+    center_offset: float
+    wheel_radius: float
+    half_track: float
+    wheel_base: float = 0.0
+    max_steering: float = 0.0
+    max_wheel_speed: float = math.inf
+    dynamics: Any = None
+
+    @property
+    def turning_radius(self) -> float:
+        """Turning radius the planner uses [m] (0: turns in place)."""
+        if self.kind == "diff":
+            return 0.0
+        return TURNING_MARGIN * self.wheel_base / math.tan(self.max_steering)
+
+
+def build_robot(spec) -> Robot:
+    """Resolve a :class:`~wheelbase.scenario.RobotSpec` (presets, defaults) to a :class:`Robot`.
+
+    Parameters
+    ----------
+    spec : RobotSpec
+        The scenario's ``robot`` section.
+    """
+    values = spec.model_dump()
+    dynamics = None
+    if spec.preset == "rm100":
+        from wheelbase.dynamics import RM100
+
+        dynamics = RM100
+        preset = {
+            "wheel_radius": RM100.wheel_radius,
+            "half_track": RM100.half_track,
+            "footprint": (0.66, 0.455),
+        }
+        values.update({k: v for k, v in preset.items() if values.get(k) is None})
+    model_name = spec.model
+    if model_name in ("diffdrive", "unicycle"):
+        radius = values["wheel_radius"] or 0.05
+        half = values["half_track"] or 0.2
+        footprint = values["footprint"] or (2.4 * half, 2.4 * half)
+        model = DiffDrive(radius, half) if model_name == "diffdrive" else Unicycle()
+        return Robot(
+            model=model,
+            kind="diff",
+            footprint=tuple(footprint),
+            center_offset=values["center_offset"],
+            wheel_radius=radius,
+            half_track=half,
+            max_wheel_speed=values["max_wheel_speed"] or math.inf,
+            dynamics=dynamics,
+        )
+    wheel_base = values["wheel_base"] or 0.5
+    max_steering = math.radians(values["max_steering_deg"] or 35.0)
+    half = values["half_track"] or 0.35 * wheel_base
+    footprint = values["footprint"] or (1.6 * wheel_base, 2.4 * half)
+    if model_name == "ackermann":
+        model = Ackermann(wheel_base, values["track"] or 2 * half, max_steering=max_steering)
+    elif model_name == "bicycle":
+        model = Bicycle(wheel_base, max_steering=max_steering)
+    else:
+        model = RearWheelBicycle(wheel_base, max_steering=max_steering)
+    offset = values["center_offset"] if "center_offset" in spec.model_fields_set else wheel_base / 2
+    return Robot(
+        model=model,
+        kind="car",
+        footprint=tuple(footprint),
+        center_offset=offset,
+        wheel_radius=values["wheel_radius"] or 0.1,
+        half_track=half,
+        wheel_base=wheel_base,
+        max_steering=max_steering,
+    )
+
+
+# --------------------------------------------------------------------------- control laws
+def _tracker(name: str) -> Callable[..., Any]:
+    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+        from wheelbase.control import tracking
+        from wheelbase.control.base import VelocityLimits
+
+        cls = getattr(tracking, name)
+        velocity_limits = VelocityLimits(
+            max_speed=1.5 * limits.max_speed,
+            max_yaw_rate=1.5 * limits.max_yaw_rate,
+            **(
+                {
+                    "max_wheel_speed": robot.max_wheel_speed,
+                    "wheel_radius": robot.wheel_radius,
+                    "half_track": robot.half_track,
+                }
+                if math.isfinite(robot.max_wheel_speed)
+                else {}
+            ),
+        )
+        return cls(**gains, limits=velocity_limits), "trajectory"
+
+    return make
+
+
+def _follower(name: str) -> Callable[..., Any]:
+    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+        from wheelbase.control import path
+        from wheelbase.control.base import SteeringLimits, VelocityLimits
+
+        cls = getattr(path, name)
+        arguments = {"speed": limits.max_speed, **gains}
+        if robot.kind == "car":
+            arguments.update(output="steering", wheel_base=robot.wheel_base)
+            command_limits = SteeringLimits(max_steering=robot.max_steering)
+        else:
+            command_limits = VelocityLimits(max_yaw_rate=limits.max_yaw_rate)
+        return cls(**arguments, limits=command_limits), "path"
+
+    return make
+
+
+class TorqueTracking:
+    """Computed-torque PID (document 000 §5.3) on a time-parametrised trajectory.
+
+    Adapts :class:`wheelbase.control.ComputedTorquePID` to the closed loop: it is called with
+    the estimated state (x, y, θ, u, v, r) and a :class:`PathReference`, whose row
+    (x, y, ψ, u, 0, r, u̇, 0, ṙ) at time t it builds (accelerations by central differences).
+
+    Parameters
+    ----------
+    robot : Robot
+        The resolved robot (its dynamics preset is the controller's model).
+    bandwidth : float
+        Pole-placement bandwidth ω of both loops [rad/s] (:meth:`TorqueGains.pole_placement`).
+    speed : float
+        Nominal speed of the lateral design [m/s].
+    max_torque : float
+        Wheel-torque saturation [N·m].
+    derivative_filter : float
+        Time constant of the error-rate filter [s].
+    model_error : float
+        Relative error of the controller's mass and inertia (0.2: the controller believes the
+        robot is 20 % heavier), to study robustness.
+    """
+
+    command_names = ("tau_left", "tau_right")
+
+    def __init__(
+        self,
+        robot: Robot,
+        bandwidth: float = 1.5,
+        speed: float = 0.3,
+        max_torque: float = 5.0,
+        derivative_filter: float = 0.05,
+        model_error: float = 0.0,
+    ) -> None:
+        from wheelbase.control.torque import ComputedTorquePID, TorqueGains
+
+        model = robot.dynamics
+        if model_error:
+            factor = 1.0 + float(model_error)
+            model = model.with_body(model.body.scaled(factor, factor))
+        self._pid = ComputedTorquePID(
+            model,
+            TorqueGains.pole_placement(bandwidth, speed=speed),
+            max_torque=max_torque,
+            derivative_filter=derivative_filter,
+        )
+        self._rows: tuple[Any, np.ndarray] | None = None
+
+    def reset(self) -> None:
+        """Forget the integrals of the PID."""
+        self._pid.reset()
+
+    def __call__(self, t: float, state: np.ndarray, reference: PathReference) -> np.ndarray:
+        """Wheel torques (left, right) [N·m] for the estimated state (6,) at time ``t`` [s].
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        state : numpy.ndarray, shape (6,)
+            Estimated (x, y, θ, u, v, r).
+        reference : PathReference
+            The trajectory.
+        """
+        if self._rows is None or self._rows[0] is not reference:
+            times = reference.t
+            heading = np.unwrap(reference.poses[:, 2])
+            zeros = np.zeros_like(times)
+            table = np.column_stack(
+                [
+                    reference.poses[:, 0], reference.poses[:, 1], heading,
+                    reference.v, zeros, reference.omega,
+                    np.gradient(reference.v, times), zeros, np.gradient(reference.omega, times),
+                ]
+            )  # fmt: skip
+            self._rows = (reference, table)
+        row = _interpolate_rows(reference.t, self._rows[1], t)
+        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
+        return self._pid(t, state, row)
+
+
+def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+    if robot.dynamics is None:
+        raise ConfigError("computed_torque needs a robot with dynamics (robot.preset: rm100)")
+    return TorqueTracking(robot, **{"speed": limits.max_speed, **gains}), "trajectory"
+
+
+LAWS: dict[str, Callable[..., Any]] = {
+    "computed_torque": _computed_torque,
+    "kanayama": _tracker("Kanayama"),
+    "linear": _tracker("LinearTracker"),
+    "pure_pursuit": _follower("PurePursuit"),
+    "stanley": _follower("Stanley"),
+    "rear_wheel_feedback": _follower("RearWheelFeedback"),
+    "segment": _follower("SegmentFollower"),
+}
+"""Control laws a scenario can name (``controller.law``) and how each is built."""
+
+
+def _build_controller(law: str, robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+    try:
+        return LAWS[law](robot, dict(gains), limits)
+    except TypeError as error:
+        # An unknown keyword: list the gains the law takes.
+        import dataclasses
+
+        built, _ = LAWS[law](robot, {}, limits)
+        names = [f.name for f in dataclasses.fields(built) if f.init and f.name != "limits"]
+        raise ConfigError(f"{error}; {law} takes: {', '.join(names)}") from None
+
+
+# --------------------------------------------------------------------------- result
+@dataclass(frozen=True)
+class RunResult:
+    """The outcome of :func:`run`.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The resolved scenario.
+    robot : Robot
+        The resolved robot.
+    grid : OccupancyGrid
+        The map.
+    plan : Path or None
+        The concatenated plan of all legs (None when planning failed).
+    reference : PathReference or None
+        The time-parametrised trajectory.
+    log : Log or None
+        The closed-loop record (None when planning failed).
+    metrics : dict
+        Planning and tracking figures (see ``metrics.json`` in the README).
+    """
+
+    scenario: Scenario
+    robot: Robot
+    grid: Any
+    plan: Any
+    reference: PathReference | None
+    log: Log | None
+    metrics: dict[str, Any]
+
+    @property
+    def footprint_polygon(self) -> np.ndarray:
+        """Footprint outline (M, 2) in the body frame of the reference point [m]."""
+        length, width = self.robot.footprint
+        c = self.robot.center_offset
+        return np.array(
+            [[c - length / 2, -width / 2], [c + length / 2, -width / 2],
+             [c + length / 2, width / 2], [c - length / 2, width / 2]]
+        )  # fmt: skip
+
+    def plot(self):
+        """Map, plan and driven path (a matplotlib figure)."""
+        from wheelbase.report import figure_map
+
+        if self.log is None:
+            raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
+        plan = None if self.plan is None else self.plan.poses
+        return figure_map(
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
+        )
+
+
+# --------------------------------------------------------------------------- run
+def run(
+    scenario: Scenario | str | Path | dict[str, Any],
+    *,
+    progress: Callable[[float, float], None] | None = None,
+) -> RunResult:
+    """Run a closed-loop scenario: plan, time-parametrise, track with odometry in the loop.
+
+    Parameters
+    ----------
+    scenario : Scenario, str, Path or dict
+        A validated scenario, a YAML path, a bundled scenario name, or a mapping.
+    progress : callable, optional
+        ``progress(simulated_time, expected_end_time)`` now and then during the run.
+
+    Returns
+    -------
+    RunResult
+        With the plan, the trajectory, the log and the metrics; a plan that cannot be found
+        gives a result with ``metrics["status"] == "planning_failed"`` and no log.
+
+    Raises
+    ------
+    ScenarioError
+        Invalid scenario or gains.
+    MapError
+        A map that cannot be read.
+    PlanningError
+        Start or goal in collision or outside the map.
+    """
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    robot = _field("robot", lambda: build_robot(scenario.robot))
+    start = _pose(scenario.start)
+    goals = [_pose(goal) for goal in scenario.goals]
+    grid = _field("map", lambda: _load_map(scenario.map, [start, *goals]))
+    _check_free(grid, robot, start, "start")
+    for index, goal in enumerate(goals):
+        _check_free(grid, robot, goal, f"goals[{index}]")
+
+    limits = _field("trajectory", lambda: SpeedLimits(**scenario.trajectory.model_dump()))
+    if scenario.controller.law not in LAWS:
+        allowed = ", ".join(sorted(LAWS))
+        raise ScenarioError(
+            f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
+        )
+    controller, reference_kind = _field(
+        "controller.gains",
+        lambda: _build_controller(
+            scenario.controller.law, robot, scenario.controller.gains, limits
+        ),
+    )
+
+    dynamic = scenario.plant == "dynamic"
+    if dynamic != (scenario.controller.law == "computed_torque"):
+        raise ScenarioError(
+            "plant: a dynamic plant is driven by wheel torques: use it with controller.law "
+            f"computed_torque, and computed_torque with it (got plant {scenario.plant!r}, law "
+            f"{scenario.controller.law!r})"
+        )
+    if dynamic and robot.dynamics is None:
+        raise ScenarioError("plant: dynamic needs a robot with a dynamics preset (rm100)")
+    plan, planning = _plan(grid, robot, scenario, start, goals)
+    base_metrics = {"name": scenario.name, "seed": scenario.seed, **planning}
+    if plan is None:
+        return RunResult(scenario, robot, grid, None, None, None,
+                         {**base_metrics, "status": "planning_failed"})  # fmt: skip
+    reference = _timed_reference(plan, limits, scenario.dt)
+    odometry = _odometry(scenario, robot)
+    command_to_inputs = _command_to_inputs(robot, controller)
+    footprint = _footprint(robot)
+    end_time = float(reference.t[-1])
+
+    ref_table = np.column_stack([reference.poses[:, :2], np.unwrap(reference.poses[:, 2])])
+
+    def reference_pose(t: float) -> np.ndarray:
+        row = _interpolate_rows(reference.t, ref_table, t)
+        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
+        return row
+
+    log = run_loop(
+        robot.model,
+        controller,
+        reference if reference_kind == "trajectory" else _polyline(plan),
+        start,
+        dt=scenario.dt,
+        duration=scenario.duration,
+        command_to_inputs=command_to_inputs,
+        odometry=odometry,
+        reference_pose=reference_pose,
+        goal=goals[-1],
+        tolerance=(scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
+        in_collision=lambda pose: bool(grid.in_collision(footprint, pose)),
+        command_names=tuple(controller.command_names),
+        end_time=end_time,
+        settle_time=SETTLE_TIME,
+        progress=None if progress is None else lambda t: progress(t, end_time),
+        dynamics=robot.dynamics if dynamic else None,
+    )
+    metrics = {**base_metrics, **tracking_metrics(log, goals[-1])}
+    metrics["trajectory_duration_s"] = end_time
+    deviation = distance_to_polyline(log.true_pose[:, :2], plan.poses[:, :2])
+    metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
+    metrics["path_deviation_max_m"] = float(np.max(deviation))
+    if log.torques is not None:
+        # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
+        power = np.sum(log.torques * log.wheel_rates, axis=1)
+        metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(log.t)))
+        metrics["max_wheel_torque_nm"] = float(np.max(np.abs(log.torques)))
+        metrics["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(log.torques**2)))
+    metrics["min_clearance_m"] = float(
+        np.min(grid.footprint_clearance(footprint, log.true_pose[:: max(1, len(log.t) // 400)]))
+    )
+    return RunResult(scenario, robot, grid, plan, reference, log, metrics)
+
+
+def _interpolate_rows(times: np.ndarray, table: np.ndarray, t: float) -> np.ndarray:
+    """Row of ``table`` (T, k) linearly interpolated at time ``t``, held at the ends."""
+    index = int(np.searchsorted(times, t, side="right")) - 1
+    if index < 0:
+        return table[0].copy()
+    if index >= len(times) - 1:
+        return table[-1].copy()
+    weight = (t - times[index]) / (times[index + 1] - times[index])
+    return (1.0 - weight) * table[index] + weight * table[index + 1]
+
+
+def _field(name: str, build: Callable[[], Any]) -> Any:
+    try:
+        return build()
+    except ScenarioError:
+        raise
+    except ConfigError as error:
+        raise ScenarioError(f"{name}: {error}") from None
+    except MapError as error:
+        raise MapError(f"{name}: {error}") from None
+
+
+def _pose(values) -> np.ndarray:
+    return np.array([values[0], values[1], math.radians(values[2])], dtype=np.float64)
+
+
+EMPTY_MAP = "empty"
+EMPTY_MARGIN = 3.0  # m around the start and the goals
+EMPTY_RESOLUTION = 0.05  # m/cell
+
+
+def _load_map(name: str, points: list[np.ndarray]):
+    """A bundled map or a map file; ``empty`` is an obstacle-free field around the points,
+    walled by the map edge."""
+    from wheelbase.planning import OccupancyGrid
+    from wheelbase.planning.maps import load_map
+
+    if name != EMPTY_MAP:
+        return load_map(name)
+    xy = np.array([point[:2] for point in points])
+    low = np.floor(xy.min(0) - EMPTY_MARGIN)
+    high = np.ceil(xy.max(0) + EMPTY_MARGIN)
+    cols, rows = np.ceil((high - low) / EMPTY_RESOLUTION).astype(int)
+    return OccupancyGrid.from_array(
+        np.zeros((rows, cols), bool), EMPTY_RESOLUTION, origin=tuple(low)
+    )
+
+
+def _footprint(robot: Robot):
+    from wheelbase.planning import Footprint
+
+    return Footprint.rectangle(*robot.footprint, rear_axle_to_center=robot.center_offset)
+
+
+def _check_free(grid, robot: Robot, pose: np.ndarray, name: str) -> None:
+    x0, y0 = grid.origin
+    rows, cols = grid.occupied.shape
+    inside = (
+        x0 <= pose[0] <= x0 + cols * grid.resolution
+        and y0 <= pose[1] <= y0 + rows * grid.resolution
+    )
+    if not inside:
+        raise PlanningError(f"{name} ({pose[0]:g}, {pose[1]:g}) is outside the map")
+    if grid.in_collision(_footprint(robot), pose):
+        raise PlanningError(
+            f"{name} ({pose[0]:g}, {pose[1]:g}, {math.degrees(pose[2]):g} deg): the robot's "
+            "footprint there overlaps an obstacle or leaves the map"
+        )
+
+
+def _plan(grid, robot: Robot, scenario: Scenario, start, goals):
+    from wheelbase.planning import HybridAStar
+    from wheelbase.planning.path import Path as PlannedPath
+
+    spec = scenario.planner
+    radius = robot.turning_radius if spec.turning_radius is None else spec.turning_radius
+    margin = spec.margin
+    planner = _field(
+        "planner",
+        lambda: HybridAStar(
+            grid,
+            footprint=(robot.footprint[0] + 2 * margin, robot.footprint[1] + 2 * margin),
+            turning_radius=radius,
+            reverse=spec.reverse,
+            rear_axle_to_center=robot.center_offset,
+            **spec.options,
+        ),
+    )
+    legs = []
+    stats = {"planning_time_s": 0.0, "expanded_nodes": 0, "compile_time_s": 0.0}
+    leg_start = start
+    for goal in goals:
+        leg = planner.plan(leg_start, goal)
+        stats["planning_time_s"] += leg.stats.planning_time_s
+        stats["expanded_nodes"] += leg.stats.expanded_nodes
+        stats["compile_time_s"] += leg.stats.compile_time_s
+        if not leg.success:
+            stats.update(success=False, message=leg.stats.message or "no path found")
+            return None, stats
+        legs.append(leg)
+        leg_start = goal
+    plan = legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
+    stats.update(
+        success=True,
+        path_length_m=float(sum(leg.length for leg in legs)),
+        cusps=int(sum(leg.cusps for leg in legs)),
+        turning_radius_m=radius,
+    )
+    return plan, stats
+
+
+def _concatenate(legs, path_type):
+    poses = np.vstack([legs[0].poses] + [leg.poses[1:] for leg in legs[1:]])
+    directions = np.concatenate([legs[0].directions] + [leg.directions[1:] for leg in legs[1:]])
+    curvatures = np.concatenate([legs[0].curvatures] + [leg.curvatures[1:] for leg in legs[1:]])
+    arc = [legs[0].arc_length]
+    for leg in legs[1:]:
+        arc.append(arc[-1][-1] + leg.arc_length[1:])
+    return path_type(poses, directions, curvatures, np.concatenate(arc), True, legs[0].stats)
+
+
+def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PathReference:
+    """Time-parametrise each forward/backward run of the plan; stops at every goal."""
+    return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
+
+
+def _polyline(plan):
+    from wheelbase.control.path import Polyline
+
+    directions = np.where(plan.directions[1:] < 0, -1.0, 1.0)
+    return Polyline(plan.poses[:, :2], directions)
+
+
+def _odometry(scenario: Scenario, robot: Robot) -> OdometrySetup:
+    spec = scenario.odometry
+    if spec.mode == "perfect":
+        return OdometrySetup(robot.wheel_radius, robot.half_track, seed=scenario.seed)
+    from wheelbase.odometry import Encoder, WheelOdometry
+
+    encoder = Encoder(spec.pulses_per_revolution, noise_std=spec.tick_noise_std, seed=scenario.seed)
+    odometry = WheelOdometry(
+        robot.wheel_radius, robot.half_track, spec.pulses_per_revolution, method=spec.method
+    )
+    return OdometrySetup(
+        robot.wheel_radius,
+        robot.half_track,
+        encoder=encoder,
+        odometry=odometry,
+        radius_scale=tuple(spec.wheel_radius_scale),
+        track_scale=spec.track_scale,
+        seed=scenario.seed,
+    )
+
+
+def _command_to_inputs(robot: Robot, controller) -> Callable[[np.ndarray], np.ndarray]:
+    from wheelbase.control.base import velocity_to_steering, velocity_to_wheel_speeds
+
+    steering_command = tuple(controller.command_names) == ("speed", "steering")
+    if robot.kind == "car":
+        if steering_command:
+            return lambda command: command
+        return lambda command: velocity_to_steering(command, robot.wheel_base)
+    if steering_command:
+        raise ScenarioError("controller: a steering law cannot drive a differential drive")
+    if isinstance(robot.model, DiffDrive):
+        return lambda command: velocity_to_wheel_speeds(command, robot.model)
+    return lambda command: command
