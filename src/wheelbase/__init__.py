@@ -32,6 +32,8 @@ from wheelbase.models import (
     reference_from_derivatives,
     reference_from_xy,
 )
+from wheelbase.runner import RunResult, run
+from wheelbase.scenario import Scenario, load_scenario
 from wheelbase.timing import SpeedLimits, time_parametrize
 
 __version__ = "0.1.0"
@@ -50,6 +52,8 @@ __all__ = [
     "PathReference",
     "PlanningError",
     "RearWheelBicycle",
+    "RunResult",
+    "Scenario",
     "ScenarioError",
     "SimResult",
     "SpeedLimits",
@@ -58,11 +62,13 @@ __all__ = [
     "WheelbaseError",
     "WheeledBase",
     "__version__",
+    "load_scenario",
     "mecanum4",
     "omni3",
     "pure_motions",
     "reference_from_derivatives",
     "reference_from_xy",
+    "run",
     "simulate",
     "time_parametrize",
     "wrap_angle",
