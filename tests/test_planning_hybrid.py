@@ -8,7 +8,7 @@ import pytest
 
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
-from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid
+from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, Path, smooth_path
 from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
 
 
@@ -175,3 +175,46 @@ def test_start_goal_and_parameter_errors():
         HybridAStar(grid, (0.6, 0.4), 1.0, curvatures=4)
     with pytest.raises(ConfigError, match="reverse_penalty"):
         HybridAStar(grid, (0.6, 0.4), 1.0, reverse_penalty=0.5)
+
+
+def _roughness(path):
+    k = path.curvatures[np.isfinite(path.curvatures)]
+    return float(np.sum(np.diff(k) ** 2))
+
+
+def test_smoothing_keeps_ends_cusps_curvature_and_reduces_roughness():
+    grid = load_map("parking_lot")
+    sc = next(s for s in bundled_scenarios() if s.name == "bay_to_bay")
+    raw_planner = HybridAStar(
+        grid,
+        sc.footprint,
+        sc.turning_radius,
+        rear_axle_to_center=sc.rear_axle_to_center,
+        smooth=False,
+    )
+    raw = raw_planner.plan(sc.start, sc.goal)
+    smooth = smooth_path(raw, grid, raw_planner.footprint, sc.turning_radius)
+    check_path(grid, raw_planner, smooth, sc.start, sc.goal)
+    assert smooth.cusps == raw.cusps
+    np.testing.assert_array_equal(smooth.cusp_indices, raw.cusp_indices)
+    np.testing.assert_allclose(smooth.poses[raw.cusp_indices], raw.poses[raw.cusp_indices])
+    assert _roughness(smooth) < 0.5 * _roughness(raw)
+    assert np.abs(smooth.poses[:, :2] - raw.poses[:, :2]).max() > 0.01  # it did move
+    # the planner's default applies the same smoothing
+    planned = HybridAStar(
+        grid, sc.footprint, sc.turning_radius, rear_axle_to_center=sc.rear_axle_to_center
+    ).plan(sc.start, sc.goal)
+    np.testing.assert_allclose(planned.poses, smooth.poses, atol=1e-12)
+
+
+def test_smoothing_leaves_turns_in_place_and_failures_alone():
+    grid = load_map("maze")
+    sc = next(s for s in bundled_scenarios() if s.name == "maze_middle")
+    planner = HybridAStar(grid, sc.footprint, 0.0, smooth=False)
+    raw = planner.plan(sc.start, sc.goal)
+    smooth = smooth_path(raw, grid, planner.footprint, 0.0)
+    np.testing.assert_allclose(smooth.poses, raw.poses)
+    failed = Path.failure(raw.stats)
+    assert smooth_path(failed, grid, planner.footprint, 1.0) is failed
+    with pytest.raises(ConfigError, match="window"):
+        smooth_path(raw, grid, planner.footprint, 1.0, window=0.0)

@@ -13,14 +13,17 @@ from wheelbase.planning.grid import (
     read_movingai_scenarios,
 )
 from wheelbase.planning.hybrid_astar import HybridAStar
+from wheelbase.planning.maps import BUNDLED_MAPS, PlanningScenario, bundled_scenarios, load_map
 from wheelbase.planning.path import CurvePath, Path, PlanningStats
 from wheelbase.planning.reeds_shepp import (
     reeds_shepp_candidates,
     reeds_shepp_length,
     reeds_shepp_path,
 )
+from wheelbase.planning.smoothing import smooth_path
 
 __all__ = [
+    "BUNDLED_MAPS",
     "CurvePath",
     "Footprint",
     "GridPath",
@@ -28,14 +31,18 @@ __all__ = [
     "MovingAIScenario",
     "OccupancyGrid",
     "Path",
+    "PlanningScenario",
     "PlanningStats",
     "astar",
+    "bundled_scenarios",
     "dijkstra",
     "dubins_candidates",
     "dubins_length",
     "dubins_path",
+    "load_map",
     "read_movingai_scenarios",
     "reeds_shepp_candidates",
     "reeds_shepp_length",
     "reeds_shepp_path",
+    "smooth_path",
 ]

@@ -50,6 +50,7 @@ from wheelbase.planning.dubins import _dubins_all
 from wheelbase.planning.grid import Footprint, OccupancyGrid, _collides_one
 from wheelbase.planning.path import Path, PlanningStats
 from wheelbase.planning.reeds_shepp import _FAMILIES, _best, _min_length, _normalise
+from wheelbase.planning.smoothing import smooth_path
 
 __all__ = ["HybridAStar"]
 
@@ -125,6 +126,9 @@ class HybridAStar:
         Expansion limit.
     time_limit : float
         Search time limit [s].
+    smooth : bool
+        Smooth the found path with :func:`~wheelbase.planning.smoothing.smooth_path`
+        (curvature profile low-pass; keeps cusps, clearance and the curvature limit).
 
     Examples
     --------
@@ -159,6 +163,7 @@ class HybridAStar:
         yaw_goal_tolerance: float = 0.0,
         max_iterations: int = 1_000_000,
         time_limit: float = 5.0,
+        smooth: bool = True,
     ) -> None:
         if not isinstance(grid, OccupancyGrid):
             raise ConfigError(f"grid must be an OccupancyGrid (got {type(grid).__name__})")
@@ -211,6 +216,7 @@ class HybridAStar:
             raise ConfigError(f"max_iterations must be a positive integer (got {max_iterations!r})")
         self.max_iterations = int(max_iterations)
         self.time_limit = positive("time_limit", time_limit, "s")
+        self.smooth = bool(smooth)
 
         self._nx = math.ceil(grid.width_m / self.xy_resolution)
         self._ny = math.ceil(grid.height_m / self.xy_resolution)
@@ -380,6 +386,14 @@ class HybridAStar:
         path = self._reconstruct(
             goal_node, xs, ys, ths, parents, prim_of, shot_types, shot_lengths, start
         )
+        if self.smooth:
+            path = smooth_path(
+                path,
+                self.grid,
+                self.footprint,
+                self.turning_radius,
+                collision_margin=self.collision_margin,
+            )
         stats = PlanningStats(int(expanded), time.perf_counter() - t0, compile_time, _STATUS[0])
         return Path(path.poses, path.directions, path.curvatures, path.arc_length, True, stats)
 
