@@ -83,6 +83,7 @@ class BatchResult:
                     if isinstance(v, (int, float)) and not isinstance(v, bool)
                 ]
             )
+            numbers = numbers[np.isfinite(numbers)]
             if numbers.size == 0:
                 continue
             out[key] = {

@@ -466,9 +466,10 @@ def run(
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(log.t)))
         metrics["max_wheel_torque_nm"] = float(np.max(np.abs(log.torques)))
         metrics["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(log.torques**2)))
-    metrics["min_clearance_m"] = float(
+    clearance = float(
         np.min(grid.footprint_clearance(footprint, log.true_pose[:: max(1, len(log.t) // 400)]))
     )
+    metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     return RunResult(scenario, robot, grid, plan, reference, log, metrics)
 
 

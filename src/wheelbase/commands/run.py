@@ -40,7 +40,7 @@ def _summary(metrics: dict, title: str) -> Table:
     table.add_column("metric")
     table.add_column("value", justify="right")
     for key, label, form in SUMMARY_KEYS:
-        if key in metrics:
+        if metrics.get(key) is not None:
             table.add_row(escape(label), form.format(metrics[key]))
     return table
 
