@@ -900,10 +900,19 @@ def _clearance_batch(occ, prefix, dist, res, x0, y0, poly, circles, radius, pose
             out[n] = 0.0
             continue
         wp = _world_polygon(poly, x, y, th)
-        # search radius: an upper bound from the distance field at the first vertex
+        # search radius: an upper bound on the clearance from points of the polygon (its first
+        # vertex and the covering-circle centres that lie inside it)
         j = min(cols - 1, max(0, math.floor((wp[0, 0] - x0) / res)))
         i = min(rows - 1, max(0, math.floor((wp[0, 1] - y0) / res)))
         reach = dist[i, j] + slack
+        c, s = math.cos(th), math.sin(th)
+        for k in range(circles.shape[0]):
+            cx = x + c * circles[k, 0] - s * circles[k, 1]
+            cy = y + s * circles[k, 0] + c * circles[k, 1]
+            if _point_in_polygon(wp, cx, cy):
+                j = min(cols - 1, max(0, math.floor((cx - x0) / res)))
+                i = min(rows - 1, max(0, math.floor((cy - y0) / res)))
+                reach = min(reach, dist[i, j] + slack)
         if not np.isfinite(reach):
             out[n] = np.inf
             continue
