@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase.errors import ConfigError, MapError, PlanningError, ScenarioError
+from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
 from wheelbase.models.path import PathReference
@@ -491,8 +491,8 @@ def _field(name: str, build: Callable[[], Any]) -> Any:
         raise
     except ConfigError as error:
         raise ScenarioError(f"{name}: {error}") from None
-    except MapError as error:
-        raise MapError(f"{name}: {error}") from None
+    except (MapError, DataError) as error:
+        raise type(error)(f"{name}: {error}") from None
 
 
 def _pose(values) -> np.ndarray:

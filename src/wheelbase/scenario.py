@@ -238,6 +238,12 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
             raise ScenarioError(f"{label}: malformed YAML{where}: {problem}") from None
         if not isinstance(data, dict):
             raise ScenarioError(f"{label}: a scenario must be a mapping of keys to values")
+        # A map path in a file is relative to that file, as a user who moves the pair expects.
+        map_name = data.get("map")
+        if isinstance(map_name, str) and not Path(map_name).is_absolute():
+            beside = path.parent / map_name
+            if beside.exists():
+                data = {**data, "map": str(beside)}
     try:
         return Scenario.model_validate(data)
     except ValidationError as error:

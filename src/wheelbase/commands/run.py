@@ -148,8 +148,9 @@ def register(app: typer.Typer) -> None:
         from wheelbase.scenario import bundled_scenarios, load_scenario
 
         table = Table(title="bundled scenarios")
-        for column in ("name", "map", "robot", "plant", "law", "goals"):
-            table.add_column(column)
+        table.add_column("name", no_wrap=True)
+        for column in ("map", "robot", "plant", "law", "goals"):
+            table.add_column(column, overflow="fold")
         for name, path in bundled_scenarios().items():
             s = load_scenario(path)
             robot = s.robot.preset or s.robot.model
