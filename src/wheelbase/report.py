@@ -198,17 +198,19 @@ def figure_commands(log: Log):
     """
     import matplotlib.pyplot as plt
 
-    rows = 3 if log.torques is not None else 2
+    # On a dynamic plant the command is the wheel torques: one panel shows them.
+    rows = 3 if log.torques is not None and log.command is not log.torques else 2
     fig, axes = plt.subplots(rows, 1, figsize=(8, 2.4 * rows + 1), sharex=True)
     for index, name in enumerate(log.command_names):
         axes[0].plot(log.t, log.command[:, index], label=name)
-    axes[0].set_ylabel("command")
+    torque_command = log.torques is not None and rows == 2
+    axes[0].set_ylabel("wheel torque command [N·m]" if torque_command else "command")
     axes[0].legend(fontsize=8)
     axes[1].plot(log.t, log.wheel_rates[:, 0], label="left")
     axes[1].plot(log.t, log.wheel_rates[:, 1], label="right")
     axes[1].set_ylabel("wheel rate [rad/s]")
     axes[1].legend(fontsize=8)
-    if log.torques is not None:
+    if rows == 3:
         axes[2].plot(log.t, log.torques[:, 0], label="left")
         axes[2].plot(log.t, log.torques[:, 1], label="right")
         axes[2].set_ylabel("wheel torque [N·m]")

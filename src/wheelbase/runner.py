@@ -213,6 +213,11 @@ class TorqueTracking:
     model_error : float
         Relative error of the controller's mass and inertia (0.2: the controller believes the
         robot is 20 % heavier), to study robustness.
+    max_acceleration, max_yaw_acceleration : float
+        Bounds on the feed-forward accelerations u̇_ref [m/s²] and ṙ_ref [rad/s²]. A planned
+        path has curvature jumps (line to arc), so the time-parametrised ω steps and its
+        derivative is an impulse the wheels cannot deliver; feeding it forward would only
+        saturate the torques. The PID corrects the remaining error.
     """
 
     command_names = ("tau_left", "tau_right")
@@ -225,6 +230,8 @@ class TorqueTracking:
         max_torque: float = 5.0,
         derivative_filter: float = 0.05,
         model_error: float = 0.0,
+        max_acceleration: float = math.inf,
+        max_yaw_acceleration: float = math.inf,
     ) -> None:
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
 
@@ -239,6 +246,7 @@ class TorqueTracking:
             derivative_filter=derivative_filter,
         )
         self._rows: tuple[Any, np.ndarray] | None = None
+        self._accel_bounds = (float(max_acceleration), float(max_yaw_acceleration))
 
     def reset(self) -> None:
         """Forget the integrals of the PID."""
@@ -264,7 +272,11 @@ class TorqueTracking:
                 [
                     reference.poses[:, 0], reference.poses[:, 1], heading,
                     reference.v, zeros, reference.omega,
-                    np.gradient(reference.v, times), zeros, np.gradient(reference.omega, times),
+                    np.clip(np.gradient(reference.v, times), -self._accel_bounds[0],
+                            self._accel_bounds[0]),
+                    zeros,
+                    np.clip(np.gradient(reference.omega, times), -self._accel_bounds[1],
+                            self._accel_bounds[1]),
                 ]
             )  # fmt: skip
             self._rows = (reference, table)
@@ -276,7 +288,12 @@ class TorqueTracking:
 def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
     if robot.dynamics is None:
         raise ConfigError("computed_torque needs a robot with dynamics (robot.preset: rm100)")
-    return TorqueTracking(robot, **{"speed": limits.max_speed, **gains}), "trajectory"
+    defaults = {
+        "speed": limits.max_speed,
+        "max_acceleration": limits.max_acceleration,
+        "max_yaw_acceleration": limits.max_yaw_acceleration,
+    }
+    return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
 LAWS: dict[str, Callable[..., Any]] = {
