@@ -218,3 +218,30 @@ def test_smoothing_leaves_turns_in_place_and_failures_alone():
     assert smooth_path(failed, grid, planner.footprint, 1.0) is failed
     with pytest.raises(ConfigError, match="window"):
         smooth_path(raw, grid, planner.footprint, 1.0, window=0.0)
+
+
+def test_goal_tolerance_accepts_a_nearby_state():
+    occ = np.zeros((80, 80), bool)
+    occ[40:42, 0:60] = True
+    grid = OccupancyGrid.from_array(occ, 0.1)
+    goal = np.array([2.0, 6.0, math.pi])
+    exact = HybridAStar(grid, (0.6, 0.4), 0.8, smooth=False).plan((2.0, 2.0, 0.0), goal)
+    loose = HybridAStar(
+        grid, (0.6, 0.4), 0.8, xy_goal_tolerance=0.6, yaw_goal_tolerance=0.4, smooth=False
+    ).plan((2.0, 2.0, 0.0), goal)
+    assert exact.success and loose.success
+    end = loose.poses[-1]
+    assert math.dist(end[:2], goal[:2]) <= 0.6 + 1e-9
+    assert abs(float(wrap_angle(end[2] - goal[2]))) <= 0.4 + 1e-9
+    assert loose.stats.expanded_nodes <= exact.stats.expanded_nodes
+
+
+def test_load_map_by_name_and_path(tmp_path):
+    grid = load_map("parking_lot")
+    assert grid.shape == (300, 400) and grid.resolution == pytest.approx(0.1)
+    grid.to_ros_yaml(tmp_path / "copy.yaml")
+    np.testing.assert_array_equal(load_map(tmp_path / "copy.yaml").occupied, grid.occupied)
+    with pytest.raises(ConfigError, match="map"):
+        load_map("atlantis")
+    names = {s.map_name for s in bundled_scenarios()}
+    assert names == set(BUNDLED_MAPS)
