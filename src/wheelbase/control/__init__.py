@@ -23,6 +23,14 @@ from wheelbase.control.goal import (
     saturate_keep_turn_rate,
 )
 from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
+from wheelbase.control.path import (
+    PathFollower,
+    Polyline,
+    PurePursuit,
+    RearWheelFeedback,
+    SegmentFollower,
+    Stanley,
+)
 from wheelbase.control.pid import ANTI_WINDUP, PID
 from wheelbase.control.point import GoToPoint
 from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
@@ -33,6 +41,7 @@ from wheelbase.control.torque import (
     track_trajectory,
     tune_computed_torque,
 )
+from wheelbase.control.tracking import Kanayama, LinearTracker
 
 __all__: list[str] = [
     "ANTI_WINDUP",
@@ -49,8 +58,16 @@ __all__: list[str] = [
     "GoToGoalLog",
     "GoToPoint",
     "GoalController",
+    "Kanayama",
     "LineArc",
+    "LinearTracker",
+    "PathFollower",
     "PolarPose",
+    "Polyline",
+    "PurePursuit",
+    "RearWheelFeedback",
+    "SegmentFollower",
+    "Stanley",
     "SteeringLimits",
     "TorqueGains",
     "TrackingResult",

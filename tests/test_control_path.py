@@ -1,0 +1,162 @@
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wheelbase import ConfigError, InputError, Unicycle
+from wheelbase.control import SteeringLimits, VelocityLimits
+from wheelbase.control.loop import run_closed_loop
+from wheelbase.control.path import (
+    Polyline,
+    PurePursuit,
+    RearWheelFeedback,
+    SegmentFollower,
+    Stanley,
+)
+from wheelbase.models import RearWheelBicycle
+
+LAWS = (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback)
+LIMITS = VelocityLimits(0.5, 1.5)
+
+
+def circle(radius, n=200, turns=1.0):
+    angle = np.linspace(-0.5 * np.pi, -0.5 * np.pi + 2 * np.pi * turns, n)
+    return np.stack([radius * np.cos(angle), radius + radius * np.sin(angle)], -1)
+
+
+def three_point_turn():
+    r = 1.5
+    a = np.linspace(-np.pi / 2, 0, 40)
+    forward = np.stack([r * np.cos(a), r + r * np.sin(a)], -1)
+    b = np.linspace(np.pi, 1.5 * np.pi, 40)[1:]
+    reverse = np.stack([3 + r * np.cos(b), r + r * np.sin(b)], -1)
+    last = np.stack([np.linspace(3, 1, 41)[1:], np.zeros(40)], -1)
+    directions = np.r_[np.ones(39), -np.ones(39), np.ones(40)]
+    return Polyline(np.concatenate([forward, reverse, last]), directions)
+
+
+def test_polyline_geometry():
+    path = Polyline([[0, 0], [1, 0], [1, 0], [1, 2]], directions=[1, 1, -1])
+    assert path.n_segments == 2  # the repeated point is dropped with its segment
+    assert path.length == 3.0
+    np.testing.assert_array_equal(path.sections, [[0, 1], [1, 2]])
+    np.testing.assert_allclose(path.distance([[0.5, 1.0], [2.0, 3.0]]), [0.5, math.sqrt(2)])
+    ring = Polyline(circle(2.0, 400))
+    np.testing.assert_allclose(ring.curvature[1:-1], 0.5, rtol=1e-3)
+    fine = ring.resample(0.01)
+    assert fine.length == pytest.approx(ring.length)
+    assert np.max(fine.segment_lengths) <= 0.01 + 1e-12
+
+
+def test_polyline_bad_input():
+    with pytest.raises(InputError, match="two distinct points"):
+        Polyline([[1.0, 1.0], [1.0, 1.0]])
+    with pytest.raises(InputError, match="two distinct points"):
+        Polyline([[1.0, 1.0]])
+    with pytest.raises(InputError, match="directions"):
+        Polyline([[0, 0], [1, 0]], directions=[0.5])
+    with pytest.raises(InputError, match="one entry per segment"):
+        Polyline([[0, 0], [1, 0]], directions=[1, 1])
+    with pytest.raises(InputError, match="path points"):
+        Polyline([[0, 0, 0], [1, 0, 0]])
+
+
+@pytest.mark.parametrize("law", LAWS)
+def test_straight_line_offset_decays(law):
+    path = Polyline([[0.0, 0.0], [8.0, 0.0]])
+    controller = law(speed=0.4, wheel_base=0.2, limits=LIMITS)
+    result = run_closed_loop(controller, Unicycle(), [0.0, 0.3, 0.3], path, 28.0, 0.01)
+    y = np.abs(result.poses[:, 0, 1])
+    assert y[result.t >= 10.0].max() < 2e-3
+    # it stops at the end of the path
+    assert result.poses[-1, 0, 0] == pytest.approx(8.0, abs=0.02)
+    assert np.all(result.commands[-50:, 0] == 0.0)
+
+
+@pytest.mark.parametrize("law", [PurePursuit, RearWheelFeedback])
+def test_circle_is_followed_closely(law):
+    path = Polyline(circle(1.0, 300, turns=0.9))
+    result = run_closed_loop(law(speed=0.3, limits=LIMITS), Unicycle(), [0, 0, 0], path, 25, 0.01)
+    error = path.distance(result.poses[:, 0, :2])
+    assert error.max() < 0.01
+
+
+def test_segment_follower_steady_offset_on_a_circle_is_the_closed_form():
+    # without curvature feed-forward the law needs a heading error e = ω/K_φ = v/(R·K_φ), which
+    # it gets from the offset atan(K_r·d/ℓ) = e: d = ℓ·tan(v/(R·K_φ))/K_r (outside the circle)
+    path = Polyline(circle(1.0, 600, turns=0.9))
+    law = SegmentFollower(speed=0.3, k_r=1.0, k_heading=4.0, length_scale=0.25, limits=LIMITS)
+    result = run_closed_loop(law, Unicycle(), [0, 0, 0], path, 12, 0.01)
+    late = result.poses[result.t > 8, 0, :2]
+    offset = np.hypot(late[:, 0], late[:, 1] - 1.0) - 1.0
+    np.testing.assert_allclose(offset, 0.25 * math.tan(0.3 / 4.0), atol=1e-3)
+
+
+def test_stanley_rear_axle_offtracking_matches_the_closed_form():
+    # Stanley holds the front axle on the circle, so the rear axle runs on the circle of
+    # radius √(R² − L²) that keeps the wheel base as a chord-free tangent: offset R − √(R² − L²)
+    radius, base = 1.0, 0.3
+    path = Polyline(circle(radius, 400, turns=0.95))
+    law = Stanley(speed=0.3, wheel_base=base, k=3.0, limits=LIMITS)
+    result = run_closed_loop(law, Unicycle(), [0, 0, 0], path, 16, 0.01)
+    late = result.poses[(result.t > 8) & (result.t < 16), 0, :2]
+    rear_radius = np.hypot(late[:, 0], late[:, 1] - radius)
+    np.testing.assert_allclose(rear_radius, math.sqrt(radius**2 - base**2), atol=2e-3)
+
+
+@pytest.mark.parametrize("law", LAWS)
+@pytest.mark.parametrize("plant", ["unicycle", "bicycle"])
+def test_cusp_path_with_reverse_section(law, plant):
+    path = three_point_turn()
+    if plant == "unicycle":
+        model, controller = Unicycle(), law(speed=0.3, wheel_base=0.1, limits=LIMITS)
+    else:
+        model = RearWheelBicycle(wheel_base=0.5, max_steering=math.radians(35))
+        limits = SteeringLimits(math.radians(35), max_steering_rate=3.0)
+        controller = law(speed=0.3, output="steering", wheel_base=0.5, limits=limits)
+    result = run_closed_loop(controller, model, [0.0, 0.05, 0.0], path, 40.0, 0.01)
+    assert result.reversals[0] == 2
+    end = result.poses[-1, 0]
+    assert np.hypot(end[0] - 1.0, end[1]) < 0.03
+    assert abs(abs(end[2]) - math.pi) < 0.1
+    error = path.distance(result.poses[result.t >= 5, 0, :2])
+    assert error.max() < (0.1 if law is Stanley else 0.02)  # Stanley: rear-axle offtracking
+    if plant == "bicycle":
+        assert np.all(np.abs(result.commands[..., 1]) <= math.radians(35) + 1e-12)
+
+
+@given(
+    st.floats(-0.5, 0.5),
+    st.floats(-0.5, 0.5),
+    st.floats(-1.0, 1.0),
+    st.sampled_from(LAWS),
+)
+@settings(max_examples=40, deadline=None)
+def test_reversing_negates_speed_and_steering(x, y, heading, law):
+    # the same geometry driven forwards from θ and backwards from θ + π: (v, ω) → (−v, ω) and
+    # (v, δ) → (−v, −δ)
+    points = np.array([[-1.0, 0.0], [0.0, 0.2], [2.0, 0.5]])
+    forward, backward = Polyline(points, [1, 1]), Polyline(points, [-1, -1])
+    pose = np.array([x, y, heading])
+    flipped = np.array([x, y, heading + math.pi])
+    for output in ("velocity", "steering"):
+        a = law(output=output)(0.0, pose, forward)
+        b = law(output=output)(0.0, flipped, backward)
+        sign = 1.0 if output == "velocity" else -1.0
+        np.testing.assert_allclose(b, [-a[0], sign * a[1]], atol=1e-9)
+
+
+def test_follower_parameters():
+    with pytest.raises(ConfigError, match="output"):
+        PurePursuit(output="torque")
+    with pytest.raises(ConfigError, match="SteeringLimits"):
+        PurePursuit(output="steering", limits=LIMITS)
+    with pytest.raises(ConfigError, match="k_e"):
+        RearWheelFeedback(k_e=0.0)
+    with pytest.raises(ConfigError, match="max_steering"):
+        Stanley(max_steering=2.0)
+    with pytest.raises(ConfigError, match="lookahead_gain"):
+        PurePursuit(lookahead_gain=-1.0)
+    assert PurePursuit(output="steering").command_names == ("speed", "steering")
