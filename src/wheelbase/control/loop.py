@@ -277,3 +277,219 @@ def evaluate_pose_law(
         "max_final_heading_error_deg": float(np.degrees(np.max(heading))),
     }
     return metrics, result
+
+
+# --------------------------------------------------------------------------- benchmarks
+POSE_LAWS: tuple[str, ...] = (
+    "point",
+    "polar",
+    "aicardi",
+    "via_point",
+    "via_direction",
+    "line_arc",
+)
+"""Names of the pose laws of issue 5 (laws 1–6), in order."""
+
+BENCHMARK_LIMITS = (0.5, 1.5)
+"""|v| [m/s] and |ω| [rad/s] limits of the benchmarks."""
+
+
+def make_pose_law(name: str, limits: Any = None) -> Controller:
+    """A pose law of :data:`POSE_LAWS` with its default gains and the given limits."""
+    from wheelbase.control.point import GoToPoint
+    from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
+
+    check_choice("law", name, POSE_LAWS)
+    classes = {
+        "point": GoToPoint,
+        "polar": PolarPose,
+        "aicardi": Aicardi,
+        "via_point": ViaPoint,
+        "via_direction": ViaDirection,
+        "line_arc": LineArc,
+    }
+    return classes[name](limits=limits)
+
+
+def pose_benchmark(
+    laws: tuple[str, ...] = POSE_LAWS,
+    *,
+    starts: ArrayLike | None = None,
+    t_end: float = 60.0,
+    dt: float = 0.01,
+) -> tuple[dict[str, dict[str, float]], dict[str, ClosedLoopResult]]:
+    """The issue-5 pose benchmark: every law from the 128 starts to the origin, on a unicycle.
+
+    |v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s, dt = 0.01 s, 60 s limit, success within 1 cm and 1°.
+
+    Returns
+    -------
+    table : dict
+        Per law, the metrics of :func:`evaluate_pose_law` plus ``runtime_s`` (wall clock).
+    results : dict
+        Per law, the trajectories.
+    """
+    import time
+
+    from wheelbase.control.base import VelocityLimits
+    from wheelbase.models import Unicycle
+
+    starts = pose_benchmark_starts() if starts is None else starts
+    limits = VelocityLimits(*BENCHMARK_LIMITS)
+    table, results = {}, {}
+    for name in laws:
+        begin = time.perf_counter()
+        metrics, result = evaluate_pose_law(
+            make_pose_law(name, limits), Unicycle(), starts, t_end=t_end, dt=dt
+        )
+        metrics["runtime_s"] = time.perf_counter() - begin
+        table[name], results[name] = metrics, result
+    return table, results
+
+
+def figure_eight_reference(duration: float = 30.0, dt: float = 0.01) -> Any:
+    """The figure-eight of issue 5: x = 1.1 + 0.7 sin(2πt/T), y = 0.9 + 0.7 sin(4πt/T).
+
+    Returns a :class:`wheelbase.models.PathReference` on the grid 0, dt, …, T, built from the
+    analytic derivatives (document 002 eq. 10).
+    """
+    from wheelbase.models import reference_from_derivatives
+
+    duration = positive("duration", duration, "s")
+    t = time_grid(duration, dt)
+    w = 2.0 * np.pi / duration
+    return reference_from_derivatives(
+        1.1 + 0.7 * np.sin(w * t),
+        0.9 + 0.7 * np.sin(2 * w * t),
+        0.7 * w * np.cos(w * t),
+        1.4 * w * np.cos(2 * w * t),
+        -0.7 * w * w * np.sin(w * t),
+        -2.8 * w * w * np.sin(2 * w * t),
+        t=t,
+    )
+
+
+def three_point_turn_path(radius: float = 1.5, step: float = 0.05) -> Any:
+    """A Hybrid-A*-style path with two cusps: forward, reverse, forward (a three-point turn).
+
+    From (0, 0) heading +x: a left quarter circle of ``radius`` forward to (R, R); a quarter
+    circle in reverse that swings the tail to +x, ending at (2R, 0) with heading π; then
+    forward 2R·2/3 along −x. Points every ``step`` metres or less.
+    """
+    from wheelbase.control.path import Polyline
+
+    r = positive("radius", radius, "m")
+    n = max(4, math.ceil(0.5 * math.pi * r / positive("step", step, "m")) + 1)
+    a = np.linspace(-0.5 * np.pi, 0.0, n)
+    forward = np.stack([r * np.cos(a), r + r * np.sin(a)], -1)
+    b = np.linspace(np.pi, 1.5 * np.pi, n)[1:]
+    reverse = np.stack([2 * r + r * np.cos(b), r + r * np.sin(b)], -1)
+    m = max(2, math.ceil(4.0 / 3.0 * r / step))
+    last = np.stack([np.linspace(2 * r, 2 * r / 3, m + 1)[1:], np.zeros(m)], -1)
+    directions = np.r_[np.ones(n - 1), -np.ones(n - 1), np.ones(m)]
+    return Polyline(np.concatenate([forward, reverse, last]), directions)
+
+
+def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """The issue-5 tracking benchmark: laws 7 and 8 on the figure-eight and the cusp path.
+
+    Figure-eight (T = 30 s, start (1.1, 0.8, 0)): the trackers (law 8) follow the timed
+    reference; the path followers (law 7) follow its polyline at the mean reference speed.
+    Cusp path (:func:`three_point_turn_path`, start (0, 0.05, 0)): the path followers at
+    0.3 m/s. Plants: the unicycle (|v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s; Stanley's virtual front axle
+    0.1 m ahead) and, for law 7, the rear-wheel bicycle with L = 0.5 m and |δ| ≤ 35° (on the
+    figure-eight a bicycle with L = 0.05 m: the lobes' 8.8 cm radius of curvature is below the
+    0.71 m turning radius of L = 0.5 m).
+
+    Returns
+    -------
+    rows : list of dict
+        ``reference``, ``law``, ``plant``, ``rms_lateral_error_m`` and
+        ``max_lateral_error_m`` after 5 s (trackers: the error across the reference heading;
+        path followers: the distance to the path), ``final_position_error_m``.
+    traces : dict
+        ``(reference, law, plant) -> (t, lateral error)`` for plots.
+    """
+    from wheelbase.control.base import SteeringLimits, VelocityLimits
+    from wheelbase.control.path import (
+        Polyline,
+        PurePursuit,
+        RearWheelFeedback,
+        SegmentFollower,
+        Stanley,
+    )
+    from wheelbase.control.tracking import Kanayama, LinearTracker
+    from wheelbase.models import RearWheelBicycle, Unicycle
+
+    limits = VelocityLimits(*BENCHMARK_LIMITS)
+    rows: list[dict[str, Any]] = []
+    traces: dict[Any, Any] = {}
+
+    def record(reference, law, plant, t, lateral, final):
+        late = t >= 5.0
+        rows.append(
+            {
+                "reference": reference,
+                "law": law,
+                "plant": plant,
+                "rms_lateral_error_m": float(np.sqrt(np.mean(lateral[late] ** 2))),
+                "max_lateral_error_m": float(np.max(np.abs(lateral[late]))),
+                "final_position_error_m": float(final),
+            }
+        )
+        traces[(reference, law, plant)] = (t, lateral)
+
+    eight = figure_eight_reference(30.0, dt)
+    start8 = np.array([1.1, 0.8, 0.0])
+    for name, law in (
+        ("linear", LinearTracker(limits=limits)),
+        ("kanayama", Kanayama(limits=limits)),
+    ):
+        result = run_closed_loop(law, _unicycle(), start8, eight, 30.0, dt)
+        pose, ref = result.poses[:, 0], eight.poses[: result.t.size]
+        lateral = -np.sin(ref[:, 2]) * (pose[:, 0] - ref[:, 0]) + np.cos(ref[:, 2]) * (
+            pose[:, 1] - ref[:, 1]
+        )
+        final = np.hypot(*(pose[-1, :2] - ref[-1, :2]))
+        record("figure_eight", name, "unicycle", result.t, lateral, final)
+
+    eight_path = Polyline(eight.poses[::20, :2])
+    cusp = three_point_turn_path()
+    followers = {
+        "segment": SegmentFollower,
+        "pure_pursuit": PurePursuit,
+        "stanley": Stanley,
+        "rear_wheel": RearWheelFeedback,
+    }
+    cases = (
+        ("figure_eight", eight_path, start8, eight_path.length / 30.0, 40.0, 0.05),
+        ("cusp_path", cusp, np.array([0.0, 0.05, 0.0]), 0.3, 40.0, 0.5),
+    )
+    for reference, path, start, speed, horizon, bike_base in cases:
+        for name, cls in followers.items():
+            plants = (
+                ("unicycle", Unicycle(), dict(output="velocity", wheel_base=0.1, limits=limits)),
+                (
+                    "bicycle",
+                    RearWheelBicycle(wheel_base=bike_base, max_steering=math.radians(35.0)),
+                    dict(
+                        output="steering",
+                        wheel_base=bike_base,
+                        limits=SteeringLimits(math.radians(35.0), max_steering_rate=3.0),
+                    ),
+                ),
+            )
+            for plant_name, model, options in plants:
+                law = cls(speed=speed, **options)
+                result = run_closed_loop(law, model, start, path, horizon, dt)
+                xy = result.poses[:, 0, :2]
+                lateral = path.distance(xy)
+                final = np.hypot(*(xy[-1] - path.points[-1]))
+                record(reference, name, plant_name, result.t, lateral, final)
+    return rows, traces
+
+
+def _unicycle() -> Any:
+    from wheelbase.models import Unicycle
+
+    return Unicycle()
