@@ -117,14 +117,20 @@ def _goal_arrow(ax: Any, goal: np.ndarray) -> None:
     )
 
 
-def plot_fan(result: ClosedLoopResult, goal: Any = (0.0, 0.0, 0.0), title: str = "") -> Any:
+def plot_fan(
+    result: ClosedLoopResult, goal: Any = (0.0, 0.0, 0.0), title: str = "", ax: Any = None
+) -> Any:
     """The "fan" figure: every robot's path of a batch run on one plot (successes in blue).
 
-    Returns a :class:`matplotlib.figure.Figure` (no pyplot state).
+    Draws into ``ax`` when given, else into a new :class:`matplotlib.figure.Figure` (no pyplot
+    state); returns the figure.
     """
     goal = np.asarray(goal, dtype=float)
-    fig = _figure()
-    ax = fig.add_subplot()
+    if ax is None:
+        fig = _figure()
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
     ok = result.arrived
     for i in range(result.poses.shape[1]):
         xy = result.poses[:, i, :2]

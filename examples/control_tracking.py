@@ -1,0 +1,59 @@
+"""Path following and trajectory tracking (issue 5, laws 7–8): error against time and paths.
+
+Usage::
+
+    python examples/control_tracking.py [OUT_DIR]      # default: examples/out/
+
+Writes ``control_tracking_errors.png`` (lateral error against time for every law, plant and
+reference of the tracking benchmark) and ``control_cusp_paths.png`` (the three-point-turn path
+with reverse section, and the paths the four followers drive on the rear-wheel bicycle, L = 0.5 m,
+|δ| ≤ 35°), and prints the tracking table as JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from wheelbase.commands.control import plot_tracking_errors
+from wheelbase.control import SteeringLimits
+from wheelbase.control.loop import run_closed_loop, three_point_turn_path, tracking_benchmark
+from wheelbase.control.path import PurePursuit, RearWheelFeedback, SegmentFollower, Stanley
+from wheelbase.models import RearWheelBicycle
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    rows, traces = tracking_benchmark()
+    plot_tracking_errors(traces).savefig(out / "control_tracking_errors.png", dpi=100)
+
+    path = three_point_turn_path()
+    car = RearWheelBicycle(wheel_base=0.5, max_steering=math.radians(35.0))
+    limits = SteeringLimits(math.radians(35.0), max_steering_rate=3.0)
+    fig = Figure(figsize=(8, 5), layout="constrained")
+    ax = fig.add_subplot()
+    points, forward = path.points, path.directions > 0
+    for index in range(path.n_segments):
+        ax.plot(points[index : index + 2, 0], points[index : index + 2, 1],
+                color="0.7" if forward[index] else "salmon", lw=6)  # fmt: skip
+    for cls in (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback):
+        law = cls(speed=0.3, output="steering", wheel_base=0.5, limits=limits)
+        result = run_closed_loop(law, car, np.array([0.0, 0.05, 0.0]), path, 40.0, 0.01)
+        ax.plot(result.poses[:, 0, 0], result.poses[:, 0, 1], lw=1.2, label=cls.__name__)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("three-point turn (grey forward, red reverse), rear axle of the bicycle")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.savefig(out / "control_cusp_paths.png", dpi=100)
+    print(json.dumps(rows, indent=2))
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "out")
