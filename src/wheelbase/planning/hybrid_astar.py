@@ -24,7 +24,10 @@ Collision checking is continuous, not only at samples: every motion is sampled a
 ``collision_step`` and checked with the footprint grown by the largest distance any footprint
 point can travel between samples, ``collision_step/2 · (1 + ρ_max/R)`` (ρ_max = farthest
 footprint vertex from the reference point), so returned paths are collision-free at every
-intermediate pose under the exact check of :meth:`OccupancyGrid.in_collision`.
+intermediate pose under the exact check of :meth:`OccupancyGrid.in_collision` — every sample
+exactly, and continuously in between. (One caveat: the start pose is checked exactly, without
+the margin, so that a robot parked closer than the margin to an obstacle can still leave; the
+first half sample interval is then covered only by the samples around it.)
 
 Poses are those of the footprint's reference point: the **rear-axle centre** for car-like
 robots (use ``rear_axle_to_center``), the wheel-axle centre for differential drive.
