@@ -246,3 +246,30 @@ def test_bad_diffdrive_and_simulation_inputs():
         simulate_dynamics(RM100, np.zeros((3, 2)), 1.0, 0.1)
     with pytest.raises(InputError, match="raised"):
         simulate_dynamics(RM100, lambda t, s: 1 / 0, 1.0, 0.1)
+
+
+def test_dynamics_command_writes_the_simulated_states(tmp_path):
+    import typer
+    from typer.testing import CliRunner
+
+    from wheelbase.commands.dynamics import register
+
+    app = typer.Typer()
+
+    @app.callback()
+    def _main() -> None:
+        """Test app."""
+
+    register(app)
+    out = tmp_path / "dyn"
+    args = ["dynamics", "--out", str(out), "--torques", "0.01", "0.012", "--t-end", "20",
+            "--dt", "0.5", "--no-gif"]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    rows = np.loadtxt(out / "dynamics.csv", delimiter=",", skiprows=1)
+    expected = simulate_dynamics(RM100, (0.01, 0.012), 20.0, 0.5)
+    np.testing.assert_allclose(rows[:, 1:7], expected.states, rtol=1e-8, atol=1e-12)
+    assert (out / "path.png").stat().st_size > 0 and not (out / "animation.gif").exists()
+    bad = CliRunner().invoke(app, ["dynamics", "--out", str(out), "--method", "leapfrog",
+                                   "--force"])  # fmt: skip
+    assert bad.exit_code != 0 and "method" in str(bad.exception)

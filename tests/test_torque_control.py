@@ -164,3 +164,64 @@ def test_bad_controller_input():
         TorqueGains((-1, 0, 0), (0, 0, 0), (0, 0, 0))
     with pytest.raises(InputError, match="PoseTrajectory"):
         track_trajectory(RM100, [[0, 0]])
+
+
+# --------------------------------------------------------------------------- command line
+def _cli():
+    import typer
+
+    from wheelbase.commands.dynamics import register
+
+    app = typer.Typer()
+
+    @app.callback()
+    def _main() -> None:
+        """Test app."""
+
+    register(app)
+    return app
+
+
+def test_track_waypoints_command_writes_metrics_matching_the_api(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    out = tmp_path / "run"
+    args = ["track-waypoints", "--out", str(out), "--waypoints", "0,0 2,2 4,0",
+            "--peak-velocity", "0.2", "--peak-yaw-rate", "30deg", "--dt", "0.02", "--no-gif",
+            "--model-error", "0.2"]  # fmt: skip
+    result = CliRunner().invoke(_cli(), args)
+    assert result.exit_code == 0, result.output
+    assert "open_loop" in result.output and "pid" in result.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    ref = feasible_trajectory([[0, 0], [2, 2], [4, 0]], 0.2, peak_yaw_rate=math.radians(30),
+                              dt=0.02)  # fmt: skip
+    model = RM100.with_body(RM100.body.scaled(1.2, 1.2))
+    gains = TorqueGains.pole_placement(1.0, speed=float(ref.twist[:, 0].max()))
+    run = track_trajectory(RM100, ref, ComputedTorquePID(model, gains), dt=0.02)
+    for key in ("max_position_error_m", "rms_position_error_m", "rms_heading_error_deg"):
+        assert metrics["pid"][key] == pytest.approx(run.metrics()[key], rel=1e-9)
+        assert key in metrics["open_loop"]
+    rows = np.loadtxt(out / "tracking.csv", delimiter=",", skiprows=1)
+    assert rows.shape[0] == run.t.size
+    assert {p.name for p in out.iterdir()} == {
+        "reference.csv", "tracking.csv", "reference.png", "tracking.png", "metrics.json"
+    }  # fmt: skip
+    again = CliRunner().invoke(_cli(), args)
+    assert again.exit_code != 0 and isinstance(again.exception, FileExistsError)
+
+
+def test_track_waypoints_command_bad_input(tmp_path):
+    from typer.testing import CliRunner
+
+    for extra, error in (
+        (["--waypoints", "0,0"], "at least two"),
+        (["--waypoints", "0,0 1"], "x,y pairs"),
+        (["--peak-velocity", "0"], "peak_velocity"),
+        (["--preset", "pioneer"], "preset"),
+        (["--reference", "smooth"], "reference"),
+    ):
+        result = CliRunner().invoke(_cli(), ["track-waypoints", "--out", str(tmp_path), *extra])
+        assert result.exit_code != 0
+        assert error in str(result.exception)

@@ -333,6 +333,11 @@ class TrackingResult:
     mode: str
 
     @property
+    def poses(self) -> np.ndarray:
+        """Actual poses (x, y, ψ) ``(T, 3)`` (for :func:`wheelbase.plot.animate`)."""
+        return self.states[:, :3]
+
+    @property
     def position_error(self) -> np.ndarray:
         """Distance between reference and actual position [m], shape (T,)."""
         return np.hypot(*(self.reference[:, :2] - self.states[:, :2]).T)
