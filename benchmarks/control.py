@@ -8,10 +8,13 @@ Prints one JSON object:
 - ``pose_runtime_s``: wall clock of all six laws × 128 cases (target < 10 s), best of
   ``--repeat``;
 - ``tracking``: one row per (reference, law, plant) with the RMS and max lateral error after 5 s;
-- ``tracking_runtime_s``.
+- ``tracking_runtime_s``;
+- ``rm100``: the pose benchmark and the figure-eight trackers on the dynamic RM100 of document 000
+  through a computed-torque velocity loop (``wheelbase.control.loop.dynamic_benchmark``), and
+  ``rm100_runtime_s``.
 
 Usage: ``python benchmarks/control.py [--quick] [--repeat N]`` (``--quick``: pose benchmark on
-16 starts, no tracking).
+16 starts, no tracking, no RM100).
 """
 
 from __future__ import annotations
@@ -20,7 +23,12 @@ import argparse
 import json
 import time
 
-from wheelbase.control.loop import pose_benchmark, pose_benchmark_starts, tracking_benchmark
+from wheelbase.control.loop import (
+    dynamic_benchmark,
+    pose_benchmark,
+    pose_benchmark_starts,
+    tracking_benchmark,
+)
 
 
 def main() -> None:
@@ -47,6 +55,9 @@ def main() -> None:
         rows, _traces = tracking_benchmark()
         out["tracking"] = rows
         out["tracking_runtime_s"] = time.perf_counter() - begin
+        begin = time.perf_counter()
+        out["rm100"] = dynamic_benchmark()
+        out["rm100_runtime_s"] = time.perf_counter() - begin
     print(json.dumps(out, indent=2))
 
 
