@@ -202,6 +202,13 @@ def velocity_to_wheel_speeds(command: ArrayLike, model: Any) -> np.ndarray:
 
     ω_L = (v − dω)/a, ω_R = (v + dω)/a (document 001 eq. 20, rows in (left, right) order); these
     are the inputs of :class:`~wheelbase.models.DiffDrive`.
+
+    Parameters
+    ----------
+    command : array_like, shape (..., 2)
+        Commands (v [m/s], ω [rad/s]).
+    model : DiffDrive
+        Anything with ``wheel_radius`` a [m] and ``half_track`` d [m].
     """
     command = as_float_array("command", command, 2)
     a, d = model.wheel_radius, model.half_track
@@ -290,6 +297,13 @@ def velocity_to_steering(command: ArrayLike, wheel_base: float) -> np.ndarray:
     ω/v: a reversing command (v < 0) gets the steering that gives its curvature. At v = 0 the
     curvature is undefined; δ is then ±π/2 in the direction of ω (0 when ω = 0 too), which the
     steering limit clips.
+
+    Parameters
+    ----------
+    command : array_like, shape (..., 2)
+        Commands (v [m/s], ω [rad/s]).
+    wheel_base : float
+        L [m], > 0.
     """
     command = as_float_array("command", command, 2)
     length = positive("wheel_base", wheel_base, "m")
@@ -300,7 +314,15 @@ def velocity_to_steering(command: ArrayLike, wheel_base: float) -> np.ndarray:
 
 
 def steering_to_velocity(command: ArrayLike, wheel_base: float) -> np.ndarray:
-    """Convert ``(v, δ)`` commands to ``(v, ω)`` with ω = v·tan(δ)/L (inverse of the above)."""
+    """Convert ``(v, δ)`` commands to ``(v, ω)`` with ω = v·tan(δ)/L (inverse of the above).
+
+    Parameters
+    ----------
+    command : array_like, shape (..., 2)
+        Commands (v [m/s], δ [rad]).
+    wheel_base : float
+        L [m], > 0.
+    """
     command = as_float_array("command", command, 2)
     length = positive("wheel_base", wheel_base, "m")
     v, delta = command[..., 0], command[..., 1]

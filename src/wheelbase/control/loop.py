@@ -32,11 +32,21 @@ from wheelbase.integrate import METHODS, integrate_step, time_grid
 from wheelbase.models.base import KinematicModel
 
 __all__ = [
+    "BENCHMARK_LIMITS",
+    "POSE_LAWS",
     "ClosedLoopResult",
     "command_to_inputs",
+    "dynamic_benchmark",
     "evaluate_pose_law",
+    "figure_eight_reference",
+    "make_pose_law",
+    "pose_benchmark",
     "pose_benchmark_starts",
     "run_closed_loop",
+    "run_dynamic_closed_loop",
+    "three_point_turn_path",
+    "tracking_benchmark",
+    "velocity_torques",
 ]
 
 
@@ -111,6 +121,15 @@ def command_to_inputs(
     (inputs ``(speed, steering)``) through δ = atan(L·ω/v) clipped to its steering stop;
     ``(v, δ)`` drives a steered model directly. Any other model gets ``model.inverse`` of the
     twist (v, 0, ω).
+
+    Parameters
+    ----------
+    command : numpy.ndarray, shape (..., 2)
+        Controller commands.
+    command_names : tuple of str
+        Their meaning (``VELOCITY_COMMAND`` or ``STEERING_COMMAND``).
+    model : KinematicModel
+        The plant.
     """
     names = tuple(model.input_names)
     if tuple(command_names) == STEERING_COMMAND:
@@ -228,6 +247,15 @@ def pose_benchmark_starts(radius: float = 2.0, bearings: int = 16, headings: int
     The goal is the origin facing +x; the starts lie on a circle of ``radius`` [m] at
     ``bearings`` equally spaced bearings (from 0), each with ``headings`` equally spaced
     headings (from 0) — 16 × 8 = 128 cases by default, bearing-major.
+
+    Parameters
+    ----------
+    radius : float
+        Radius of the circle of starts [m], > 0.
+    bearings : int
+        Number of bearings, >= 1.
+    headings : int
+        Number of headings per bearing, >= 1.
     """
     radius = positive("radius", radius, "m")
     for name, count in (("bearings", bearings), ("headings", headings)):
@@ -252,6 +280,23 @@ def evaluate_pose_law(
     tolerance: tuple[float, float] = (0.01, math.radians(1.0)),
 ) -> tuple[dict[str, float], ClosedLoopResult]:
     """Run a pose law from every start and summarise it (the issue-5 pose benchmark).
+
+    Parameters
+    ----------
+    controller : Controller
+        A pose law (goal-pose reference).
+    model : KinematicModel
+        The plant.
+    starts : array_like, shape (N, 3)
+        Start poses.
+    goal : array_like, shape (3,)
+        The goal pose.
+    t_end : float
+        Time limit [s].
+    dt : float
+        Step [s].
+    tolerance : (float, float)
+        Position [m] and heading [rad] tolerance of success.
 
     Returns
     -------
@@ -295,7 +340,15 @@ BENCHMARK_LIMITS = (0.5, 1.5)
 
 
 def make_pose_law(name: str, limits: Any = None) -> Controller:
-    """A pose law of :data:`POSE_LAWS` with its default gains and the given limits."""
+    """A pose law of :data:`POSE_LAWS` with its default gains and the given limits.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`POSE_LAWS`.
+    limits : VelocityLimits, optional
+        Command limits.
+    """
     from wheelbase.control.point import GoToPoint
     from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
 
@@ -321,6 +374,17 @@ def pose_benchmark(
     """The issue-5 pose benchmark: every law from the 128 starts to the origin, on a unicycle.
 
     |v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s, dt = 0.01 s, 60 s limit, success within 1 cm and 1°.
+
+    Parameters
+    ----------
+    laws : tuple of str
+        Names of :data:`POSE_LAWS` to run.
+    starts : array_like, shape (N, 3), optional
+        Start poses (default :func:`pose_benchmark_starts`).
+    t_end : float
+        Time limit [s].
+    dt : float
+        Step [s].
 
     Returns
     -------
@@ -352,6 +416,13 @@ def figure_eight_reference(duration: float = 30.0, dt: float = 0.01) -> Any:
 
     Returns a :class:`wheelbase.models.PathReference` on the grid 0, dt, …, T, built from the
     analytic derivatives (document 002 eq. 10).
+
+    Parameters
+    ----------
+    duration : float
+        Period T [s].
+    dt : float
+        Sampling step [s].
     """
     from wheelbase.models import reference_from_derivatives
 
@@ -375,6 +446,13 @@ def three_point_turn_path(radius: float = 1.5, step: float = 0.05) -> Any:
     From (0, 0) heading +x: a left quarter circle of ``radius`` forward to (R, R); a quarter
     circle in reverse that swings the tail to +x, ending at (2R, 0) with heading π; then
     forward 2R·2/3 along −x. Points every ``step`` metres or less.
+
+    Parameters
+    ----------
+    radius : float
+        R [m], > 0.
+    step : float
+        Largest spacing of the points [m], > 0.
     """
     from wheelbase.control.path import Polyline
 
@@ -558,6 +636,29 @@ def run_dynamic_closed_loop(
     arrived when it is within the tolerance *and* nearly at rest (|u| ≤ ``rest_speed``,
     |r| ≤ 2·``rest_speed`` rad/s per m/s): a dynamic robot can cross the goal window at speed. An
     arrived robot is braked (command (0, 0) through the torque layer).
+
+    Parameters
+    ----------
+    controller : Controller
+        A (v, ω) controller.
+    dynamics : DiffDriveDynamics
+        The plant (e.g. :data:`wheelbase.dynamics.RM100`).
+    pose0 : array_like, shape (3,) or (N, 3)
+        Initial poses; the robots start at rest.
+    reference : object
+        Passed to the controller (a goal pose when ``goal_tolerance`` is given).
+    t_end : float
+        Duration [s].
+    dt : float
+        Control period and RK4 step [s].
+    gains : (float, float)
+        Velocity-loop gains k_u, k_r [1/s] of :func:`velocity_torques`.
+    max_torque : float
+        Wheel torque limit [N·m].
+    goal_tolerance : (float, float), optional
+        Position [m] and heading [rad] tolerance of arrival.
+    rest_speed : float
+        Speed [m/s] under which an arrived robot counts as at rest.
     """
     times = time_grid(t_end, dt)
     pose = as_float_array("pose0", pose0, 3, min_ndim=1, max_ndim=2).reshape(-1, 3)

@@ -37,6 +37,15 @@ __all__ = ["GoToPoint", "check_point_gains", "go_to_point_law"]
 def check_point_gains(k_heading: float, k_speed: float, *, name: str = "GoToPoint") -> None:
     """Validate the gains of the go-to-point law (see the module docstring).
 
+    Parameters
+    ----------
+    k_heading : float
+        K₁ [1/s].
+    k_speed : float
+        K₂ [1/s].
+    name : str
+        The law's name, for the messages.
+
     Raises
     ------
     ConfigError

@@ -367,6 +367,11 @@ class LineArc(_Aligning):
     def plan(self, x: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
         """The line and arc from start positions (x, y) in the goal frame [m].
 
+        Parameters
+        ----------
+        x, y : numpy.ndarray
+            Start positions in the goal frame (goal at the origin facing +x) [m].
+
         Returns a dict of arrays of the batch shape: ``sigma`` (±1, circle side), ``tangent``
         (..., 2) the point T, ``start`` (..., 2), ``arc_angle`` the arc's angle [rad] in [0, 2π)
         and ``length`` the total length [m].

@@ -83,6 +83,13 @@ def tracking_errors(pose: ArrayLike, reference_pose: ArrayLike) -> np.ndarray:
     """Errors ``(..., 3)`` = (e_x [m], e_y [m], e_θ [rad]) of the reference in the robot frame.
 
     e_x is along the robot's heading, e_y to its left (see the module docstring).
+
+    Parameters
+    ----------
+    pose : array_like, shape (..., 3)
+        Robot poses (x [m], y [m], θ [rad]).
+    reference_pose : array_like, shape (..., 3)
+        Reference poses, broadcast against ``pose``.
     """
     pose = as_float_array("pose", pose, 3)
     ref = as_float_array("reference pose", reference_pose, 3)
@@ -148,7 +155,15 @@ class LinearTracker(_Tracker):
         object.__setattr__(self, "g", positive("g", self.g, "1/m²"))
 
     def gains(self, v_r: ArrayLike, omega_r: ArrayLike) -> tuple[np.ndarray, ...]:
-        """(K_x, K_y, K_θ) for the reference inputs v_r [m/s], ω_r [rad/s]."""
+        """(K_x, K_y, K_θ) for the reference inputs.
+
+        Parameters
+        ----------
+        v_r : array_like
+            Reference speed [m/s].
+        omega_r : array_like
+            Reference yaw rate [rad/s].
+        """
         v_r, omega_r = np.asarray(v_r, float), np.asarray(omega_r, float)
         natural = np.sqrt(omega_r**2 + self.g * v_r**2)
         k = 2.0 * self.zeta * natural
