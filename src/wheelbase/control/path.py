@@ -219,10 +219,14 @@ def _as_polyline(reference: object) -> Polyline:
     if isinstance(reference, Polyline):
         return reference
     poses = getattr(reference, "poses", None)
-    if poses is not None:  # a planned path or PathReference
+    if poses is not None:  # a planned path (wheelbase.planning.Path) or a PathReference
         directions = getattr(reference, "directions", None)
-        if directions is None and getattr(reference, "direction", None) is not None:
-            directions = np.asarray(reference.direction)[:-1]  # type: ignore[attr-defined]
+        if directions is not None:
+            directions = np.asarray(directions, dtype=np.float64).ravel()
+            if directions.size == np.shape(poses)[0]:
+                # one direction per sample, "of the motion that reaches it": segment k → k + 1
+                # is driven in the direction of sample k + 1
+                directions = directions[1:]
         return Polyline.from_poses(poses, directions)
     return Polyline(as_float_array("path", reference, 2, min_ndim=2, max_ndim=2))
 
@@ -288,8 +292,10 @@ class PathFollower:
         pose : array_like, shape (..., 3)
             Measured poses (x [m], y [m], θ [rad]) of the reference point (the rear axle of a
             steered vehicle).
-        reference : Polyline or array_like, shape (M, 2)
-            The path (anything with ``poses`` and optional ``directions`` works too).
+        reference : Polyline, Path or array_like, shape (M, 2)
+            The path: a :class:`Polyline`, points, or anything with ``poses`` (M, 3) and
+            optional ``directions`` per segment (M − 1) or per sample (M, the direction of the
+            motion reaching each sample, as :class:`wheelbase.planning.Path` has).
         """
         pose = as_float_array("pose", pose, 3)
         path = self._state.get("path")
