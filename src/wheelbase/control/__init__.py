@@ -23,6 +23,7 @@ from wheelbase.control.goal import (
     saturate_keep_turn_rate,
 )
 from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
+from wheelbase.control.mppi import MPPI, MPPI_BACKENDS, MPPICritics, MPPIPlan
 from wheelbase.control.path import (
     PathFollower,
     Polyline,
@@ -46,6 +47,8 @@ from wheelbase.control.tracking import Kanayama, LinearTracker
 __all__: list[str] = [
     "ANTI_WINDUP",
     "FIGURE8_GOALS",
+    "MPPI",
+    "MPPI_BACKENDS",
     "PID",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
@@ -61,6 +64,8 @@ __all__: list[str] = [
     "Kanayama",
     "LineArc",
     "LinearTracker",
+    "MPPICritics",
+    "MPPIPlan",
     "PathFollower",
     "PolarPose",
     "Polyline",

@@ -1,0 +1,743 @@
+"""Model Predictive Path Integral control (MPPI) on batched rollouts.
+
+Each call (Williams et al., "Information-theoretic MPC for model-based reinforcement learning",
+ICRA 2017; the form of Nav2's MPPI controller):
+
+1. warm start: the previous optimal command sequence U (T, 2), shifted by one step;
+2. K samples V_i = clip(U + ε_i, limits) with Gaussian ε_i ~ N(0, diag(σ²));
+3. each V_i is rolled out from the measured pose through the model's body twist with the
+   Euler step of :func:`wheelbase.integrate.integrate_step` (the same arithmetic);
+4. the critics of :mod:`wheelbase.control.mppi_critics` score each rollout: S_i;
+5. w_i = exp(−(S_i − min S)/λ) / Σ exp(−(S_j − min S)/λ) (the minimum subtracted: the best
+   sample has weight exp(0) = 1 before normalising, so nothing overflows at any λ);
+6. U ← Savitzky–Golay(Σ w_i V_i) along the horizon, clipped; the command is U[0].
+
+When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
+warm start is cleared and :attr:`MPPI.status` is ``"all_collide"``.
+
+Backends: ``numpy`` (the reference), ``numba`` (one parallel compiled loop that draws the noise,
+rolls each sample out and scores it: ``cache=True``), ``jax`` (``jax.jit`` + ``lax.scan`` over
+the horizon; float32 by default, float64 with ``jax_float64=True``; install ``wheelbase[jax]``).
+Steps 1, 5 and 6 are shared NumPy code, so with the same noise (``plan(..., noise=...)``) the
+backends return the same command to rounding.
+
+Commands are ``(v [m/s], ω [rad/s])`` for :class:`~wheelbase.models.Unicycle` and
+:class:`~wheelbase.models.DiffDrive` (``limits``: :class:`VelocityLimits`), and
+``(v [m/s], δ [rad])`` for the steered models (``limits``: :class:`SteeringLimits`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.signal import savgol_filter
+
+from wheelbase._validate import as_float_array, check_choice, positive
+from wheelbase.control.base import (
+    STEERING_COMMAND,
+    VELOCITY_COMMAND,
+    SteeringLimits,
+    VelocityLimits,
+)
+from wheelbase.control.mppi_critics import MPPICritics, PathTables
+from wheelbase.control.path import _as_polyline
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
+from wheelbase.integrate import integrate_step
+
+__all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
+
+MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
+STATUSES: tuple[str, ...] = ("ok", "all_collide")
+
+# twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α)
+_KIND_VELOCITY, _KIND_REAR, _KIND_FRONT = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class MPPIPlan:
+    """One MPPI iteration.
+
+    Attributes
+    ----------
+    command : numpy.ndarray, shape (2,)
+        The command sent (first of ``controls``, or a stop).
+    controls : numpy.ndarray, shape (T, 2)
+        The smoothed optimal command sequence.
+    costs : numpy.ndarray, shape (K,)
+        Cost of each sample.
+    weights : numpy.ndarray, shape (K,)
+        Softmin weights (sum 1).
+    status : str
+        ``"ok"`` or ``"all_collide"``.
+    poses : numpy.ndarray, shape (T + 1, 3)
+        The rollout of ``controls`` from the measured pose.
+    """
+
+    command: np.ndarray
+    controls: np.ndarray
+    costs: np.ndarray
+    weights: np.ndarray
+    status: str
+    poses: np.ndarray
+
+
+class MPPI:
+    """Sampling-based predictive controller for one robot (see the module docstring).
+
+    Parameters
+    ----------
+    model : KinematicModel
+        Unicycle, DiffDrive, Bicycle, RearWheelBicycle or Ackermann (any model with an
+        ``inverse`` on the ``numpy`` backend).
+    horizon_steps : int
+        T, steps of the horizon, >= 1.
+    dt : float
+        Step [s], > 0.
+    samples : int
+        K, rollouts per call, >= 1.
+    noise_std : sequence of float
+        σ of the Gaussian perturbation of each command component (SI units), > 0.
+    temperature : float
+        λ of the softmin, > 0.
+    critics : MPPICritics, dict or None
+        Critic weights (``None``: defaults).
+    limits : VelocityLimits or SteeringLimits
+        Command limits; ``max_speed`` (and ``max_yaw_rate`` for velocity commands) finite.
+    seed : int
+        Seed of the noise.
+    backend : str
+        One of :data:`MPPI_BACKENDS`.
+    grid : OccupancyGrid, optional
+        Map for the obstacle critic.
+    footprint : Footprint, optional
+        Robot outline; its covering circles are checked against the distance field (default:
+        a point robot).
+    allow_reverse : bool
+        Whether v may be negative (down to −max_speed); otherwise v >= 0.
+    savgol_window : int
+        Savitzky–Golay window (odd, >= 3; shortened to fit the horizon); 0 switches it off.
+    path_spacing : float
+        Spacing [m] of the densified path the path critics use.
+    cusp_tolerance : float
+        Distance [m] to a cusp at which the next path section becomes active.
+    jax_float64 : bool
+        Run the ``jax`` backend in float64 (default float32).
+
+    Examples
+    --------
+    >>> from wheelbase.models import Unicycle
+    >>> mppi = MPPI(Unicycle(), 20, 0.1, 64, (0.2, 0.5), 1.0, None,
+    ...             VelocityLimits(max_speed=0.5, max_yaw_rate=1.5), seed=1)
+    >>> mppi(0.0, [0.0, 0.0, 0.0], [[0.0, 0.0], [2.0, 0.0]]).shape
+    (2,)
+    """
+
+    command_names: ClassVar[tuple[str, ...]] = VELOCITY_COMMAND
+
+    def __init__(
+        self,
+        model: Any,
+        horizon_steps: int,
+        dt: float,
+        samples: int,
+        noise_std: ArrayLike,
+        temperature: float,
+        critics: MPPICritics | dict | None,
+        limits: VelocityLimits | SteeringLimits,
+        *,
+        seed: int = 0,
+        backend: str = "numpy",
+        grid: Any = None,
+        footprint: Any = None,
+        allow_reverse: bool = True,
+        savgol_window: int = 9,
+        path_spacing: float = 0.05,
+        cusp_tolerance: float = 0.15,
+        jax_float64: bool = False,
+    ) -> None:
+        self.model = model
+        self.horizon_steps = _count("horizon_steps", horizon_steps)
+        self.samples = _count("samples", samples)
+        self.dt = positive("dt", dt, "s")
+        self.temperature = positive("temperature", temperature)
+        sigma = np.asarray(noise_std, dtype=np.float64).reshape(-1)
+        if sigma.size == 1:
+            sigma = np.repeat(sigma, 2)
+        if sigma.size != 2 or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0.0):
+            raise ConfigError(f"noise_std must be two values > 0 (got {noise_std!r})")
+        self.noise_std = sigma
+        self.critics = MPPICritics.from_mapping(critics)
+        self.backend = check_choice("backend", backend, MPPI_BACKENDS)
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ConfigError(f"seed must be an integer >= 0 (got {seed!r})")
+        self.seed = int(seed)
+        self.path_spacing = positive("path_spacing", path_spacing, "m")
+        self.cusp_tolerance = positive("cusp_tolerance", cusp_tolerance, "m")
+        self.allow_reverse = bool(allow_reverse)
+        self.jax_float64 = bool(jax_float64)
+        self._kind, self._wheel_base = _model_kind(model)
+        self.command_names = STEERING_COMMAND if self._kind != _KIND_VELOCITY else VELOCITY_COMMAND
+        self._lo, self._hi = self._bounds(limits)
+        self.limits = limits
+        window = int(savgol_window)
+        if window != 0 and (window < 3 or window % 2 == 0):
+            raise ConfigError(f"savgol_window must be 0 or an odd integer >= 3 (got {window})")
+        self.savgol_window = window
+        self._set_map(grid, footprint)
+        if self.backend == "jax":
+            _import_jax()
+        ahead = 1.2 * self.horizon_steps * self.dt * float(self._hi[0]) + 2.0 * self.path_spacing
+        self._window_points = math.ceil(ahead / self.path_spacing) + 1
+        self._tables: tuple[object, PathTables] | None = None
+        self.reset()
+
+    # ------------------------------------------------------------------ set-up
+    def _bounds(self, limits: Any) -> tuple[np.ndarray, np.ndarray]:
+        if self._kind == _KIND_VELOCITY:
+            if not isinstance(limits, VelocityLimits):
+                raise ConfigError("limits must be VelocityLimits for (v, ω) commands")
+            top = np.array([limits.max_speed, limits.max_yaw_rate])
+        else:
+            if not isinstance(limits, SteeringLimits):
+                raise ConfigError("limits must be SteeringLimits for (v, δ) commands")
+            steer = min(limits.max_steering, float(self.model.max_steering))
+            top = np.array([limits.max_speed, steer])
+        if not np.all(np.isfinite(top)):
+            raise ConfigError(f"MPPI needs finite command limits (got {top.tolist()})")
+        low = -top.copy()
+        if not self.allow_reverse:
+            low[0] = 0.0
+        return low, top
+
+    def _set_map(self, grid: Any, footprint: Any) -> None:
+        self.grid = grid
+        if grid is None:
+            self._df = np.zeros((1, 1))
+            self._map = np.array([0.0, 0.0, 1.0, 0.0])  # x0, y0, resolution, enabled
+        else:
+            self._df = np.ascontiguousarray(np.minimum(grid.distance_field, 1.0e3))
+            self._map = np.array([grid.origin[0], grid.origin[1], grid.resolution, 1.0])
+        if footprint is None:
+            self._circles = np.zeros((1, 2))
+            self._circle_radius = 0.0
+        else:
+            self._circles = np.ascontiguousarray(footprint.circles, dtype=np.float64)
+            self._circle_radius = float(footprint.circle_radius)
+        self.footprint = footprint
+
+    def reset(self) -> None:
+        """Forget the warm start, the path progress and the noise counter."""
+        self._mean = np.zeros((self.horizon_steps, 2))
+        self._mean[:, 0] = np.clip(0.0, self._lo[0], self._hi[0])
+        self._last = np.zeros(2)
+        self._progress: int | None = None
+        self._section = 0
+        self._calls = 0
+        self._rng = np.random.default_rng(self.seed)
+        self.status = "ok"
+        self.last_plan: MPPIPlan | None = None
+
+    # ------------------------------------------------------------------ call
+    def __call__(self, t: float, pose: ArrayLike, reference: Any) -> np.ndarray:
+        """Command for the measured pose, following the reference path.
+
+        Parameters
+        ----------
+        t : float
+            Time [s] (unused: the path is followed by position).
+        pose : array_like, shape (3,) or (1, 3)
+            Measured pose (x [m], y [m], θ [rad]).
+        reference : Polyline, Path or array_like (M, 2)
+            The reference path (a planned path's directions mark reversing sections).
+
+        Returns
+        -------
+        numpy.ndarray
+            Command of shape (2,) or (1, 2) like ``pose``.
+        """
+        array = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=2)
+        if array.ndim == 2 and array.shape[0] != 1:
+            raise InputError(f"MPPI controls one robot: pose (3,) or (1, 3) (got {array.shape})")
+        plan = self.plan(array.reshape(3), reference)
+        return plan.command.reshape((*array.shape[:-1], 2))
+
+    def plan(self, pose: ArrayLike, reference: Any, noise: ArrayLike | None = None) -> MPPIPlan:
+        """One MPPI iteration from ``pose``; updates the warm start.
+
+        Parameters
+        ----------
+        pose : array_like, shape (3,)
+            Measured pose (x [m], y [m], θ [rad]).
+        reference : Polyline, Path or array_like (M, 2)
+            The reference path.
+        noise : array_like, shape (K, T, 2), optional
+            The perturbations ε to use instead of drawing them (cross-backend checks).
+
+        Returns
+        -------
+        MPPIPlan
+        """
+        pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
+        tables = self._path_tables(reference)
+        window, info = self._window(pose, tables)
+        mean = self._mean
+        if noise is not None:
+            noise = as_float_array("noise", noise, 2, min_ndim=3, max_ndim=3)
+            if noise.shape[:2] != (self.samples, self.horizon_steps):
+                raise InputError(
+                    f"noise must have shape ({self.samples}, {self.horizon_steps}, 2) "
+                    f"(got {noise.shape})"
+                )
+        args = (pose, mean, self._lo, self._hi, window, info, self._last)
+        if self.backend == "numpy":
+            if noise is None:
+                noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
+                noise *= self.noise_std
+            costs, controls = self._costs_numpy(*args, noise)
+        elif self.backend == "numba":
+            has_noise = noise is not None
+            buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, 2))
+            costs = np.empty(self.samples)
+            controls = np.empty((self.samples, self.horizon_steps, 2))
+            _mppi_kernel(
+                *args, buffer, has_noise, self.noise_std, np.uint64(self.seed),
+                np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
+                self.critics.vector(), self._df, self._map, self._circles,
+                self._circle_radius, int(self.critics.path_stride), costs, controls,
+            )  # fmt: skip
+        else:
+            if noise is None:
+                noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
+                noise *= self.noise_std
+            costs, controls = self._costs_jax(*args, noise)
+        self._calls += 1
+        if self.critics.extra is not None:
+            extra = np.asarray(
+                self.critics.extra(self._rollout_many(pose, controls), controls), np.float64
+            )
+            if extra.shape != (self.samples,):
+                raise InputError(
+                    f"extra critic must return shape ({self.samples},) (got {extra.shape})"
+                )
+            costs = costs + np.where(np.isfinite(extra), np.maximum(extra, 0.0), 1e6)
+        return self._update(pose, costs, controls)
+
+    def _update(self, pose: np.ndarray, costs: np.ndarray, controls: np.ndarray) -> MPPIPlan:
+        best = float(np.min(costs))
+        weights = np.exp(-(costs - best) / self.temperature)
+        weights /= np.sum(weights)
+        if best >= self.critics.collision_cost:
+            self.status = "all_collide"
+            command = np.zeros(2)
+            sequence = np.zeros_like(self._mean)
+            self._mean = np.zeros_like(self._mean)
+            self._mean[:, 0] = np.clip(0.0, self._lo[0], self._hi[0])
+        else:
+            self.status = "ok"
+            sequence = np.tensordot(weights, controls, axes=1)
+            sequence = np.clip(self._smooth(sequence), self._lo, self._hi)
+            command = sequence[0].copy()
+            self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
+        self._last = command
+        poses = self._rollout_many(pose, sequence[None])[0]
+        plan = MPPIPlan(command, sequence, costs, weights, self.status, poses)
+        self.last_plan = plan
+        return plan
+
+    def _smooth(self, sequence: np.ndarray) -> np.ndarray:
+        window = self.savgol_window
+        if window == 0:
+            return sequence
+        steps = sequence.shape[0]
+        window = min(window, steps if steps % 2 else steps - 1)
+        if window < 3:
+            return sequence
+        return savgol_filter(sequence, window, min(3, window - 1), axis=0, mode="interp")
+
+    # ------------------------------------------------------------------ path
+    def _path_tables(self, reference: Any) -> PathTables:
+        if self._tables is not None and self._tables[0] is reference:
+            return self._tables[1]
+        line = _as_polyline(reference)
+        tables = PathTables(np.asarray(line.points), np.asarray(line.directions), self.path_spacing)
+        self._tables = (reference, tables)
+        self._progress, self._section = None, 0
+        return tables
+
+    def _window(self, pose: np.ndarray, tab: PathTables) -> tuple[np.ndarray, np.ndarray]:
+        """The local path window (M, 4) = (x, y, heading, 0) and the scalars the critics need."""
+        end = int(tab.section_end[self._section])
+        start = 0 if self._section == 0 else int(tab.section_end[self._section - 1])
+        if self._progress is None:
+            lo, hi = start, end + 1
+        else:
+            lo = max(start, self._progress - 10)
+            hi = min(end + 1, self._progress + 4 * self._window_points)
+        d2 = np.sum((tab.xy[lo:hi] - pose[:2]) ** 2, axis=1)
+        index = lo + int(np.argmin(d2))
+        self._progress = max(index, self._progress or 0) if self._progress is not None else index
+        last_section = self._section == tab.n_sections - 1
+        at_cusp = np.hypot(*(tab.xy[end] - pose[:2])) <= self.cusp_tolerance
+        if not last_section and at_cusp:
+            self._section += 1
+            self._progress = end
+            return self._window(pose, tab)
+        stop = min(self._progress + self._window_points, end + 1)
+        idx = np.arange(self._progress, self._progress + self._window_points)
+        idx = np.minimum(idx, stop - 1)
+        window = np.stack([tab.xy[idx, 0], tab.xy[idx, 1], tab.heading[idx]], -1)
+        remaining = tab.arc[end] - tab.arc[self._progress]
+        goal_mode = 1.0 if remaining <= self.critics.goal_distance else 0.0
+        target = tab.xy[stop - 1]
+        info = np.array(
+            [
+                goal_mode,
+                target[0],
+                target[1],
+                tab.xy[end, 0],
+                tab.xy[end, 1],
+                tab.heading[end],
+                tab.direction[end],
+            ]
+        )
+        return np.ascontiguousarray(window), info
+
+    # ------------------------------------------------------------------ NumPy reference
+    def _twist(self, controls: np.ndarray) -> np.ndarray:
+        from wheelbase.control.loop import command_to_inputs
+
+        return self.model.twist(command_to_inputs(controls, self.command_names, self.model))
+
+    def _rollout_many(self, pose: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        n, steps = controls.shape[:2]
+        twist = self._twist(controls)
+        poses = np.empty((n, steps + 1, 3))
+        poses[:, 0] = pose
+        for t in range(steps):
+            z = twist[:, t]
+            poses[:, t + 1] = integrate_step(poses[:, t], z, z, z, self.dt, "euler")
+        return poses
+
+    def _costs_numpy(self, pose, mean, lo, hi, window, info, last, noise):
+        c = self.critics
+        controls = np.clip(mean[None] + noise, lo, hi)
+        poses = self._rollout_many(pose, controls)
+        after = poses[:, 1:]
+        steps = self.horizon_steps
+        cost = np.zeros(self.samples)
+        goal_mode = info[0] > 0.5
+        if not goal_mode:
+            checked = np.arange(c.path_stride - 1, steps, c.path_stride)
+            if checked.size:
+                pts = after[:, checked]
+                d2 = (pts[..., 0, None] - window[:, 0]) ** 2 + (
+                    pts[..., 1, None] - window[:, 1]
+                ) ** 2
+                nearest = np.argmin(d2, axis=-1)
+                dmin = np.take_along_axis(d2, nearest[..., None], -1)[..., 0]
+                err = wrap_angle(pts[..., 2] - window[nearest, 2])
+                cost += c.path * np.sum(dmin, axis=1) / checked.size
+                cost += c.path_align * np.sum(err * err, axis=1) / checked.size
+            end = after[:, -1]
+            cost += c.follow * np.hypot(end[:, 0] - info[1], end[:, 1] - info[2])
+        else:
+            dist = np.hypot(after[..., 0] - info[3], after[..., 1] - info[4])
+            cost += c.goal * np.sum(dist, axis=1) / steps
+            cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[5]))
+        if self._map[3] > 0.5:
+            x0, y0, res = self._map[:3]
+            cos, sin = np.cos(after[..., 2]), np.sin(after[..., 2])
+            collided = np.zeros(self.samples, bool)
+            for cx, cy in self._circles:
+                px = after[..., 0] + cos * cx - sin * cy
+                py = after[..., 1] + sin * cx + cos * cy
+                col = np.floor((px - x0) / res).astype(np.int64)
+                row = np.floor((py - y0) / res).astype(np.int64)
+                inside = (row >= 0) & (row < self._df.shape[0]) & (col >= 0)
+                inside &= col < self._df.shape[1]
+                field = self._df[np.clip(row, 0, self._df.shape[0] - 1),
+                                 np.clip(col, 0, self._df.shape[1] - 1)]  # fmt: skip
+                clear = field - self._circle_radius - math.sqrt(2.0) * res
+                collided |= np.any(~inside | (clear <= 0.0), axis=1)
+                gap = np.where(inside & (clear > 0.0), np.maximum(c.inflation - clear, 0.0), 0.0)
+                cost += c.obstacle * np.sum(gap * gap, axis=1) / steps
+            cost += np.where(collided, c.collision_cost, 0.0)
+        v = controls[..., 0]
+        cost += c.prefer_forward * np.sum(np.maximum(-info[6] * v, 0.0), axis=1) * self.dt
+        scale = hi
+        cost += c.effort * np.sum((controls / scale) ** 2, axis=(1, 2)) / steps
+        previous = np.concatenate(
+            [np.broadcast_to(last, (self.samples, 1, 2)), controls[:, :-1]], 1
+        )
+        cost += c.rate * np.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
+        if self._kind == _KIND_VELOCITY:
+            cost += c.twirl * np.sum(np.abs(controls[..., 1]), axis=1) / (steps * scale[1])
+        return cost, controls
+
+    # ------------------------------------------------------------------ JAX
+    def _costs_jax(self, pose, mean, lo, hi, window, info, last, noise):
+        jax, _jnp = _import_jax()
+        if self._kind != _KIND_VELOCITY and self._kind not in (_KIND_REAR, _KIND_FRONT):
+            raise ConfigError("the jax backend needs a unicycle, diff-drive or steered model")
+        function = _jax_function(
+            self.horizon_steps, int(self.critics.path_stride), self._kind, self.jax_float64
+        )
+        dtype = np.float64 if self.jax_float64 else np.float32
+        values = (
+            pose, mean, lo, hi, window, info, last, noise, self.critics.vector(), self._df,
+            self._map, self._circles, np.array([self._circle_radius, self.dt, self._wheel_base]),
+        )  # fmt: skip
+        with _x64(jax, self.jax_float64):
+            costs, controls = function(*(np.asarray(v, dtype) for v in values))
+            return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
+
+
+# --------------------------------------------------------------------------- helpers
+def _count(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f"{name} must be an integer >= 1 (got {value!r})")
+    return int(value)
+
+
+def _model_kind(model: Any) -> tuple[int, float]:
+    names = tuple(getattr(model, "input_names", ()))
+    if names in (VELOCITY_COMMAND, ("omega_left", "omega_right")):
+        return _KIND_VELOCITY, 0.0
+    if names == STEERING_COMMAND:
+        front = type(model).__name__ == "Bicycle"
+        return (_KIND_FRONT if front else _KIND_REAR), float(model.wheel_base)
+    if names == ("speed", "alpha") or hasattr(model, "wheel_base"):
+        return _KIND_FRONT, float(model.wheel_base)
+    raise ConfigError(
+        f"MPPI supports Unicycle, DiffDrive and the steered models (got {type(model).__name__})"
+    )
+
+
+def _import_jax():
+    try:
+        import jax
+        import jax.numpy as jnp
+    except ImportError:
+        raise ConfigError(
+            "backend='jax' needs JAX: install the extra with pip install 'wheelbase[jax]'"
+        ) from None
+    return jax, jnp
+
+
+class _x64:
+    """Enable float64 in JAX inside a block (restores the previous setting)."""
+
+    def __init__(self, jax: Any, enabled: bool) -> None:
+        self.jax, self.enabled = jax, enabled
+
+    def __enter__(self) -> None:
+        self.before = bool(self.jax.config.read("jax_enable_x64"))
+        if self.enabled:
+            self.jax.config.update("jax_enable_x64", True)
+
+    def __exit__(self, *exc: object) -> None:
+        self.jax.config.update("jax_enable_x64", self.before)
+
+
+_JAX_CACHE: dict = {}
+
+
+def _jax_function(steps: int, stride: int, kind: int, float64: bool):
+    key = (steps, stride, kind, float64)
+    if key in _JAX_CACHE:
+        return _JAX_CACHE[key]
+    jax, jnp = _import_jax()
+    lax = jax.lax
+
+    def wrap(a):
+        return jnp.arctan2(jnp.sin(a), jnp.cos(a))
+
+    def run(pose, mean, lo, hi, window, info, last, noise, w, df, mp, circles, extra):
+        radius, dt, wheel_base = extra[0], extra[1], extra[2]
+        controls = jnp.clip(mean[None] + noise, lo, hi)
+        n = noise.shape[0]
+        goal_mode = info[0] > 0.5
+        rows, cols = df.shape
+        x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
+
+        def step(carry, inputs):
+            x, y, th, prev, cost, collided = carry
+            t, u = inputs
+            v, second = u[:, 0], u[:, 1]
+            if kind == _KIND_VELOCITY:
+                speed, rate = v, second
+            elif kind == _KIND_REAR:
+                speed, rate = v, v * jnp.tan(second) / wheel_base
+            else:
+                speed, rate = v * jnp.cos(second), v * jnp.sin(second) / wheel_base
+            x = x + dt * (jnp.cos(th) * speed)
+            y = y + dt * (jnp.sin(th) * speed)
+            th = wrap(th + dt * rate)
+            check = jnp.logical_and((t + 1) % stride == 0, jnp.logical_not(goal_mode))
+            d2 = (x[:, None] - window[None, :, 0]) ** 2 + (y[:, None] - window[None, :, 1]) ** 2
+            nearest = jnp.argmin(d2, axis=1)
+            dmin = jnp.min(d2, axis=1)
+            err = wrap(th - window[nearest, 2])
+            checked = max(1, len(range(stride - 1, steps, stride)))
+            path = (w[0] * dmin + w[1] * err * err) / checked
+            cost = cost + jnp.where(check, path, 0.0)
+            dist = jnp.hypot(x - info[3], y - info[4])
+            cost = cost + jnp.where(goal_mode, w[3] * dist / steps, 0.0)
+            c, s = jnp.cos(th), jnp.sin(th)
+            for k in range(circles.shape[0]):
+                px = x + c * circles[k, 0] - s * circles[k, 1]
+                py = y + s * circles[k, 0] + c * circles[k, 1]
+                col = jnp.floor((px - x0) / res).astype(jnp.int32)
+                row = jnp.floor((py - y0) / res).astype(jnp.int32)
+                inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+                field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
+                clear = field - radius - math.sqrt(2.0) * res
+                hit = has_map & (~inside | (clear <= 0.0))
+                collided = collided | hit
+                gap = jnp.where(inside & (clear > 0.0), jnp.maximum(w[10] - clear, 0.0), 0.0)
+                cost = cost + jnp.where(has_map, w[5] * gap * gap / steps, 0.0)
+            cost = cost + w[6] * jnp.maximum(-info[6] * v, 0.0) * dt
+            cost = cost + w[7] * jnp.sum((u / hi) ** 2, axis=1) / steps
+            cost = cost + w[8] * jnp.sum(((u - prev) / hi) ** 2, axis=1) / steps
+            if kind == _KIND_VELOCITY:
+                cost = cost + w[9] * jnp.abs(second) / (steps * hi[1])
+            return (x, y, th, u, cost, collided), None
+
+        zeros = jnp.zeros(n, dtype=pose.dtype)
+        carry = (
+            zeros + pose[0], zeros + pose[1], zeros + pose[2],
+            jnp.broadcast_to(last, (n, 2)), zeros, jnp.zeros(n, dtype=bool),
+        )  # fmt: skip
+        times = jnp.arange(steps)
+        (x, y, th, _u, cost, collided), _ = lax.scan(
+            step, carry, (times, jnp.swapaxes(controls, 0, 1))
+        )
+        follow = w[2] * jnp.hypot(x - info[1], y - info[2])
+        heading = w[4] * jnp.abs(wrap(th - info[5]))
+        cost = cost + jnp.where(goal_mode, heading, follow)
+        cost = cost + jnp.where(collided, w[11], 0.0)
+        return cost, controls
+
+    function = jax.jit(run)
+    _JAX_CACHE[key] = function
+    return function
+
+
+# --------------------------------------------------------------------------- Numba kernel
+@numba.njit(cache=True, inline="always")
+def _uniform(z):
+    """A uniform number in (0, 1) from a 64-bit counter (the SplitMix64 finaliser)."""
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    return (float(z >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
+
+
+@numba.njit(cache=True, inline="always")
+def _normal_pair(seed, call, sample, step):
+    """Two standard normals from a counter-based generator (SplitMix64 + Box–Muller).
+
+    The stream depends only on (seed, call, sample, step), so it is the same whatever thread
+    runs a sample."""
+    z = seed * np.uint64(0x9E3779B97F4A7C15) + call * np.uint64(0xD1B54A32D192ED03)
+    z = z + sample * np.uint64(0x8CB92BA72F3D8DD7) + step * np.uint64(0x2545F4914F6CDD1D)
+    first = _uniform(z + np.uint64(0x9E3779B97F4A7C15))
+    second = _uniform(z + np.uint64(0x3C6EF372FE94F82A))
+    r = math.sqrt(-2.0 * math.log(first))
+    return r * math.cos(2.0 * math.pi * second), r * math.sin(2.0 * math.pi * second)
+
+
+@numba.njit(cache=True, inline="always")
+def _wrap_scalar(a):
+    w = math.atan2(math.sin(a), math.cos(a))
+    return math.pi if w <= -math.pi else w
+
+
+@numba.njit(cache=True, parallel=True)
+def _mppi_kernel(
+    pose, mean, lo, hi, window, info, last, noise, has_noise, sigma, seed, call, kind,
+    wheel_base, dt, w, df, mp, circles, radius, stride, costs, controls,
+):  # fmt: skip
+    """Draw, roll out and score every sample in one pass (the numba backend)."""
+    n, steps = controls.shape[0], controls.shape[1]
+    m = window.shape[0]
+    goal_mode = info[0] > 0.5
+    rows, cols = df.shape[0], df.shape[1]
+    x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
+    n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
+    sqrt2res = math.sqrt(2.0) * res
+    for i in numba.prange(n):
+        x, y, th = pose[0], pose[1], pose[2]
+        p0, p1 = last[0], last[1]
+        cost = 0.0
+        path_sum = 0.0
+        collided = False
+        for t in range(steps):
+            if has_noise:
+                e0, e1 = noise[i, t, 0], noise[i, t, 1]
+            else:
+                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t))
+                e0 *= sigma[0]
+                e1 *= sigma[1]
+            u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
+            u1 = min(max(mean[t, 1] + e1, lo[1]), hi[1])
+            controls[i, t, 0] = u0
+            controls[i, t, 1] = u1
+            if kind == 0:
+                speed, rate = u0, u1
+            elif kind == 1:
+                speed, rate = u0, u0 * math.tan(u1) / wheel_base
+            else:
+                speed, rate = u0 * math.cos(u1), u0 * math.sin(u1) / wheel_base
+            c, s = math.cos(th), math.sin(th)
+            x = x + dt * (c * speed)
+            y = y + dt * (s * speed)
+            th = _wrap_scalar(th + dt * rate)
+            c, s = math.cos(th), math.sin(th)
+            if not goal_mode:
+                if (t + 1) % stride == 0:
+                    best, bj = np.inf, 0
+                    for j in range(m):
+                        dx, dy = x - window[j, 0], y - window[j, 1]
+                        d2 = dx * dx + dy * dy
+                        if d2 < best:
+                            best, bj = d2, j
+                    err = _wrap_scalar(th - window[bj, 2])
+                    path_sum += (w[0] * best + w[1] * err * err) / n_checked
+            else:
+                cost += w[3] * math.hypot(x - info[3], y - info[4]) / steps
+            if has_map:
+                for k in range(circles.shape[0]):
+                    px = x + c * circles[k, 0] - s * circles[k, 1]
+                    py = y + s * circles[k, 0] + c * circles[k, 1]
+                    col = math.floor((px - x0) / res)
+                    row = math.floor((py - y0) / res)
+                    if row < 0 or row >= rows or col < 0 or col >= cols:
+                        collided = True
+                        continue
+                    clear = df[row, col] - radius - sqrt2res
+                    if clear <= 0.0:
+                        collided = True
+                    else:
+                        gap = max(w[10] - clear, 0.0)
+                        cost += w[5] * gap * gap / steps
+            cost += w[6] * max(-info[6] * u0, 0.0) * dt
+            cost += w[7] * ((u0 / hi[0]) ** 2 + (u1 / hi[1]) ** 2) / steps
+            cost += w[8] * (((u0 - p0) / hi[0]) ** 2 + ((u1 - p1) / hi[1]) ** 2) / steps
+            if kind == 0:
+                cost += w[9] * abs(u1) / (steps * hi[1])
+            p0, p1 = u0, u1
+        cost += path_sum
+        if goal_mode:
+            cost += w[4] * abs(_wrap_scalar(th - info[5]))
+        else:
+            cost += w[2] * math.hypot(x - info[1], y - info[2])
+        if collided:
+            cost += w[11]
+        costs[i] = cost

@@ -1,0 +1,188 @@
+"""Critics of the MPPI controller: their weights, and the local path window they score against.
+
+Every critic adds a non-negative cost to each sampled rollout; :class:`~wheelbase.control.MPPI`
+turns the costs into weights exp(−(S − S_min)/λ). With T the horizon steps, p_t the rollout pose
+after step t, u_t the sampled command and dt the step:
+
+==================  ==============================================================  ============
+critic (weight)     cost of one rollout                                              weight unit
+==================  ==============================================================  ============
+``path``            mean over checked steps of d², d = distance from p_t to the      1/m²
+                    nearest point of the local path window (every ``path_stride``)
+``path_align``      mean over the same steps of wrap(θ_t − θ_path)², θ_path the      1/rad²
+                    travel heading of the robot at that nearest window point
+``follow``          distance from p_T to the window's last point (progress)          1/m
+``goal``            mean over t of |p_t − goal| once the section end is near         1/m
+``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
+``obstacle``        mean over t, covering circles of (r_infl − c)² for 0 < c <        1/m²
+                    r_infl, c = distance field − circle radius − √2·cell (clearance)
+(lethal)            ``collision_cost`` once if any c <= 0 or a circle leaves the map  —
+``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
+``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
+``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
+                    command sent
+``twirl``           mean over t of |ω_t|/ω̄ (velocity commands only)                  —
+==================  ==============================================================  ============
+
+While the end of the current path section (the goal, or a cusp) is closer than
+``goal_distance``, ``path``/``path_align``/``follow`` are off and ``goal``/``goal_heading`` on,
+as Nav2's critics do (Macenski et al., Nav2 MPPI controller documentation). A user critic
+(``extra``) is a vectorised function ``extra(poses (N, T + 1, 3), commands (N, T, 2)) -> (N,)``
+added to the costs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from wheelbase._validate import finite, positive
+from wheelbase.errors import ConfigError
+
+__all__ = ["MPPICritics"]
+
+
+@dataclass(frozen=True)
+class MPPICritics:
+    """Weights and shape parameters of the MPPI critics (see the module table for units).
+
+    Parameters
+    ----------
+    path, path_align, follow, goal, goal_heading, obstacle, prefer_forward, effort, rate, twirl
+        Critic weights, >= 0 (0 switches a critic off).
+    inflation : float
+        Clearance r_infl [m] below which the obstacle critic starts to cost, > 0.
+    collision_cost : float
+        Cost added to a rollout that collides or leaves the map, > 0 (finite: no NaN ever).
+    goal_distance : float
+        Distance [m] to the end of the path section under which the goal critics take over.
+    path_stride : int
+        The path critics check every ``path_stride``-th step (Nav2's trajectory_point_step).
+    extra : callable, optional
+        User critic ``extra(poses (N, T+1, 3), commands (N, T, 2)) -> costs (N,)``.
+
+    Examples
+    --------
+    >>> MPPICritics(obstacle=0.0).obstacle
+    0.0
+    """
+
+    path: float = 5.0
+    path_align: float = 2.0
+    follow: float = 5.0
+    goal: float = 5.0
+    goal_heading: float = 3.0
+    obstacle: float = 20.0
+    prefer_forward: float = 5.0
+    effort: float = 0.1
+    rate: float = 0.5
+    twirl: float = 0.0
+    inflation: float = 0.4
+    collision_cost: float = 1.0e6
+    goal_distance: float = 0.5
+    path_stride: int = 4
+    extra: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+
+    WEIGHTS = (
+        "path",
+        "path_align",
+        "follow",
+        "goal",
+        "goal_heading",
+        "obstacle",
+        "prefer_forward",
+        "effort",
+        "rate",
+        "twirl",
+    )
+
+    def __post_init__(self) -> None:
+        for name in self.WEIGHTS:
+            value = finite(name, getattr(self, name))
+            if value < 0.0:
+                raise ConfigError(f"critic weight {name} must be >= 0 (got {value:g})")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "inflation", positive("inflation", self.inflation, "m"))
+        object.__setattr__(self, "collision_cost", positive("collision_cost", self.collision_cost))
+        object.__setattr__(
+            self, "goal_distance", positive("goal_distance", self.goal_distance, "m")
+        )
+        stride = self.path_stride
+        if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
+            raise ConfigError(f"path_stride must be an integer >= 1 (got {stride!r})")
+        if self.extra is not None and not callable(self.extra):
+            raise ConfigError(f"extra critic must be callable (got {type(self.extra).__name__})")
+
+    @classmethod
+    def from_mapping(cls, values: dict | MPPICritics | None) -> MPPICritics:
+        """Critics from a mapping of plain keyword weights (a scenario file), or as given.
+
+        Parameters
+        ----------
+        values : dict, MPPICritics or None
+            Weights by name; ``None`` gives the defaults.
+
+        Returns
+        -------
+        MPPICritics
+        """
+        if values is None:
+            return cls()
+        if isinstance(values, cls):
+            return values
+        if not isinstance(values, dict):
+            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ConfigError(f"unknown critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
+        return cls(**values)
+
+    def vector(self) -> np.ndarray:
+        """The weights in the order of :attr:`WEIGHTS` plus (inflation, collision_cost), float64."""
+        values = [getattr(self, name) for name in self.WEIGHTS]
+        return np.array([*values, self.inflation, self.collision_cost], dtype=np.float64)
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return np.arctan2(np.sin(angle), np.cos(angle))
+
+
+class PathTables:
+    """A reference path densified every ``spacing`` metres, with its sections (private helper).
+
+    Attributes: ``xy`` (P, 2), ``heading`` (P,) robot heading when travelling the path there,
+    ``direction`` (P,), ``arc`` (P,), ``section`` (P,) index of the direction run of each point.
+    """
+
+    def __init__(self, points: np.ndarray, directions: np.ndarray, spacing: float) -> None:
+        xy, heading, direction, arc, section = [points[:1]], [], [], [0.0], []
+        seg = np.diff(points, axis=0)
+        length = np.hypot(seg[:, 0], seg[:, 1])
+        seg_heading = np.arctan2(seg[:, 1], seg[:, 0])
+        run = 0
+        for i in range(seg.shape[0]):
+            if i > 0 and directions[i] != directions[i - 1]:
+                run += 1
+            count = max(1, math.ceil(length[i] / spacing - 1e-9))
+            frac = np.arange(1, count + 1) / count
+            xy.append(points[i] + frac[:, None] * seg[i])
+            robot_heading = seg_heading[i] if directions[i] > 0 else seg_heading[i] + math.pi
+            heading.extend([robot_heading] * count)
+            direction.extend([directions[i]] * count)
+            arc.extend(list(arc[-1] + frac * length[i]))
+            section.extend([run] * count)
+        # The first point takes the values of the first segment.
+        self.xy = np.concatenate(xy)
+        self.heading = _wrap(np.array([heading[0], *heading]))
+        self.direction = np.array([direction[0], *direction], dtype=np.float64)
+        self.arc = np.array(arc)
+        self.section = np.array([section[0], *section], dtype=np.int64)
+        # A cusp point belongs to the section that ends there.
+        self.n_sections = run + 1
+        self.section_end = np.array(
+            [np.flatnonzero(self.section == k)[-1] for k in range(self.n_sections)]
+        )
