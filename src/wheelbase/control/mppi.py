@@ -15,9 +15,12 @@ ICRA 2017; the form of Nav2's MPPI controller):
 When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
 warm start is cleared and :attr:`MPPI.status` is ``"all_collide"``.
 
-Backends: ``numpy`` (the reference), ``numba`` (one parallel compiled loop that draws the noise,
-rolls each sample out and scores it: ``cache=True``), ``jax`` (``jax.jit`` + ``lax.scan`` over
-the horizon; float32 by default, float64 with ``jax_float64=True``; install ``wheelbase[jax]``).
+Backends: ``numpy`` (the reference; noise from ``numpy.random.Generator``), ``numba`` (one
+parallel compiled loop that draws the noise, rolls each sample out and scores it, ``cache=True``;
+its noise comes from a counter-based SplitMix64 stream keyed by (seed, call, sample, step)
+through an inverse-CDF table, so it does not depend on the threads), ``jax`` (``jax.jit`` +
+``lax.scan`` over the horizon; float32 by default, float64 with ``jax_float64=True``; install
+``wheelbase[jax]``).
 Steps 1, 5 and 6 are shared NumPy code, so with the same noise (``plan(..., noise=...)``) the
 backends return the same command to rounding.
 
@@ -36,6 +39,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
+from scipy.special import ndtri
 
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.control.base import (
@@ -75,8 +79,8 @@ class MPPIPlan:
         Softmin weights (sum 1).
     status : str
         ``"ok"`` or ``"all_collide"``.
-    poses : numpy.ndarray, shape (T + 1, 3)
-        The rollout of ``controls`` from the measured pose.
+    pose : numpy.ndarray, shape (3,)
+        The measured pose the plan starts from (see :meth:`MPPI.predict`).
     """
 
     command: np.ndarray
@@ -84,7 +88,7 @@ class MPPIPlan:
     costs: np.ndarray
     weights: np.ndarray
     status: str
-    poses: np.ndarray
+    pose: np.ndarray
 
 
 class MPPI:
@@ -189,6 +193,13 @@ class MPPI:
         if window != 0 and (window < 3 or window % 2 == 0):
             raise ConfigError(f"savgol_window must be 0 or an odd integer >= 3 (got {window})")
         self.savgol_window = window
+        # Savitzky–Golay as a matrix along the horizon: the filter is linear in the sequence.
+        steps = self.horizon_steps
+        window = min(window, steps if steps % 2 else steps - 1)
+        self._savgol = None
+        if window >= 3:
+            order = min(3, window - 1)
+            self._savgol = savgol_filter(np.eye(steps), window, order, axis=0, mode="interp")
         self._set_map(grid, footprint)
         if self.backend == "jax":
             _import_jax()
@@ -309,7 +320,7 @@ class MPPI:
                 *args, buffer, has_noise, self.noise_std, np.uint64(self.seed),
                 np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
                 self.critics.vector(), self._df, self._map, self._circles,
-                self._circle_radius, int(self.critics.path_stride), costs, controls,
+                self._circle_radius, int(self.critics.path_stride), _NORMAL_TABLE, costs, controls,
             )  # fmt: skip
         else:
             if noise is None:
@@ -345,20 +356,37 @@ class MPPI:
             command = sequence[0].copy()
             self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
         self._last = command
-        poses = self._rollout_many(pose, sequence[None])[0]
-        plan = MPPIPlan(command, sequence, costs, weights, self.status, poses)
+        plan = MPPIPlan(command, sequence, costs, weights, self.status, pose.copy())
         self.last_plan = plan
         return plan
 
     def _smooth(self, sequence: np.ndarray) -> np.ndarray:
-        window = self.savgol_window
-        if window == 0:
-            return sequence
-        steps = sequence.shape[0]
-        window = min(window, steps if steps % 2 else steps - 1)
-        if window < 3:
-            return sequence
-        return savgol_filter(sequence, window, min(3, window - 1), axis=0, mode="interp")
+        return sequence if self._savgol is None else self._savgol @ sequence
+
+    def predict(
+        self, plan: MPPIPlan | None = None, controls: ArrayLike | None = None
+    ) -> np.ndarray:
+        """Poses ``(..., T + 1, 3)`` of command sequences rolled out from a plan's pose.
+
+        Parameters
+        ----------
+        plan : MPPIPlan, optional
+            The plan (default: the last one).
+        controls : array_like, shape (T, 2) or (K, T, 2), optional
+            Sequences to roll out (default: the plan's optimal one), e.g. a few samples for a
+            fan of rollouts.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        plan = self.last_plan if plan is None else plan
+        if plan is None:
+            raise InputError("predict needs a plan: call the controller first")
+        seq = plan.controls if controls is None else as_float_array("controls", controls, 2)
+        many = seq.ndim == 3
+        poses = self._rollout_many(plan.pose, seq if many else seq[None])
+        return poses if many else poses[0]
 
     # ------------------------------------------------------------------ path
     def _path_tables(self, reference: Any) -> PathTables:
@@ -630,27 +658,39 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
 
 
 # --------------------------------------------------------------------------- Numba kernel
-@numba.njit(cache=True, inline="always")
-def _uniform(z):
-    """A uniform number in (0, 1) from a 64-bit counter (the SplitMix64 finaliser)."""
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    z = z ^ (z >> np.uint64(31))
-    return (float(z >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
+# Inverse normal CDF at the midpoints of 2,048 equal-probability bins: the numba backend draws
+# a normal as Φ⁻¹(u), linearly interpolated in this table (tails truncated at ±3.5σ, where the
+# outermost midpoints lie; the standard deviation of the draws is 0.998).
+_NORMAL_TABLE_SIZE = 2048
+_NORMAL_TABLE = ndtri((np.arange(_NORMAL_TABLE_SIZE) + 0.5) / _NORMAL_TABLE_SIZE)
 
 
 @numba.njit(cache=True, inline="always")
-def _normal_pair(seed, call, sample, step):
-    """Two standard normals from a counter-based generator (SplitMix64 + Box–Muller).
+def _table_normal(bits, table):
+    """A normal draw from 32 random bits through the inverse-CDF table."""
+    position = float(bits) * (table.shape[0] / 4294967296.0) - 0.5
+    if position <= 0.0:
+        return table[0]
+    k = int(position)
+    if k >= table.shape[0] - 1:
+        return table[table.shape[0] - 1]
+    frac = position - k
+    return table[k] + frac * (table[k + 1] - table[k])
+
+
+@numba.njit(cache=True, inline="always")
+def _normal_pair(seed, call, sample, step, table):
+    """Two standard normals from a counter-based generator (SplitMix64 + inverse-CDF table).
 
     The stream depends only on (seed, call, sample, step), so it is the same whatever thread
     runs a sample."""
     z = seed * np.uint64(0x9E3779B97F4A7C15) + call * np.uint64(0xD1B54A32D192ED03)
     z = z + sample * np.uint64(0x8CB92BA72F3D8DD7) + step * np.uint64(0x2545F4914F6CDD1D)
-    first = _uniform(z + np.uint64(0x9E3779B97F4A7C15))
-    second = _uniform(z + np.uint64(0x3C6EF372FE94F82A))
-    r = math.sqrt(-2.0 * math.log(first))
-    return r * math.cos(2.0 * math.pi * second), r * math.sin(2.0 * math.pi * second)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    low = z & np.uint64(0xFFFFFFFF)
+    return _table_normal(low, table), _table_normal(z >> np.uint64(32), table)
 
 
 @numba.njit(cache=True, inline="always")
@@ -659,30 +699,42 @@ def _wrap_scalar(a):
     return math.pi if w <= -math.pi else w
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, fastmath=True)
 def _mppi_kernel(
     pose, mean, lo, hi, window, info, last, noise, has_noise, sigma, seed, call, kind,
-    wheel_base, dt, w, df, mp, circles, radius, stride, costs, controls,
+    wheel_base, dt, w, df, mp, circles, radius, stride, table, costs, controls,
 ):  # fmt: skip
-    """Draw, roll out and score every sample in one pass (the numba backend)."""
+    """Draw, roll out and score every sample in one pass (the numba backend).
+
+    The same costs as ``MPPI._costs_numpy`` (to rounding: ``fastmath`` lets the compiler
+    reorder the sums), one sample per iteration of the parallel loop."""
     n, steps = controls.shape[0], controls.shape[1]
     m = window.shape[0]
     goal_mode = info[0] > 0.5
     rows, cols = df.shape[0], df.shape[1]
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
+    inv_res = 1.0 / res
     n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
-    sqrt2res = math.sqrt(2.0) * res
+    offset = radius + math.sqrt(2.0) * res
+    w_path, w_align = w[0] / n_checked, w[1] / n_checked
+    w_goal, w_obstacle = w[3] / steps, w[5] / steps
+    w_forward = w[6] * dt
+    a0, a1 = 1.0 / hi[0], 1.0 / hi[1]
+    w_effort, w_rate, w_twirl = w[7] / steps, w[8] / steps, w[9] / steps * a1
+    inflation, direction = w[10], info[6]
+    n_circles = circles.shape[0]
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
+        c, s = math.cos(th), math.sin(th)
         p0, p1 = last[0], last[1]
         cost = 0.0
-        path_sum = 0.0
         collided = False
+        next_check = stride - 1
         for t in range(steps):
             if has_noise:
                 e0, e1 = noise[i, t, 0], noise[i, t, 1]
             else:
-                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t))
+                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t), table)
                 e0 *= sigma[0]
                 e1 *= sigma[1]
             u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
@@ -695,13 +747,17 @@ def _mppi_kernel(
                 speed, rate = u0, u0 * math.tan(u1) / wheel_base
             else:
                 speed, rate = u0 * math.cos(u1), u0 * math.sin(u1) / wheel_base
-            c, s = math.cos(th), math.sin(th)
             x = x + dt * (c * speed)
             y = y + dt * (s * speed)
-            th = _wrap_scalar(th + dt * rate)
+            th = th + dt * rate
+            if th > math.pi:  # one step turns by less than 2π: a cheap wrap
+                th -= 2.0 * math.pi
+            elif th <= -math.pi:
+                th += 2.0 * math.pi
             c, s = math.cos(th), math.sin(th)
             if not goal_mode:
-                if (t + 1) % stride == 0:
+                if t == next_check:
+                    next_check += stride
                     best, bj = np.inf, 0
                     for j in range(m):
                         dx, dy = x - window[j, 0], y - window[j, 1]
@@ -709,31 +765,31 @@ def _mppi_kernel(
                         if d2 < best:
                             best, bj = d2, j
                     err = _wrap_scalar(th - window[bj, 2])
-                    path_sum += (w[0] * best + w[1] * err * err) / n_checked
+                    cost += w_path * best + w_align * err * err
             else:
-                cost += w[3] * math.hypot(x - info[3], y - info[4]) / steps
+                cost += w_goal * math.hypot(x - info[3], y - info[4])
             if has_map:
-                for k in range(circles.shape[0]):
+                for k in range(n_circles):
                     px = x + c * circles[k, 0] - s * circles[k, 1]
                     py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) / res)
-                    row = math.floor((py - y0) / res)
+                    col = math.floor((px - x0) * inv_res)
+                    row = math.floor((py - y0) * inv_res)
                     if row < 0 or row >= rows or col < 0 or col >= cols:
                         collided = True
                         continue
-                    clear = df[row, col] - radius - sqrt2res
+                    clear = df[row, col] - offset
                     if clear <= 0.0:
                         collided = True
-                    else:
-                        gap = max(w[10] - clear, 0.0)
-                        cost += w[5] * gap * gap / steps
-            cost += w[6] * max(-info[6] * u0, 0.0) * dt
-            cost += w[7] * ((u0 / hi[0]) ** 2 + (u1 / hi[1]) ** 2) / steps
-            cost += w[8] * (((u0 - p0) / hi[0]) ** 2 + ((u1 - p1) / hi[1]) ** 2) / steps
+                    elif clear < inflation:
+                        gap = inflation - clear
+                        cost += w_obstacle * gap * gap
+            cost += w_forward * max(-direction * u0, 0.0)
+            q0, q1 = u0 * a0, u1 * a1
+            r0, r1 = (u0 - p0) * a0, (u1 - p1) * a1
+            cost += w_effort * (q0 * q0 + q1 * q1) + w_rate * (r0 * r0 + r1 * r1)
             if kind == 0:
-                cost += w[9] * abs(u1) / (steps * hi[1])
+                cost += w_twirl * abs(u1)
             p0, p1 = u0, u1
-        cost += path_sum
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[5]))
         else:
