@@ -1,0 +1,291 @@
+"""MPPI (issue 9): cross-backend agreement, softmin, warm start, smoothing, safe stop, errors,
+and the closed-loop evaluation (figure-eight tracking, clearance on the cluttered map)."""
+
+from __future__ import annotations
+
+import builtins
+import math
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wheelbase.control import (
+    MPPI,
+    MPPICritics,
+    Polyline,
+    PurePursuit,
+    SteeringLimits,
+    VelocityLimits,
+    run_closed_loop,
+)
+from wheelbase.control.loop import figure_eight_reference
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.models import DiffDrive, RearWheelBicycle, Unicycle
+from wheelbase.planning import Footprint, load_map
+
+LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
+STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])  # the cluttered map's reference path
+ROBOT = Footprint.rectangle(0.4, 0.4)
+
+
+@pytest.fixture(scope="module")
+def cluttered():
+    path = Path(str(resources.files("wheelbase") / "data" / "maps" / "cluttered.yaml"))
+    return load_map(path)
+
+
+def make(backend="numpy", samples=64, steps=20, **options):
+    options.setdefault("seed", 3)
+    return MPPI(Unicycle(), steps, 0.05, samples, (0.2, 0.5), 0.03, None, LIMITS,
+                backend=backend, **options)  # fmt: skip
+
+
+def backends():
+    out = ["numpy", "numba"]
+    try:
+        import jax  # noqa: F401
+
+        out.append("jax")
+    except ImportError:
+        pass
+    return out
+
+
+# --------------------------------------------------------------------------- backends agree
+@pytest.mark.parametrize(
+    ("model", "limits", "reference", "pose"),
+    [
+        (Unicycle(), LIMITS, STRAIGHT, (2.6, 3.9, 0.2)),
+        (DiffDrive(0.05, 0.2), LIMITS, STRAIGHT, (5.2, 4.3, -0.3)),
+        (
+            RearWheelBicycle(wheel_base=0.3, max_steering=0.6),
+            SteeringLimits(0.5, max_speed=0.5),
+            Polyline([[2.0, 4.0], [4.0, 4.0], [3.0, 4.0]], [1, -1]),
+            (3.7, 4.05, 0.0),
+        ),
+    ],
+    ids=["unicycle", "diffdrive", "bicycle_cusp"],
+)
+def test_backends_agree_on_the_command(cluttered, model, limits, reference, pose):
+    names = backends()
+    controllers = {
+        name: MPPI(
+            model,
+            24,
+            0.05,
+            128,
+            (0.2, 0.4),
+            0.05,
+            {"twirl": 1.0},
+            limits,
+            backend=name,
+            grid=cluttered,
+            footprint=ROBOT,
+            jax_float64=True,
+        )
+        for name in names
+    }
+    rng = np.random.default_rng(7)
+    for _ in range(3):  # three calls: the warm start is carried the same way
+        noise = rng.standard_normal((128, 24, 2)) * (0.2, 0.4)
+        plans = {name: c.plan(pose, reference, noise) for name, c in controllers.items()}
+        reference_plan = plans["numpy"]
+        for plan in plans.values():
+            np.testing.assert_allclose(plan.costs, reference_plan.costs, rtol=1e-9, atol=1e-9)
+            np.testing.assert_allclose(plan.command, reference_plan.command, atol=1e-5)
+            np.testing.assert_allclose(plan.controls, reference_plan.controls, atol=1e-5)
+
+
+def test_numba_noise_is_reproducible_and_seeded():
+    pose = (1.2, 4.0, 0.0)
+    a = make("numba", seed=1).plan(pose, STRAIGHT).command
+    b = make("numba", seed=1).plan(pose, STRAIGHT).command
+    c = make("numba", seed=2).plan(pose, STRAIGHT).command
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_numba_noise_is_standard_normal():
+    from wheelbase.control.mppi import _NORMAL_TABLE, _normal_pair
+
+    draws = np.array([_normal_pair(np.uint64(5), np.uint64(0), np.uint64(i), np.uint64(0),
+                                   _NORMAL_TABLE) for i in range(20000)])  # fmt: skip
+    assert abs(draws.mean()) < 0.02
+    assert abs(draws.std() - 1.0) < 0.02
+    assert abs(np.corrcoef(draws[:, 0], draws[:, 1])[0, 1]) < 0.03
+
+
+# --------------------------------------------------------------------------- MPPI identities
+@pytest.mark.parametrize("temperature", [1e-12, 1e-3, 1.0, 1e12])
+def test_softmin_never_overflows(cluttered, temperature):
+    mppi = MPPI(Unicycle(), 20, 0.05, 64, (0.2, 0.5), temperature, None, LIMITS,
+                grid=cluttered, footprint=ROBOT)  # fmt: skip
+    plan = mppi.plan((2.6, 3.9, 0.2), STRAIGHT)
+    assert np.all(np.isfinite(plan.weights)) and np.all(np.isfinite(plan.command))
+    assert math.isclose(plan.weights.sum(), 1.0, rel_tol=1e-12)
+    assert plan.weights[np.argmin(plan.costs)] == plan.weights.max()
+
+
+def test_tiny_temperature_picks_the_best_sample():
+    mppi = MPPI(Unicycle(), 20, 0.05, 64, (0.2, 0.5), 1e-9, None, LIMITS, savgol_window=0)
+    noise = np.random.default_rng(0).standard_normal((64, 20, 2)) * (0.2, 0.5)
+    plan = mppi.plan((1.0, 4.1, 0.0), STRAIGHT, noise)
+    best = np.clip(noise[np.argmin(plan.costs)], (-0.5, -1.5), (0.5, 1.5))
+    np.testing.assert_allclose(plan.controls, best, atol=1e-12)
+
+
+def test_warm_start_is_shifted_by_one_step():
+    mppi = make(savgol_window=0)
+    first = mppi.plan((1.0, 4.1, 0.0), STRAIGHT)
+    # zero noise: every sample is the warm start, so the new plan is the shifted old one
+    second = mppi.plan((1.0, 4.1, 0.0), STRAIGHT, np.zeros((64, 20, 2)))
+    expected = np.concatenate([first.controls[1:], first.controls[-1:]])
+    np.testing.assert_allclose(second.controls, expected, atol=1e-15)
+    np.testing.assert_allclose(second.command, expected[0], atol=1e-15)
+
+
+def test_savitzky_golay_keeps_cubics_and_matches_scipy():
+    from scipy.signal import savgol_filter
+
+    mppi = make(steps=30)
+    t = np.linspace(0.0, 1.0, 30)
+    cubic = np.stack([0.1 + t - 2 * t**3, 0.5 * t**2], -1)
+    np.testing.assert_allclose(mppi._smooth(cubic), cubic, atol=1e-12)
+    rough = np.random.default_rng(1).normal(size=(30, 2))
+    np.testing.assert_allclose(
+        mppi._smooth(rough), savgol_filter(rough, 9, 3, axis=0, mode="interp"), atol=1e-12
+    )
+
+
+def test_constant_extra_critic_does_not_change_the_command():
+    noise = np.random.default_rng(2).standard_normal((64, 20, 2)) * (0.2, 0.5)
+    plain = make().plan((1.0, 4.1, 0.0), STRAIGHT, noise)
+    critics = MPPICritics(extra=lambda poses, controls: np.full(poses.shape[0], 3.0))
+    shifted = MPPI(Unicycle(), 20, 0.05, 64, (0.2, 0.5), 0.03, critics, LIMITS)
+    plan = shifted.plan((1.0, 4.1, 0.0), STRAIGHT, noise)
+    np.testing.assert_allclose(plan.costs, plain.costs + 3.0)
+    np.testing.assert_allclose(plan.command, plain.command, atol=1e-12)
+
+
+def test_extra_critic_steers_the_robot():
+    # penalise the left half-plane: the robot turns right
+    def right(poses, controls):
+        return 50.0 * np.sum(np.maximum(poses[..., 1] - 4.0, 0.0), axis=1)
+
+    mppi = MPPI(Unicycle(), 20, 0.05, 256, (0.2, 0.5), 0.03, {"extra": right}, LIMITS)
+    for _ in range(5):
+        command = mppi(0.0, (1.0, 4.0, 0.3), STRAIGHT)
+    assert command[1] < 0.0
+    bad = MPPI(Unicycle(), 20, 0.05, 16, (0.2, 0.5), 0.03,
+               {"extra": lambda p, c: np.zeros(3)}, LIMITS)  # fmt: skip
+    with pytest.raises(InputError, match="extra critic"):
+        bad(0.0, (1.0, 4.0, 0.0), STRAIGHT)
+
+
+def test_predicted_poses_follow_the_euler_step():
+    mppi = make()
+    plan = mppi.plan((1.0, 4.1, 0.3), STRAIGHT)
+    poses = mppi.predict()
+    x, y, th = 1.0, 4.1, 0.3
+    for k, (v, omega) in enumerate(plan.controls):
+        x, y, th = x + 0.05 * v * math.cos(th), y + 0.05 * v * math.sin(th), th + 0.05 * omega
+        np.testing.assert_allclose(poses[k + 1], (x, y, th), atol=1e-12)
+
+
+def test_all_samples_colliding_stops_safely(cluttered):
+    mppi = make("numba", grid=cluttered, footprint=ROBOT)
+    command = mppi(0.0, (3.5, 4.6, 0.0), STRAIGHT)  # inside a disc
+    assert mppi.status == "all_collide"
+    np.testing.assert_array_equal(command, [0.0, 0.0])
+    assert np.all(np.isfinite(mppi.last_plan.weights))
+    command = mppi(0.1, (2.6, 4.0, 0.0), STRAIGHT)
+    assert mppi.status == "ok" and np.all(np.isfinite(command))
+
+
+def test_batch_shape_and_one_robot_only():
+    mppi = make()
+    assert mppi(0.0, [[1.0, 4.0, 0.0]], STRAIGHT).shape == (1, 2)
+    with pytest.raises(InputError, match="one robot"):
+        mppi(0.0, np.zeros((2, 3)), STRAIGHT)
+
+
+# --------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"samples": 0}, "samples"),
+        ({"horizon_steps": 0}, "horizon_steps"),
+        ({"dt": -0.1}, "dt"),
+        ({"temperature": 0.0}, "temperature"),
+        ({"noise_std": (0.0, 0.5)}, "noise_std"),
+        ({"critics": {"obstacle": -1.0}}, "obstacle"),
+        ({"critics": {"nonsense": 1.0}}, "nonsense"),
+        ({"backend": "cuda"}, "backend"),
+        ({"limits": VelocityLimits(max_speed=0.5)}, "finite"),
+        ({"savgol_window": 4}, "savgol_window"),
+    ],
+)
+def test_bad_parameters(change, match):
+    args = dict(model=Unicycle(), horizon_steps=20, dt=0.05, samples=16, noise_std=(0.2, 0.5),
+                temperature=0.1, critics=None, limits=LIMITS)  # fmt: skip
+    args.update(change)
+    with pytest.raises(ConfigError, match=match):
+        MPPI(**args)
+
+
+def test_nan_pose_and_bad_noise():
+    mppi = make()
+    with pytest.raises(InputError, match="pose"):
+        mppi(0.0, (np.nan, 0.0, 0.0), STRAIGHT)
+    with pytest.raises(InputError, match="noise"):
+        mppi.plan((1.0, 4.0, 0.0), STRAIGHT, np.zeros((3, 20, 2)))
+
+
+def test_jax_backend_missing_names_the_extra(monkeypatch):
+    real_import = builtins.__import__
+
+    def no_jax(name, *args, **kwargs):
+        if name == "jax" or name.startswith("jax."):
+            raise ImportError("no jax")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_jax)
+    with pytest.raises(ConfigError, match=r"wheelbase\[jax\]"):
+        make("jax")
+
+
+# --------------------------------------------------------------------------- closed loop
+def lateral_errors(result, path, after=5.0):
+    error = path.distance(result.poses[:, 0, :2])[result.t >= after]
+    return float(np.sqrt(np.mean(error**2))), float(np.max(error))
+
+
+def test_figure_eight_tracking_beside_pure_pursuit():
+    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    start = np.array([1.1, 0.8, 0.0])
+    pursuit = PurePursuit(speed=eight.length / 30.0, limits=LIMITS)
+    pp = run_closed_loop(pursuit, Unicycle(), start, eight, 30.0, 0.05)
+    mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.5), 0.03, None,
+                VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba")  # fmt: skip
+    result = run_closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
+    rms, worst = lateral_errors(result, eight)
+    rms_pp, _worst_pp = lateral_errors(pp, eight)
+    assert rms < 0.02 and worst < 0.06
+    assert rms < 3.0 * rms_pp
+    assert np.hypot(*(result.poses[-1, 0, :2] - eight.points[-1])) < 0.05  # reached the end
+
+
+def test_clearance_where_pure_pursuit_collides(cluttered):
+    start = np.array([1.0, 4.0, 0.0])
+    pp = run_closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
+                         26.0, 0.1)  # fmt: skip
+    assert cluttered.in_collision(ROBOT, pp.poses[:, 0]).any()
+    for seed in range(3):
+        mppi = MPPI(Unicycle(), 30, 0.1, 200, (0.2, 0.5), 0.03, None, LIMITS, seed=seed,
+                    backend="numba", grid=cluttered, footprint=ROBOT)  # fmt: skip
+        result = run_closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
+        poses = result.poses[:, 0]
+        assert cluttered.footprint_clearance(ROBOT, poses).min() >= 0.1
+        assert np.hypot(*(poses[-1, :2] - STRAIGHT.points[-1])) < 0.2
