@@ -1,0 +1,179 @@
+"""MPPI figures of issue 9: controller rate per backend, tracking beside the path followers,
+clearance on the bundled cluttered map.
+
+Prints one JSON object:
+
+- ``cpu_hz_2000x56``: controller calls per second (one MPPI iteration, 2,000 samples × 56
+  steps, dt 0.05 s) per backend — ``numpy``, ``numba`` (all Numba threads), ``numba_1_thread``,
+  ``jax`` (CPU, float32) and ``jax_float64`` where JAX is installed — with the default critics
+  (path, path alignment, follow, goal, obstacles through the distance field with a 0.4 × 0.4 m
+  footprint, prefer-forward, effort, rate) on the cluttered map; ``pytorch_mppi`` where installed;
+- ``tracking``: the figure-eight of issue 5 (x = 1.1 + 0.7 sin(2πt/30), y = 0.9 + 0.7 sin(4πt/30))
+  on the unicycle: RMS and max distance to the path after 5 s and the final distance to its end,
+  for MPPI (numba, 500 × 30, dt 0.05 s, |v| <= 0.35 m/s), pure pursuit and rear-wheel feedback
+  at the mean reference speed, all in this run;
+- ``clearance``: the cluttered map's straight reference through three discs whose edges are
+  0.1 m from it: pure pursuit (0.4 m/s) collides; MPPI (numba, 400 × 30, dt 0.1 s) over
+  ``--seeds`` noise seeds: success = no collision, footprint clearance >= 0.1 m all along and
+  the end of the path reached within 0.2 m.
+
+Usage: ``python benchmarks/mppi.py [--quick] [--seeds N]`` (``--quick``: 5 seeds, 5 timed calls).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from importlib import resources
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from wheelbase.control import (
+    MPPI,
+    Polyline,
+    PurePursuit,
+    RearWheelFeedback,
+    VelocityLimits,
+    run_closed_loop,
+)
+from wheelbase.control.loop import figure_eight_reference
+from wheelbase.models import Unicycle
+from wheelbase.planning import Footprint, load_map
+
+LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
+ROBOT = Footprint.rectangle(0.4, 0.4)
+STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])
+
+
+def cluttered():
+    return load_map(Path(str(resources.files("wheelbase") / "data" / "maps" / "cluttered.yaml")))
+
+
+def rate(backend: str, grid, calls: int, **options) -> float:
+    mppi = MPPI(Unicycle(), 56, 0.05, 2000, (0.2, 0.5), 0.03, None, LIMITS, seed=0,
+                backend=backend, grid=grid, footprint=ROBOT, **options)  # fmt: skip
+    pose = np.array([2.4, 3.9, 0.1])
+    for _ in range(3):  # compile / warm up
+        mppi.plan(pose, STRAIGHT)
+    best = np.inf
+    for _ in range(3):
+        begin = time.perf_counter()
+        for _ in range(calls):
+            mppi.plan(pose, STRAIGHT)
+        best = min(best, (time.perf_counter() - begin) / calls)
+    return 1.0 / best
+
+
+def speed(grid, calls: int) -> dict:
+    out: dict = {}
+    out["numpy"] = rate("numpy", grid, max(1, calls // 10))
+    out["numba"] = rate("numba", grid, calls)
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    out["numba_1_thread"] = rate("numba", grid, calls)
+    numba.set_num_threads(threads)
+    try:
+        import jax  # noqa: F401
+
+        out["jax"] = rate("jax", grid, max(1, calls // 4))
+        out["jax_float64"] = rate("jax", grid, max(1, calls // 4), jax_float64=True)
+    except ImportError as error:
+        out["jax"] = None
+        out["jax_error"] = str(error)
+    try:
+        import pytorch_mppi  # noqa: F401
+
+        out["pytorch_mppi"] = "installed but not wired: see the report"
+    except ImportError:
+        out["pytorch_mppi"] = None
+    return out
+
+
+def errors(result, path) -> dict:
+    distance = path.distance(result.poses[:, 0, :2])[result.t >= 5.0]
+    end = np.hypot(*(result.poses[-1, 0, :2] - path.points[-1]))
+    return {
+        "rms_lateral_error_m": float(np.sqrt(np.mean(distance**2))),
+        "max_lateral_error_m": float(np.max(distance)),
+        "final_distance_to_path_end_m": float(end),
+    }
+
+
+def tracking() -> dict:
+    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    start = np.array([1.1, 0.8, 0.0])
+    v = eight.length / 30.0
+    rows = {}
+    for name, law in (
+        ("pure_pursuit", PurePursuit(speed=v, limits=LIMITS)),
+        ("rear_wheel_feedback", RearWheelFeedback(speed=v, limits=LIMITS)),
+    ):
+        rows[name] = errors(run_closed_loop(law, Unicycle(), start, eight, 30.0, 0.05), eight)
+    mppi = MPPI(Unicycle(), 30, 0.05, 500, (0.2, 0.5), 0.03, None,
+                VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba")  # fmt: skip
+    begin = time.perf_counter()
+    result = run_closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
+    rows["mppi"] = errors(result, eight) | {"runtime_s": time.perf_counter() - begin}
+    return {"reference": "figure_eight", "plant": "unicycle", "mean_speed_m_s": v, **rows}
+
+
+def clearance(grid, seeds: int) -> dict:
+    start = np.array([1.0, 4.0, 0.0])
+    pp = run_closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
+                         26.0, 0.1)  # fmt: skip
+    pp_clear = grid.footprint_clearance(ROBOT, pp.poses[:, 0])
+    minima, successes, times = [], 0, []
+    for seed in range(seeds):
+        mppi = MPPI(Unicycle(), 30, 0.1, 400, (0.2, 0.5), 0.03, None, LIMITS, seed=seed,
+                    backend="numba", grid=grid, footprint=ROBOT)  # fmt: skip
+        result = run_closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
+        poses = result.poses[:, 0]
+        low = float(grid.footprint_clearance(ROBOT, poses).min())
+        reached = np.hypot(*(poses[-1, :2] - STRAIGHT.points[-1])) < 0.2
+        arrive = np.flatnonzero(np.hypot(*(poses[:, :2] - STRAIGHT.points[-1]).T) < 0.2)
+        times.append(float(result.t[arrive[0]]) if arrive.size else float("nan"))
+        minima.append(low)
+        successes += int(low >= 0.1 and reached and not grid.in_collision(ROBOT, poses).any())
+    return {
+        "stated_clearance_m": 0.1,
+        "pure_pursuit_collides": bool(grid.in_collision(ROBOT, pp.poses[:, 0]).any()),
+        "pure_pursuit_min_clearance_m": float(pp_clear.min()),
+        "mppi_seeds": seeds,
+        "mppi_success_rate": successes / seeds,
+        "mppi_min_clearance_m": float(np.min(minima)),
+        "mppi_median_min_clearance_m": float(np.median(minima)),
+        "mppi_median_time_to_end_s": float(np.nanmedian(times)),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="5 seeds, 5 timed calls")
+    parser.add_argument("--seeds", type=int, default=50, help="noise seeds of the clearance run")
+    args = parser.parse_args()
+    seeds = 5 if args.quick else args.seeds
+    calls = 5 if args.quick else 50
+    grid = cluttered()
+    out = {
+        "machine": {
+            "cpus": os.cpu_count(),
+            "numba_threads": numba.get_num_threads(),
+            "load_average_1min": os.getloadavg()[0],
+            "python": platform.python_version(),
+        },
+        "config": {"samples": 2000, "horizon_steps": 56, "dt_s": 0.05, "map": "cluttered"},
+    }
+    out["cpu_hz_2000x56"] = speed(grid, calls)
+    out["target_cpu_hz"] = 200.0
+    out["tracking"] = tracking()
+    out["clearance"] = clearance(grid, seeds)
+    print(json.dumps(out, indent=2))
+
+
+if __name__ == "__main__":
+    main()
