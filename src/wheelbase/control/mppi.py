@@ -297,6 +297,9 @@ class MPPI:
         pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
         tables = self._path_tables(reference)
         window, info = self._window(pose, tables)
+        weights = self.critics.vector()
+        if self._path_blocked(window):
+            weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
         mean = self._mean
         if noise is not None:
             noise = as_float_array("noise", noise, 2, min_ndim=3, max_ndim=3)
@@ -305,7 +308,7 @@ class MPPI:
                     f"noise must have shape ({self.samples}, {self.horizon_steps}, 2) "
                     f"(got {noise.shape})"
                 )
-        args = (pose, mean, self._lo, self._hi, window, info, self._last)
+        args = (pose, mean, self._lo, self._hi, window, info, self._last, weights)
         if self.backend == "numpy":
             if noise is None:
                 noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
@@ -317,9 +320,9 @@ class MPPI:
             costs = np.empty(self.samples)
             controls = np.empty((self.samples, self.horizon_steps, 2))
             _mppi_kernel(
-                *args, buffer, has_noise, self.noise_std, np.uint64(self.seed),
-                np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
-                self.critics.vector(), self._df, self._map, self._circles,
+                pose, mean, self._lo, self._hi, window, info, self._last, buffer, has_noise,
+                self.noise_std, np.uint64(self.seed), np.uint64(self._calls), self._kind,
+                self._wheel_base, self.dt, weights, self._df, self._map, self._circles,
                 self._circle_radius, int(self.critics.path_stride), _NORMAL_TABLE, costs, controls,
             )  # fmt: skip
         else:
@@ -409,6 +412,11 @@ class MPPI:
             hi = min(end + 1, self._progress + 4 * self._window_points)
         d2 = np.sum((tab.xy[lo:hi] - pose[:2]) ** 2, axis=1)
         index = lo + int(np.argmin(d2))
+        if self._progress is None:
+            # First call: the earliest point about as near as the nearest one (a closed path
+            # starts where it ends: begin at its start, not at its end).
+            near = np.sqrt(d2) <= np.sqrt(d2[index - lo]) + 0.1
+            index = lo + int(np.argmax(near))
         self._progress = max(index, self._progress or 0) if self._progress is not None else index
         last_section = self._section == tab.n_sections - 1
         at_cusp = np.hypot(*(tab.xy[end] - pose[:2])) <= self.cusp_tolerance
@@ -436,6 +444,25 @@ class MPPI:
         )
         return np.ascontiguousarray(window), info
 
+    def _path_blocked(self, window: np.ndarray) -> bool:
+        """Whether more than 7 % of the window's poses put the footprint in collision (Nav2's
+        ``max_path_occupancy_ratio``): the path critics are then switched off for this call."""
+        if self._map[3] < 0.5:
+            return False
+        x0, y0, res = self._map[:3]
+        cos, sin = np.cos(window[:, 2]), np.sin(window[:, 2])
+        hit = np.zeros(window.shape[0], bool)
+        for cx, cy in self._circles:
+            px = window[:, 0] + cos * cx - sin * cy
+            py = window[:, 1] + sin * cx + cos * cy
+            col = np.floor((px - x0) / res).astype(np.int64)
+            row = np.floor((py - y0) / res).astype(np.int64)
+            rows, cols = self._df.shape
+            inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+            field = self._df[np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)]
+            hit |= ~inside | (field - self._circle_radius - math.sqrt(2.0) * res <= 0.0)
+        return bool(np.mean(hit) > 0.07)
+
     # ------------------------------------------------------------------ NumPy reference
     def _twist(self, controls: np.ndarray) -> np.ndarray:
         from wheelbase.control.loop import command_to_inputs
@@ -452,7 +479,7 @@ class MPPI:
             poses[:, t + 1] = integrate_step(poses[:, t], z, z, z, self.dt, "euler")
         return poses
 
-    def _costs_numpy(self, pose, mean, lo, hi, window, info, last, noise):
+    def _costs_numpy(self, pose, mean, lo, hi, window, info, last, w, noise):
         c = self.critics
         controls = np.clip(mean[None] + noise, lo, hi)
         poses = self._rollout_many(pose, controls)
@@ -470,8 +497,8 @@ class MPPI:
                 nearest = np.argmin(d2, axis=-1)
                 dmin = np.take_along_axis(d2, nearest[..., None], -1)[..., 0]
                 err = wrap_angle(pts[..., 2] - window[nearest, 2])
-                cost += c.path * np.sum(dmin, axis=1) / checked.size
-                cost += c.path_align * np.sum(err * err, axis=1) / checked.size
+                cost += w[0] * np.sum(dmin, axis=1) / checked.size
+                cost += w[1] * np.sum(err * err, axis=1) / checked.size
             end = after[:, -1]
             cost += c.follow * np.hypot(end[:, 0] - info[1], end[:, 1] - info[2])
         else:
@@ -509,7 +536,7 @@ class MPPI:
         return cost, controls
 
     # ------------------------------------------------------------------ JAX
-    def _costs_jax(self, pose, mean, lo, hi, window, info, last, noise):
+    def _costs_jax(self, pose, mean, lo, hi, window, info, last, w, noise):
         jax, _jnp = _import_jax()
         if self._kind != _KIND_VELOCITY and self._kind not in (_KIND_REAR, _KIND_FRONT):
             raise ConfigError("the jax backend needs a unicycle, diff-drive or steered model")
@@ -518,7 +545,7 @@ class MPPI:
         )
         dtype = np.float64 if self.jax_float64 else np.float32
         values = (
-            pose, mean, lo, hi, window, info, last, noise, self.critics.vector(), self._df,
+            pose, mean, lo, hi, window, info, last, noise, w, self._df,
             self._map, self._circles, np.array([self._circle_radius, self.dt, self._wheel_base]),
         )  # fmt: skip
         with _x64(jax, self.jax_float64):

@@ -26,7 +26,10 @@ critic (weight)     cost of one rollout                                         
 
 While the end of the current path section (the goal, or a cusp) is closer than
 ``goal_distance``, ``path``/``path_align``/``follow`` are off and ``goal``/``goal_heading`` on,
-as Nav2's critics do (Macenski et al., Nav2 MPPI controller documentation). A user critic
+as Nav2's critics do (Macenski et al., Nav2 MPPI controller documentation). Also as in Nav2
+(``max_path_occupancy_ratio``), ``path`` and ``path_align`` are off for a call when more than
+7 % of the window's poses put the footprint in collision: a path that cuts through obstacles
+must not pull the robot onto them (``follow`` still asks for progress). A user critic
 (``extra``) is a vectorised function ``extra(poses (N, T + 1, 3), commands (N, T, 2)) -> (N,)``
 added to the costs.
 """
@@ -70,9 +73,9 @@ class MPPICritics:
     0.0
     """
 
-    path: float = 5.0
+    path: float = 20.0
     path_align: float = 2.0
-    follow: float = 5.0
+    follow: float = 2.0
     goal: float = 5.0
     goal_heading: float = 3.0
     obstacle: float = 20.0
