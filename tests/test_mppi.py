@@ -20,7 +20,7 @@ from wheelbase.control import (
     VelocityLimits,
     run_closed_loop,
 )
-from wheelbase.control.loop import figure_eight_reference
+from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.models import DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.planning import Footprint, load_map
@@ -291,3 +291,26 @@ def test_clearance_where_pure_pursuit_collides(cluttered):
         poses = result.poses[:, 0]
         assert cluttered.footprint_clearance(ROBOT, poses).min() >= 0.1
         assert np.hypot(*(poses[-1, :2] - STRAIGHT.points[-1])) < 0.2
+
+
+@pytest.mark.parametrize(
+    ("model", "limits", "noise"),
+    [
+        (Unicycle(), VelocityLimits(0.3, 1.5), (0.2, 0.5)),
+        (
+            RearWheelBicycle(wheel_base=0.5, max_steering=math.radians(35.0)),
+            SteeringLimits(math.radians(35.0), max_speed=0.3),
+            (0.2, 0.3),
+        ),
+    ],
+    ids=["unicycle", "bicycle"],
+)
+def test_cusp_path_reverses_and_arrives(model, limits, noise):
+    path = three_point_turn_path()
+    mppi = MPPI(model, 30, 0.05, 200, noise, 0.03, None, limits, backend="numba")
+    result = run_closed_loop(mppi, model, (0.0, 0.05, 0.0), path, 40.0, 0.05)
+    assert mppi.status == "arrived"
+    assert np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])) <= 0.05
+    assert 2 <= result.reversals[0] <= 10  # the two cusps, and a little dithering at them
+    assert path.distance(result.poses[:, 0, :2]).max() < 0.15
+    np.testing.assert_array_equal(result.commands[-2, 0], [0.0, 0.0])

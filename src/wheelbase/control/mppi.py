@@ -57,7 +57,7 @@ from wheelbase.integrate import integrate_step
 __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
-STATUSES: tuple[str, ...] = ("ok", "all_collide")
+STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
 
 # twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α)
 _KIND_VELOCITY, _KIND_REAR, _KIND_FRONT = 0, 1, 2
@@ -128,6 +128,9 @@ class MPPI:
         Savitzky–Golay window (odd, >= 3; shortened to fit the horizon); 0 switches it off.
     path_spacing : float
         Spacing [m] of the densified path the path critics use.
+    goal_tolerance : (float, float)
+        (position [m], heading [rad]): within both of the path's end the command is a stop and
+        :attr:`status` is ``"arrived"``.
     cusp_tolerance : float
         Distance [m] to a cusp at which the next path section becomes active.
     jax_float64 : bool
@@ -162,6 +165,7 @@ class MPPI:
         allow_reverse: bool = True,
         savgol_window: int = 9,
         path_spacing: float = 0.05,
+        goal_tolerance: tuple[float, float] = (0.05, 0.25),
         cusp_tolerance: float = 0.15,
         jax_float64: bool = False,
     ) -> None:
@@ -183,6 +187,10 @@ class MPPI:
         self.seed = int(seed)
         self.path_spacing = positive("path_spacing", path_spacing, "m")
         self.cusp_tolerance = positive("cusp_tolerance", cusp_tolerance, "m")
+        self.goal_tolerance = (
+            positive("goal position tolerance", goal_tolerance[0], "m"),
+            positive("goal heading tolerance", goal_tolerance[1], "rad"),
+        )
         self.allow_reverse = bool(allow_reverse)
         self.jax_float64 = bool(jax_float64)
         self._kind, self._wheel_base = _model_kind(model)
@@ -297,6 +305,11 @@ class MPPI:
         pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
         tables = self._path_tables(reference)
         window, info = self._window(pose, tables)
+        if self._section == tables.n_sections - 1:
+            gap = math.hypot(pose[0] - info[3], pose[1] - info[4])
+            turn = abs(float(wrap_angle(pose[2] - info[5])))
+            if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
+                return self._stop(pose, "arrived")
         weights = self.critics.vector()
         if self._path_blocked(window):
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
@@ -341,6 +354,16 @@ class MPPI:
                 )
             costs = costs + np.where(np.isfinite(extra), np.maximum(extra, 0.0), 1e6)
         return self._update(pose, costs, controls)
+
+    def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
+        self.status = status
+        self._mean = np.zeros_like(self._mean)
+        self._last = np.zeros(2)
+        costs = np.zeros(self.samples)
+        weights = np.full(self.samples, 1.0 / self.samples)
+        plan = MPPIPlan(np.zeros(2), self._mean.copy(), costs, weights, status, pose.copy())
+        self.last_plan = plan
+        return plan
 
     def _update(self, pose: np.ndarray, costs: np.ndarray, controls: np.ndarray) -> MPPIPlan:
         best = float(np.min(costs))
