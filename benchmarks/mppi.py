@@ -8,10 +8,13 @@ Prints one JSON object:
   ``jax`` (CPU, float32) and ``jax_float64`` where JAX is installed — with the default critics
   (path, path alignment, follow, goal, obstacles through the distance field with a 0.4 × 0.4 m
   footprint, prefer-forward, effort, rate) on the cluttered map; ``pytorch_mppi`` where installed;
-- ``tracking``: the figure-eight of issue 5 (x = 1.1 + 0.7 sin(2πt/30), y = 0.9 + 0.7 sin(4πt/30))
-  on the unicycle: RMS and max distance to the path after 5 s and the final distance to its end,
-  for MPPI (numba, 500 × 30, dt 0.05 s, |v| <= 0.35 m/s), pure pursuit and rear-wheel feedback
-  at the mean reference speed, all in this run;
+- ``tracking``: the figure-eight of issue 5 (x = 1.1 + 0.7 sin(2πt/30), y = 0.9 + 0.7 sin(4πt/30),
+  as a path) and the three-point-turn path with two cusps, on the unicycle and the rear-wheel
+  bicycle (L = 0.05 m on the figure-eight, 0.5 m on the cusp path, |δ| <= 35°): RMS and max
+  distance to the path after 5 s, final distance to its end and reversals, for MPPI (numba,
+  500 × 30, dt 0.05 s, |v| <= 0.35 / 0.3 m/s), pure pursuit and rear-wheel feedback at the mean
+  reference speed (0.22 / 0.3 m/s), all in this run (the figure-eight is closed: its end is its
+  start, so also see ``path_length_driven_m``);
 - ``clearance``: the cluttered map's straight reference through three discs whose edges are
   0.1 m from it: pure pursuit (0.4 m/s) collides; MPPI (numba, 400 × 30, dt 0.1 s) over
   ``--seeds`` noise seeds: success = no collision, footprint clearance >= 0.1 m all along and
@@ -24,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import time
@@ -38,11 +42,12 @@ from wheelbase.control import (
     Polyline,
     PurePursuit,
     RearWheelFeedback,
+    SteeringLimits,
     VelocityLimits,
     run_closed_loop,
 )
-from wheelbase.control.loop import figure_eight_reference
-from wheelbase.models import Unicycle
+from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
+from wheelbase.models import RearWheelBicycle, Unicycle
 from wheelbase.planning import Footprint, load_map
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
@@ -104,22 +109,49 @@ def errors(result, path) -> dict:
     }
 
 
-def tracking() -> dict:
+def tracking() -> list[dict]:
     eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
-    start = np.array([1.1, 0.8, 0.0])
-    v = eight.length / 30.0
-    rows = {}
-    for name, law in (
-        ("pure_pursuit", PurePursuit(speed=v, limits=LIMITS)),
-        ("rear_wheel_feedback", RearWheelFeedback(speed=v, limits=LIMITS)),
-    ):
-        rows[name] = errors(run_closed_loop(law, Unicycle(), start, eight, 30.0, 0.05), eight)
-    mppi = MPPI(Unicycle(), 30, 0.05, 500, (0.2, 0.5), 0.03, None,
-                VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba")  # fmt: skip
-    begin = time.perf_counter()
-    result = run_closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
-    rows["mppi"] = errors(result, eight) | {"runtime_s": time.perf_counter() - begin}
-    return {"reference": "figure_eight", "plant": "unicycle", "mean_speed_m_s": v, **rows}
+    cusp = three_point_turn_path()
+    cases = (
+        ("figure_eight", eight, (1.1, 0.8, 0.0), eight.length / 30.0, 0.35, 36.0, 0.05),
+        ("cusp_path", cusp, (0.0, 0.05, 0.0), 0.3, 0.3, 40.0, 0.5),
+    )
+    rows = []
+    for reference, path, start, v, v_mppi, t_end, wheel_base in cases:
+        steer = math.radians(35.0)
+        bike = RearWheelBicycle(wheel_base=wheel_base, max_steering=steer)
+        plants = (
+            ("unicycle", Unicycle(), {"limits": LIMITS}, VelocityLimits(v_mppi, 1.5), (0.2, 0.5)),
+            (
+                "bicycle",
+                bike,
+                {"output": "steering", "wheel_base": wheel_base,
+                 "limits": SteeringLimits(steer, max_steering_rate=3.0)},
+                SteeringLimits(steer, max_speed=v_mppi),
+                (0.2, 0.3),
+            ),
+        )  # fmt: skip
+        for plant, model, options, mppi_limits, noise in plants:
+            laws = {
+                "pure_pursuit": PurePursuit(speed=v, **options),
+                "rear_wheel_feedback": RearWheelFeedback(speed=v, **options),
+                "mppi": MPPI(model, 30, 0.05, 500, noise, 0.03, None, mppi_limits,
+                             backend="numba"),
+            }  # fmt: skip
+            for law_name, law in laws.items():
+                begin = time.perf_counter()
+                result = run_closed_loop(law, model, start, path, t_end, 0.05)
+                rows.append(
+                    {"reference": reference, "plant": plant, "law": law_name}
+                    | errors(result, path)
+                    | {
+                        "reversals": int(result.reversals[0]),
+                        "path_length_driven_m": float(result.path_length[0]),
+                        "reference_length_m": path.length,
+                        "runtime_s": time.perf_counter() - begin,
+                    }
+                )
+    return rows
 
 
 def clearance(grid, seeds: int) -> dict:

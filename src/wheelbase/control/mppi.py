@@ -81,6 +81,8 @@ class MPPIPlan:
         ``"ok"`` or ``"all_collide"``.
     pose : numpy.ndarray, shape (3,)
         The measured pose the plan starts from (see :meth:`MPPI.predict`).
+    samples : numpy.ndarray, shape (K, T, 2)
+        The sampled (clipped) command sequences, e.g. for a fan of rollouts.
     """
 
     command: np.ndarray
@@ -89,6 +91,7 @@ class MPPIPlan:
     weights: np.ndarray
     status: str
     pose: np.ndarray
+    samples: np.ndarray
 
 
 class MPPI:
@@ -361,7 +364,10 @@ class MPPI:
         self._last = np.zeros(2)
         costs = np.zeros(self.samples)
         weights = np.full(self.samples, 1.0 / self.samples)
-        plan = MPPIPlan(np.zeros(2), self._mean.copy(), costs, weights, status, pose.copy())
+        samples = np.zeros((0, self.horizon_steps, 2))
+        plan = MPPIPlan(
+            np.zeros(2), self._mean.copy(), costs, weights, status, pose.copy(), samples
+        )
         self.last_plan = plan
         return plan
 
@@ -382,7 +388,7 @@ class MPPI:
             command = sequence[0].copy()
             self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
         self._last = command
-        plan = MPPIPlan(command, sequence, costs, weights, self.status, pose.copy())
+        plan = MPPIPlan(command, sequence, costs, weights, self.status, pose.copy(), controls)
         self.last_plan = plan
         return plan
 
