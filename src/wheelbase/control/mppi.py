@@ -642,7 +642,10 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
     def wrap(a):
         return jnp.arctan2(jnp.sin(a), jnp.cos(a))
 
+    checked = np.arange(stride - 1, steps, stride)
+
     def run(pose, mean, lo, hi, window, info, last, noise, w, df, mp, circles, extra):
+        # The scan rolls the samples out; the critics then score all steps at once.
         radius, dt, wheel_base = extra[0], extra[1], extra[2]
         controls = jnp.clip(mean[None] + noise, lo, hi)
         n = noise.shape[0]
@@ -650,9 +653,8 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
         rows, cols = df.shape
         x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
 
-        def step(carry, inputs):
-            x, y, th, prev, cost, collided = carry
-            t, u = inputs
+        def step(carry, u):
+            x, y, th = carry
             v, second = u[:, 0], u[:, 1]
             if kind == _KIND_VELOCITY:
                 speed, rate = v, second
@@ -663,45 +665,42 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
             x = x + dt * (jnp.cos(th) * speed)
             y = y + dt * (jnp.sin(th) * speed)
             th = wrap(th + dt * rate)
-            check = jnp.logical_and((t + 1) % stride == 0, jnp.logical_not(goal_mode))
-            d2 = (x[:, None] - window[None, :, 0]) ** 2 + (y[:, None] - window[None, :, 1]) ** 2
-            nearest = jnp.argmin(d2, axis=1)
-            dmin = jnp.min(d2, axis=1)
-            err = wrap(th - window[nearest, 2])
-            checked = max(1, len(range(stride - 1, steps, stride)))
-            path = (w[0] * dmin + w[1] * err * err) / checked
-            cost = cost + jnp.where(check, path, 0.0)
-            dist = jnp.hypot(x - info[3], y - info[4])
-            cost = cost + jnp.where(goal_mode, w[3] * dist / steps, 0.0)
-            c, s = jnp.cos(th), jnp.sin(th)
-            for k in range(circles.shape[0]):
-                px = x + c * circles[k, 0] - s * circles[k, 1]
-                py = y + s * circles[k, 0] + c * circles[k, 1]
-                col = jnp.floor((px - x0) / res).astype(jnp.int32)
-                row = jnp.floor((py - y0) / res).astype(jnp.int32)
-                inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
-                field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
-                clear = field - radius - math.sqrt(2.0) * res
-                hit = has_map & (~inside | (clear <= 0.0))
-                collided = collided | hit
-                gap = jnp.where(inside & (clear > 0.0), jnp.maximum(w[10] - clear, 0.0), 0.0)
-                cost = cost + jnp.where(has_map, w[5] * gap * gap / steps, 0.0)
-            cost = cost + w[6] * jnp.maximum(-info[6] * v, 0.0) * dt
-            cost = cost + w[7] * jnp.sum((u / hi) ** 2, axis=1) / steps
-            cost = cost + w[8] * jnp.sum(((u - prev) / hi) ** 2, axis=1) / steps
-            if kind == _KIND_VELOCITY:
-                cost = cost + w[9] * jnp.abs(second) / (steps * hi[1])
-            return (x, y, th, u, cost, collided), None
+            return (x, y, th), (x, y, th)
 
         zeros = jnp.zeros(n, dtype=pose.dtype)
-        carry = (
-            zeros + pose[0], zeros + pose[1], zeros + pose[2],
-            jnp.broadcast_to(last, (n, 2)), zeros, jnp.zeros(n, dtype=bool),
-        )  # fmt: skip
-        times = jnp.arange(steps)
-        (x, y, th, _u, cost, collided), _ = lax.scan(
-            step, carry, (times, jnp.swapaxes(controls, 0, 1))
-        )
+        carry = (zeros + pose[0], zeros + pose[1], zeros + pose[2])
+        (x, y, th), (xs, ys, ths) = lax.scan(step, carry, jnp.swapaxes(controls, 0, 1))
+        cost = zeros
+        if checked.size:
+            px, py, pth = xs[checked], ys[checked], ths[checked]  # (C, N)
+            d2 = (px[..., None] - window[:, 0]) ** 2 + (py[..., None] - window[:, 1]) ** 2
+            nearest = jnp.argmin(d2, axis=-1)
+            dmin = jnp.min(d2, axis=-1)
+            err = wrap(pth - window[nearest, 2])
+            path = (w[0] * jnp.sum(dmin, 0) + w[1] * jnp.sum(err * err, 0)) / checked.size
+            cost = cost + jnp.where(goal_mode, 0.0, path)
+        goal = w[3] * jnp.sum(jnp.hypot(xs - info[3], ys - info[4]), 0) / steps
+        cost = cost + jnp.where(goal_mode, goal, 0.0)
+        c, s = jnp.cos(ths), jnp.sin(ths)
+        collided = jnp.zeros(n, dtype=bool)
+        for k in range(circles.shape[0]):
+            cx = xs + c * circles[k, 0] - s * circles[k, 1]
+            cy = ys + s * circles[k, 0] + c * circles[k, 1]
+            col = jnp.floor((cx - x0) / res).astype(jnp.int32)
+            row = jnp.floor((cy - y0) / res).astype(jnp.int32)
+            inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+            field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
+            clear = field - radius - math.sqrt(2.0) * res
+            collided = collided | (has_map & jnp.any(~inside | (clear <= 0.0), axis=0))
+            gap = jnp.where(inside & (clear > 0.0), jnp.maximum(w[10] - clear, 0.0), 0.0)
+            cost = cost + jnp.where(has_map, w[5] * jnp.sum(gap * gap, 0) / steps, 0.0)
+        v = controls[..., 0]
+        cost = cost + w[6] * jnp.sum(jnp.maximum(-info[6] * v, 0.0), 1) * dt
+        cost = cost + w[7] * jnp.sum((controls / hi) ** 2, axis=(1, 2)) / steps
+        previous = jnp.concatenate([jnp.broadcast_to(last, (n, 1, 2)), controls[:, :-1]], 1)
+        cost = cost + w[8] * jnp.sum(((controls - previous) / hi) ** 2, axis=(1, 2)) / steps
+        if kind == _KIND_VELOCITY:
+            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., 1]), 1) / (steps * hi[1])
         follow = w[2] * jnp.hypot(x - info[1], y - info[2])
         heading = w[4] * jnp.abs(wrap(th - info[5]))
         cost = cost + jnp.where(goal_mode, heading, follow)
