@@ -314,3 +314,18 @@ def test_cusp_path_reverses_and_arrives(model, limits, noise):
     assert 2 <= result.reversals[0] <= 10  # the two cusps, and a little dithering at them
     assert path.distance(result.poses[:, 0, :2]).max() < 0.15
     np.testing.assert_array_equal(result.commands[-2, 0], [0.0, 0.0])
+
+
+def test_from_gains_builds_the_limits_and_critics(cluttered):
+    mppi = MPPI.from_gains(Unicycle(), grid=cluttered, footprint=ROBOT, samples=32,
+                           horizon_steps=10, max_speed=0.4, obstacle=30.0,
+                           critics={"effort": 0.5})  # fmt: skip
+    assert mppi.samples == 32 and mppi.horizon_steps == 10 and mppi.backend == "numba"
+    assert mppi.critics.obstacle == 30.0 and mppi.critics.effort == 0.5
+    np.testing.assert_array_equal(mppi._hi, [0.4, 1.5])
+    bike = RearWheelBicycle(wheel_base=0.5, max_steering=0.6)
+    steered = MPPI.from_gains(bike, samples=16, horizon_steps=8)
+    assert steered.command_names == ("speed", "steering")
+    np.testing.assert_array_equal(steered._hi, [0.5, 0.6])
+    with pytest.raises(ConfigError, match="horizon"):
+        MPPI.from_gains(Unicycle(), horizon=10)

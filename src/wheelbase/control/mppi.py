@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 from typing import Any, ClassVar
 
 import numba
@@ -218,6 +219,85 @@ class MPPI:
         self._window_points = math.ceil(ahead / self.path_spacing) + 1
         self._tables: tuple[object, PathTables] | None = None
         self.reset()
+
+    @classmethod
+    def from_gains(
+        cls,
+        model: Any,
+        *,
+        grid: Any = None,
+        footprint: Any = None,
+        **gains: Any,
+    ) -> MPPI:
+        """An MPPI from plain keyword gains, as a scenario file gives them.
+
+        Parameters
+        ----------
+        model : KinematicModel
+            The robot model.
+        grid : OccupancyGrid, optional
+            Map for the obstacle critic.
+        footprint : Footprint, optional
+            Robot outline.
+        **gains
+            ``horizon_steps`` (56), ``dt`` (0.05 s), ``samples`` (2000), ``noise_std``
+            ((0.2, 0.5)), ``temperature`` (0.03), ``seed`` (0), ``backend`` ("numba"),
+            ``max_speed`` (0.5 m/s), ``max_yaw_rate`` (1.5 rad/s, velocity commands) or
+            ``max_steering`` (the model's, steered models), any keyword of :class:`MPPI`
+            (``allow_reverse``, ``savgol_window``, ...) and any critic weight of
+            :class:`MPPICritics` by name (``obstacle=30``), or ``critics={...}``.
+
+        Returns
+        -------
+        MPPI
+
+        Examples
+        --------
+        >>> from wheelbase.models import Unicycle
+        >>> MPPI.from_gains(Unicycle(), samples=100, obstacle=30.0).critics.obstacle
+        30.0
+        """
+        options = dict(gains)
+        critic_names = {f.name for f in dataclass_fields(MPPICritics)}
+        critics = dict(options.pop("critics", None) or {})
+        for name in list(options):
+            if name in critic_names:
+                critics[name] = options.pop(name)
+        max_speed = options.pop("max_speed", 0.5)
+        max_yaw_rate = options.pop("max_yaw_rate", 1.5)
+        kind, _base = _model_kind(model)
+        if kind == _KIND_VELOCITY:
+            limits: Any = VelocityLimits(max_speed=max_speed, max_yaw_rate=max_yaw_rate)
+            options.pop("max_steering", None)
+        else:
+            steering = options.pop("max_steering", float(model.max_steering))
+            limits = SteeringLimits(min(steering, 1.5), max_speed=max_speed)
+        allowed = {
+            "horizon_steps", "dt", "samples", "noise_std", "temperature", "seed", "backend",
+            "allow_reverse", "savgol_window", "path_spacing", "goal_tolerance",
+            "cusp_tolerance", "jax_float64",
+        }  # fmt: skip
+        unknown = sorted(set(options) - allowed)
+        if unknown:
+            names = allowed | critic_names | {"max_speed", "max_yaw_rate", "max_steering"}
+            raise ConfigError(
+                f"unknown MPPI gain {unknown[0]!r}; allowed: {', '.join(sorted(names))}"
+            )
+        return cls(
+            model,
+            options.pop("horizon_steps", 56),
+            options.pop("dt", 0.05),
+            options.pop("samples", 2000),
+            options.pop("noise_std", (0.2, 0.5)),
+            options.pop("temperature", 0.03),
+            critics,
+            limits,
+            seed=options.pop("seed", 0),
+            backend=options.pop("backend", "numba"),
+            grid=grid,
+            footprint=footprint,
+            **options,
+        )
 
     # ------------------------------------------------------------------ set-up
     def _bounds(self, limits: Any) -> tuple[np.ndarray, np.ndarray]:
