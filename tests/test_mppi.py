@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from wheelbase.control import (
     MPPI,
@@ -329,3 +331,31 @@ def test_from_gains_builds_the_limits_and_critics(cluttered):
     np.testing.assert_array_equal(steered._hi, [0.5, 0.6])
     with pytest.raises(ConfigError, match="horizon"):
         MPPI.from_gains(Unicycle(), horizon=10)
+
+
+def test_jax_float32_is_close_to_the_float64_reference():
+    pytest.importorskip("jax")
+    noise = np.random.default_rng(4).standard_normal((64, 20, 2)) * (0.2, 0.5)
+    reference = make("numpy").plan((2.6, 3.9, 0.2), STRAIGHT, noise)
+    single = make("jax").plan((2.6, 3.9, 0.2), STRAIGHT, noise)
+    np.testing.assert_allclose(single.costs, reference.costs, rtol=1e-4, atol=1e-4)
+    np.testing.assert_allclose(single.command, reference.command, atol=1e-3)
+
+
+@settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    temperature=st.floats(1e-300, 1e300),
+    x=st.floats(0.5, 11.5),
+    y=st.floats(0.5, 7.5),
+    theta=st.floats(-math.pi, math.pi),
+)
+def test_command_is_finite_and_within_limits(cluttered, temperature, x, y, theta):
+    mppi = MPPI(Unicycle(), 12, 0.05, 32, (0.2, 0.5), temperature, None, LIMITS,
+                backend="numba", grid=cluttered, footprint=ROBOT)  # fmt: skip
+    plan = mppi.plan((x, y, theta), STRAIGHT)
+    assert np.all(np.isfinite(plan.command)) and np.all(np.isfinite(plan.weights))
+    assert abs(plan.command[0]) <= 0.5 and abs(plan.command[1]) <= 1.5
+    if plan.status == "all_collide":
+        np.testing.assert_array_equal(plan.command, [0.0, 0.0])
