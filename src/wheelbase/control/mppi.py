@@ -453,7 +453,8 @@ class MPPI:
 
     def _update(self, pose: np.ndarray, costs: np.ndarray, controls: np.ndarray) -> MPPIPlan:
         best = float(np.min(costs))
-        weights = np.exp(-(costs - best) / self.temperature)
+        with np.errstate(over="ignore", under="ignore"):  # exp(−inf) = 0: the intended limit
+            weights = np.exp(-(costs - best) / self.temperature)
         weights /= np.sum(weights)
         if best >= self.critics.collision_cost:
             self.status = "all_collide"
