@@ -4,7 +4,10 @@ and the closed-loop evaluation (figure-eight tracking, clearance on the cluttere
 from __future__ import annotations
 
 import builtins
+import json
 import math
+import subprocess
+import sys
 from importlib import resources
 from pathlib import Path
 
@@ -359,3 +362,18 @@ def test_command_is_finite_and_within_limits(cluttered, temperature, x, y, theta
     assert abs(plan.command[0]) <= 0.5 and abs(plan.command[1]) <= 1.5
     if plan.status == "all_collide":
         np.testing.assert_array_equal(plan.command, [0.0, 0.0])
+
+
+def test_benchmark_quick_prints_the_promised_json():
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "mppi.py"
+    done = subprocess.run([sys.executable, str(script), "--quick"], capture_output=True,
+                          text=True, timeout=300, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    rates = report["cpu_hz_2000x56"]
+    assert rates["numpy"] > 0 and rates["numba"] > 0 and rates["numba_1_thread"] > 0
+    laws = {(row["reference"], row["plant"], row["law"]) for row in report["tracking"]}
+    assert ("figure_eight", "unicycle", "mppi") in laws
+    assert ("figure_eight", "unicycle", "pure_pursuit") in laws
+    clearance = report["clearance"]
+    assert clearance["pure_pursuit_collides"] and clearance["mppi_success_rate"] == 1.0
