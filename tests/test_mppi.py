@@ -27,7 +27,7 @@ from wheelbase.control import (
 )
 from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.models import DiffDrive, RearWheelBicycle, Unicycle
+from wheelbase.models import Bicycle, BodyTwist, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.planning import Footprint, load_map
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
@@ -70,8 +70,14 @@ def backends():
             Polyline([[2.0, 4.0], [4.0, 4.0], [3.0, 4.0]], [1, -1]),
             (3.7, 4.05, 0.0),
         ),
+        (
+            Bicycle(wheel_base=0.3, max_steering=0.6),
+            SteeringLimits(0.5, max_speed=0.5),
+            STRAIGHT,
+            (5.0, 3.8, 0.4),
+        ),
     ],
-    ids=["unicycle", "diffdrive", "bicycle_cusp"],
+    ids=["unicycle", "diffdrive", "bicycle_cusp", "front_bicycle"],
 )
 def test_backends_agree_on_the_command(cluttered, model, limits, reference, pose):
     names = backends()
@@ -238,6 +244,11 @@ def test_bad_parameters(change, match):
     args.update(change)
     with pytest.raises(ConfigError, match=match):
         MPPI(**args)
+
+
+def test_unsupported_model():
+    with pytest.raises(ConfigError, match="BodyTwist"):
+        MPPI(BodyTwist(), 10, 0.05, 8, 0.2, 0.1, None, LIMITS)
 
 
 def test_nan_pose_and_bad_noise():

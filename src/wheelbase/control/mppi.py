@@ -101,8 +101,7 @@ class MPPI:
     Parameters
     ----------
     model : KinematicModel
-        Unicycle, DiffDrive, Bicycle, RearWheelBicycle or Ackermann (any model with an
-        ``inverse`` on the ``numpy`` backend).
+        Unicycle, DiffDrive, Bicycle, RearWheelBicycle or Ackermann.
     horizon_steps : int
         T, steps of the horizon, >= 1.
     dt : float
@@ -671,16 +670,17 @@ def _count(name: str, value: object) -> int:
 
 
 def _model_kind(model: Any) -> tuple[int, float]:
+    from wheelbase.models import Bicycle
+
     names = tuple(getattr(model, "input_names", ()))
     if names in (VELOCITY_COMMAND, ("omega_left", "omega_right")):
         return _KIND_VELOCITY, 0.0
     if names == STEERING_COMMAND:
-        front = type(model).__name__ == "Bicycle"
+        front = isinstance(model, Bicycle)
         return (_KIND_FRONT if front else _KIND_REAR), float(model.wheel_base)
-    if names == ("speed", "alpha") or hasattr(model, "wheel_base"):
-        return _KIND_FRONT, float(model.wheel_base)
     raise ConfigError(
-        f"MPPI supports Unicycle, DiffDrive and the steered models (got {type(model).__name__})"
+        "MPPI supports Unicycle, DiffDrive, Bicycle, RearWheelBicycle and Ackermann "
+        f"(got {type(model).__name__})"
     )
 
 
