@@ -1,0 +1,89 @@
+import json
+import math
+
+import numpy as np
+import pytest
+
+from wheelbase.errors import PlanningError, ScenarioError
+from wheelbase.report import REPORT_FILES, write_report
+from wheelbase.runner import run
+
+BASE = {
+    "name": "aisle",
+    "map": "warehouse",
+    "robot": {"model": "diffdrive", "preset": "rm100"},
+    "controller": {"law": "kanayama"},
+    "start": [3.0, 2.0, 0.0],
+    "goal": [8.0, 2.5, 0.0],
+    "trajectory": {"max_speed": 0.8, "max_acceleration": 0.8},
+    "dt": 0.02,
+}
+
+
+@pytest.fixture(scope="module")
+def result():
+    return run(BASE)
+
+
+def test_closed_loop_arrives_with_encoder_odometry(result):
+    m = result.metrics
+    assert m["status"] == "arrived" and m["success"] and not m["collision"]
+    assert m["final_position_error_true_m"] < 0.05
+    assert m["tracking_max_position_error_m"] < 0.02
+    # Odometry (2048-tick encoders, exact-arc update) stays within a few mm on 5 m.
+    assert m["odometry_drift_m"] < 0.005
+    log = result.log
+    assert log.true_pose.shape == log.estimated_pose.shape == (len(log.t), 3)
+    # The encoders count the wheel rotation that the commands asked for.
+    rotation = np.sum(log.wheel_rates[:-1, 0]) * 0.02
+    assert abs(log.ticks[-1, 0] - rotation * 2048 / (2 * math.pi)) <= 2
+
+
+def test_report_files_and_no_overwrite(result, tmp_path):
+    written = write_report(result, tmp_path, gif=False)
+    names = {path.name for path in written}
+    assert names == set(REPORT_FILES) - {"animation.gif"}
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["status"] == "arrived"
+    header = (tmp_path / "log.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t", "true_x", "true_y", "true_theta"]
+    assert "ticks_left" in header and "cmd_omega" in header
+    with pytest.raises(FileExistsError, match="--force"):
+        write_report(result, tmp_path, gif=False)
+    write_report(result, tmp_path, gif=False, force=True)
+
+
+def test_resolved_scenario_round_trips(result, tmp_path):
+    from wheelbase.scenario import load_scenario
+
+    path = tmp_path / "resolved.yaml"
+    path.write_text(result.scenario.to_yaml())
+    assert load_scenario(path) == result.scenario
+
+
+@pytest.mark.parametrize(
+    ("change", "error", "match"),
+    [
+        ({"start": [4.6, 8.0, 0.0]}, PlanningError, r"start \(4.6, 8, 0 deg\).*obstacle"),
+        ({"goal": [100.0, 2.0, 0.0]}, PlanningError, r"goals\[0\].*outside the map"),
+        ({"controller": {"law": "magic"}}, ScenarioError, "unknown law 'magic'; allowed: "),
+        (
+            {"controller": {"law": "kanayama", "gains": {"k_x": -1.0}}},
+            ScenarioError,
+            "controller.gains: .*k_x",
+        ),
+        ({"map": "atlantis"}, ScenarioError, "map: "),
+        ({"robot": {"model": "tank"}}, ScenarioError, "robot.model"),
+        ({"dt": -0.1}, ScenarioError, "dt: Input should be greater than 0"),
+        ({"extra": 1}, ScenarioError, "extra: unknown key"),
+    ],
+)
+def test_bad_scenarios_are_clear_errors(change, error, match):
+    with pytest.raises(error, match=match):
+        run({**BASE, **change})
+
+
+def test_unknown_gain_lists_the_allowed_ones():
+    bad = {**BASE, "controller": {"law": "kanayama", "gains": {"k_z": 1.0}}}
+    with pytest.raises(ScenarioError, match=r"controller.gains: .*k_z.*takes: k_x, k_y, k_theta"):
+        run(bad)
