@@ -87,3 +87,21 @@ def test_unknown_gain_lists_the_allowed_ones():
     bad = {**BASE, "controller": {"law": "kanayama", "gains": {"k_z": 1.0}}}
     with pytest.raises(ScenarioError, match=r"controller.gains: .*k_z.*takes: k_x, k_y, k_theta"):
         run(bad)
+
+
+def test_mppi_scenario_runs_from_plain_gains():
+    scenario = {
+        **BASE,
+        "map": "cluttered",
+        "robot": {"model": "unicycle", "footprint": [0.4, 0.4]},
+        "controller": {"law": "mppi", "gains": {"samples": 200, "backend": "numpy"}},
+        "odometry": {"mode": "perfect"},
+        "start": [1.0, 4.0, 0.0],
+        "goal": [4.0, 4.0, 0.0],
+        "goal_tolerance": [0.1, 180.0],
+        "dt": 0.05,
+        "duration": 30.0,
+    }
+    metrics = run(scenario).metrics
+    assert metrics["status"] == "arrived" and not metrics["collision"]
+    assert metrics["min_clearance_m"] > 0.05

@@ -151,7 +151,7 @@ def build_robot(spec) -> Robot:
 
 # --------------------------------------------------------------------------- control laws
 def _tracker(name: str) -> Callable[..., Any]:
-    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits, grid: Any = None):
         from wheelbase.control import tracking
         from wheelbase.control.base import VelocityLimits
 
@@ -175,7 +175,7 @@ def _tracker(name: str) -> Callable[..., Any]:
 
 
 def _follower(name: str) -> Callable[..., Any]:
-    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+    def make(robot: Robot, gains: dict[str, float], limits: SpeedLimits, grid: Any = None):
         from wheelbase.control import path
         from wheelbase.control.base import SteeringLimits, VelocityLimits
 
@@ -285,7 +285,7 @@ class TorqueTracking:
         return self._pid(t, state, row)
 
 
-def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits, grid: Any = None):
     if robot.dynamics is None:
         raise ConfigError("computed_torque needs a robot with dynamics (robot.preset: rm100)")
     defaults = {
@@ -296,7 +296,20 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits)
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
+def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
+    """MPPI (Williams et al.) on the map's distance field, following the planned path."""
+    from wheelbase.control.mppi import MPPI
+
+    defaults: dict[str, Any] = {"max_speed": limits.max_speed}
+    if robot.kind == "diff":
+        defaults["max_yaw_rate"] = limits.max_yaw_rate
+    return MPPI.from_gains(
+        robot.model, grid=grid, footprint=_footprint(robot), **{**defaults, **gains}
+    ), "path"
+
+
 LAWS: dict[str, Callable[..., Any]] = {
+    "mppi": _mppi,
     "computed_torque": _computed_torque,
     "kanayama": _tracker("Kanayama"),
     "linear": _tracker("LinearTracker"),
@@ -308,15 +321,22 @@ LAWS: dict[str, Callable[..., Any]] = {
 """Control laws a scenario can name (``controller.law``) and how each is built."""
 
 
-def _build_controller(law: str, robot: Robot, gains: dict[str, float], limits: SpeedLimits):
+def _build_controller(
+    law: str, robot: Robot, gains: dict[str, float], limits: SpeedLimits, grid: Any = None
+):
     try:
-        return LAWS[law](robot, dict(gains), limits)
+        return LAWS[law](robot, dict(gains), limits, grid)
     except TypeError as error:
         # An unknown keyword: list the gains the law takes.
         import dataclasses
 
-        built, _ = LAWS[law](robot, {}, limits)
-        names = [f.name for f in dataclasses.fields(built) if f.init and f.name != "limits"]
+        built, _ = LAWS[law](robot, {}, limits, grid)
+        if dataclasses.is_dataclass(built):
+            names = [f.name for f in dataclasses.fields(built) if f.init and f.name != "limits"]
+        else:
+            import inspect
+
+            names = list(inspect.signature(type(built).__init__).parameters)[2:]
         raise ConfigError(f"{error}; {law} takes: {', '.join(names)}") from None
 
 
@@ -422,7 +442,7 @@ def run(
     controller, reference_kind = _field(
         "controller.gains",
         lambda: _build_controller(
-            scenario.controller.law, robot, scenario.controller.gains, limits
+            scenario.controller.law, robot, scenario.controller.gains, limits, grid
         ),
     )
 

@@ -112,7 +112,11 @@ class ControllerSpec(_Strict):
     """The tracking controller: a law of :mod:`wheelbase.control` and its gains."""
 
     law: str = Field("kanayama", description="Name of the control law.")
-    gains: dict[str, float] = Field(default_factory=dict, description="Gains of the law.")
+    gains: dict[str, bool | int | float | str | tuple[float, ...]] = Field(
+        default_factory=dict,
+        description="Gains and options of the law (numbers; MPPI also takes backend names, "
+        "flags and per-input noise tuples).",
+    )
 
 
 class OdometrySpec(_Strict):

@@ -18,9 +18,12 @@ import yaml
 from wheelbase._validate import check_choice
 from wheelbase.planning.grid import OccupancyGrid
 
-__all__ = ["BUNDLED_MAPS", "PlanningScenario", "bundled_scenarios", "load_map"]
+__all__ = ["BUNDLED_MAPS", "IMAGE_RESOLUTION", "PlanningScenario", "bundled_scenarios", "load_map"]
 
-BUNDLED_MAPS = ("parking_lot", "corridor_uturn", "maze", "warehouse")
+BUNDLED_MAPS = ("parking_lot", "corridor_uturn", "maze", "warehouse", "cluttered")
+IMAGE_RESOLUTION = 0.05
+"""Cell side [m/pixel] assumed for a plain image map (ROS maps carry their own)."""
+_IMAGE_SUFFIXES = (".png", ".pgm", ".bmp", ".jpg", ".jpeg")
 
 
 def _data_dir() -> FilePath:
@@ -34,7 +37,8 @@ def load_map(name_or_path: str | FilePath) -> OccupancyGrid:
     ----------
     name_or_path : str or pathlib.Path
         One of :data:`BUNDLED_MAPS`, or a file path (``.yaml``/``.yml``: ROS map_server;
-        ``.map``: Moving AI at 1 m/cell).
+        ``.map``: Moving AI at 1 m/cell; an image: dark pixels occupied, at
+        :data:`IMAGE_RESOLUTION` m/pixel with its lower-left corner at the origin).
 
     Returns
     -------
@@ -51,6 +55,8 @@ def load_map(name_or_path: str | FilePath) -> OccupancyGrid:
         return OccupancyGrid.from_ros_yaml(path)
     if path.suffix.lower() == ".map":
         return OccupancyGrid.from_movingai(path)
+    if path.suffix.lower() in _IMAGE_SUFFIXES:
+        return OccupancyGrid.from_image(path, IMAGE_RESOLUTION)
     check_choice("map", text, BUNDLED_MAPS)
     return OccupancyGrid.from_ros_yaml(_data_dir() / f"{text}.yaml")
 
