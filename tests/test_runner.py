@@ -97,7 +97,7 @@ def test_mppi_scenario_runs_from_plain_gains():
         "controller": {"law": "mppi", "gains": {"samples": 200, "backend": "numpy"}},
         "odometry": {"mode": "perfect"},
         "start": [1.0, 4.0, 0.0],
-        "goal": [4.0, 4.0, 0.0],
+        "goal": [5.0, 4.0, 0.0],
         "goal_tolerance": [0.1, 180.0],
         "dt": 0.05,
         "duration": 30.0,
