@@ -1,9 +1,34 @@
 """wheelbase: model, simulate, plan for and control wheeled mobile robots.
 
 The curated public API; everything else lives in its module (``wheelbase.geometry``,
-``wheelbase.integrate`` …).
+``wheelbase.integrate``, ``wheelbase.planning``, ``wheelbase.control``, ``wheelbase.odometry`` …).
+Plotting lives in ``wheelbase.plot`` and is not imported here, so ``import wheelbase`` does not
+load matplotlib.
 """
 
+from wheelbase.control import (
+    MPPI,
+    PID,
+    Aicardi,
+    ComputedTorquePID,
+    GoToGoal,
+    GoToPoint,
+    Kanayama,
+    LineArc,
+    LinearTracker,
+    PolarPose,
+    Polyline,
+    PurePursuit,
+    RearWheelFeedback,
+    SegmentFollower,
+    Stanley,
+    SteeringLimits,
+    TorqueGains,
+    VelocityLimits,
+    ViaDirection,
+    ViaPoint,
+)
+from wheelbase.dynamics import RM100, DiffDriveDynamics, RigidBody, simulate_dynamics
 from wheelbase.errors import (
     ConfigError,
     DataError,
@@ -32,44 +57,98 @@ from wheelbase.models import (
     reference_from_derivatives,
     reference_from_xy,
 )
+from wheelbase.odometry import Encoder, WheelOdometry, dead_reckon, load_mrclam
+from wheelbase.planning import (
+    Footprint,
+    HybridAStar,
+    OccupancyGrid,
+    astar,
+    dijkstra,
+    dubins_length,
+    load_map,
+    reeds_shepp_length,
+)
+from wheelbase.planning import Path as PlannedPath
 from wheelbase.runner import RunResult, run
 from wheelbase.scenario import Scenario, load_scenario
 from wheelbase.timing import SpeedLimits, time_parametrize
+from wheelbase.trajectory import PoseTrajectory, Trajectory, feasible_trajectory, trapezoidal
 
 __version__ = "0.1.0"
 
 __all__ = [
     "METHODS",
+    "MPPI",
+    "PID",
+    "RM100",
     "Ackermann",
+    "Aicardi",
     "Bicycle",
     "BodyTwist",
+    "ComputedTorquePID",
     "ConfigError",
     "DataError",
     "DiffDrive",
+    "DiffDriveDynamics",
+    "Encoder",
+    "Footprint",
+    "GoToGoal",
+    "GoToPoint",
+    "HybridAStar",
     "InputError",
+    "Kanayama",
     "KinematicModel",
+    "LineArc",
+    "LinearTracker",
     "MapError",
+    "OccupancyGrid",
     "PathReference",
+    "PlannedPath",
     "PlanningError",
+    "PolarPose",
+    "Polyline",
+    "PoseTrajectory",
+    "PurePursuit",
     "RearWheelBicycle",
+    "RearWheelFeedback",
+    "RigidBody",
     "RunResult",
     "Scenario",
     "ScenarioError",
+    "SegmentFollower",
     "SimResult",
     "SpeedLimits",
+    "Stanley",
+    "SteeringLimits",
+    "TorqueGains",
+    "Trajectory",
     "Unicycle",
+    "VelocityLimits",
+    "ViaDirection",
+    "ViaPoint",
     "Wheel",
+    "WheelOdometry",
     "WheelbaseError",
     "WheeledBase",
     "__version__",
+    "astar",
+    "dead_reckon",
+    "dijkstra",
+    "dubins_length",
+    "feasible_trajectory",
+    "load_map",
+    "load_mrclam",
     "load_scenario",
     "mecanum4",
     "omni3",
     "pure_motions",
+    "reeds_shepp_length",
     "reference_from_derivatives",
     "reference_from_xy",
     "run",
     "simulate",
+    "simulate_dynamics",
     "time_parametrize",
+    "trapezoidal",
     "wrap_angle",
 ]
