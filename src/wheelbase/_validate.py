@@ -18,6 +18,7 @@ __all__ = [
     "check_choice",
     "finite",
     "nonnegative",
+    "parse_angle",
     "positive",
 ]
 
@@ -83,6 +84,45 @@ def as_float_array(
     if not np.all(np.isfinite(array)):
         raise InputError(f"{name} must be finite (got NaN or inf)")
     return array
+
+
+def parse_angle(text: str | float, name: str = "angle", default_unit: str = "rad") -> float:
+    """Parse an angle typed by a user (CLI flag, file) into radians.
+
+    ``"90deg"``, ``"90°"``, ``"1.57rad"``, or a bare number in ``default_unit`` (``"rad"`` or
+    ``"deg"``).
+
+    Parameters
+    ----------
+    text : str or float
+        The angle as typed.
+    name : str
+        What the angle is, for the error message.
+    default_unit : {"rad", "deg"}
+        Unit of a bare number.
+
+    Raises
+    ------
+    ConfigError
+        If the text is not a finite number with an optional ``deg``/``°``/``rad`` suffix.
+
+    Examples
+    --------
+    >>> round(parse_angle("90deg"), 6), parse_angle("1.5rad"), parse_angle("-0.5")
+    (1.570796, 1.5, -0.5)
+    """
+    raw = str(text).strip().lower()
+    scale = math.pi / 180 if default_unit == "deg" else 1.0
+    for suffix, factor in (("deg", math.pi / 180), ("°", math.pi / 180), ("rad", 1.0)):
+        if raw.endswith(suffix):
+            raw, scale = raw[: -len(suffix)].strip(), factor
+            break
+    try:
+        value = float(raw)
+    except ValueError:
+        example = "90deg, 1.57rad or 90" if default_unit == "deg" else "90deg, 1.57rad or 1.57"
+        raise ConfigError(f"{name} must be an angle such as {example} (got {text!r})") from None
+    return finite(name, value, default_unit) * scale
 
 
 def _unit(unit: str) -> str:

@@ -35,7 +35,7 @@ from rich.table import Table
 from rich.text import Text
 from typer.core import TyperGroup
 
-from wheelbase._validate import check_choice, finite, positive
+from wheelbase._validate import check_choice, finite, parse_angle, positive
 from wheelbase.errors import ConfigError, WheelbaseError
 from wheelbase.integrate import METHODS, SimResult, simulate
 
@@ -131,46 +131,6 @@ def _main(
 
 
 # --------------------------------------------------------------------------- parsing
-def parse_angle(text: str | float, name: str = "angle") -> float:
-    """Parse an angle given on the command line into radians.
-
-    Parameters
-    ----------
-    text : str or float
-        ``"90deg"``, ``"90°"``, ``"1.57rad"`` or a bare number (radians).
-    name : str
-        Name used in the error message.
-
-    Returns
-    -------
-    float
-        The angle [rad].
-
-    Raises
-    ------
-    ConfigError
-        If the text is not a finite number with an optional ``deg``/``°``/``rad`` suffix.
-
-    Examples
-    --------
-    >>> round(parse_angle("90deg"), 6), parse_angle("1.5rad"), parse_angle("-0.5")
-    (1.570796, 1.5, -0.5)
-    """
-    raw = str(text).strip().lower()
-    scale = 1.0
-    for suffix, factor in (("deg", math.pi / 180), ("°", math.pi / 180), ("rad", 1.0)):
-        if raw.endswith(suffix):
-            raw, scale = raw[: -len(suffix)].strip(), factor
-            break
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ConfigError(
-            f"{name} must be an angle such as 90deg, 1.57rad or 1.57 (got {text!r})"
-        ) from None
-    return finite(name, value, "rad") * scale
-
-
 def _parse_length(text: str, name: str) -> float:
     raw = str(text).strip().lower().removesuffix("m").strip()
     try:

@@ -26,7 +26,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from wheelbase._validate import finite, positive
+from wheelbase._validate import finite, parse_angle, positive
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.loop import (
     POSE_LAWS,
@@ -60,27 +60,6 @@ RUN_FILES: tuple[str, ...] = ("run.csv", "run.png", "metrics.json")
 
 
 # --------------------------------------------------------------------------- parsing
-def parse_angle(text: str) -> float:
-    """``"90deg"``, ``"90°"``, ``"1.57rad"`` or a bare number (radians) → radians.
-
-    Raises
-    ------
-    ConfigError
-        If the text is not a finite number with an optional suffix.
-    """
-    raw = str(text).strip().lower()
-    scale = 1.0
-    for suffix, factor in (("deg", math.pi / 180), ("°", math.pi / 180), ("rad", 1.0)):
-        if raw.endswith(suffix):
-            raw, scale = raw[: -len(suffix)].strip(), factor
-            break
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ConfigError(f"angle must be a number like 90deg or 1.57rad (got {text!r})") from None
-    return finite("angle", value, "rad") * scale
-
-
 def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
     try:
         x, y = float(values[0]), float(values[1])

@@ -13,14 +13,13 @@ written with ``rad`` (``1.57rad``); ``90deg`` is accepted too.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
 import typer
 
-from wheelbase._validate import finite
+from wheelbase._validate import finite, parse_angle
 from wheelbase.errors import ConfigError
 
 __all__ = ["PLAN_FILES", "plan_to_files", "register"]
@@ -30,20 +29,7 @@ PLAN_FILES: tuple[str, ...] = ("path.csv", "path.png", "metrics.json")
 
 def _heading_deg(text: str, name: str) -> float:
     """Heading text → radians; a bare number is in degrees (the unit of --start/--goal)."""
-    raw = str(text).strip()
-    for suffix, factor in (("deg", math.pi / 180), ("°", math.pi / 180), ("rad", 1.0)):
-        if raw.endswith(suffix):
-            raw, scale = raw[: -len(suffix)].strip(), factor
-            break
-    else:
-        scale = math.pi / 180
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ConfigError(
-            f"{name} heading must be a number like 90 or 1.57rad (got {text!r})"
-        ) from None
-    return finite(f"{name} heading", value) * scale
+    return parse_angle(text, f"{name} heading", default_unit="deg")
 
 
 def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
