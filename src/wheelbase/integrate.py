@@ -25,7 +25,6 @@ of that step. Inputs given as a callable of time are evaluated at t, t + h/2 and
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,6 +35,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
+from wheelbase._io import write_csv
 from wheelbase._validate import as_float_array, check_choice, finite, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import se2_exp, to_world_frame, wrap_angle
@@ -288,16 +288,9 @@ class SimResult:
         """
         if self.is_batch:
             raise InputError("to_csv writes one robot; select one with result.robot(i)")
-        path = Path(path)
-        if path.exists() and not overwrite:
-            raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
-        header = ["t", "x", "y", "theta", *self.model.input_names]
-        with path.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(header)
-            for row in np.column_stack([self.t, self.poses, self.inputs]):
-                writer.writerow([repr(float(value)) for value in row])
-        return path
+        names = ["t", "x", "y", "theta", *self.model.input_names]
+        values = np.column_stack([self.t, self.poses, self.inputs]).T
+        return write_csv(path, dict(zip(names, values, strict=True)), overwrite=overwrite)
 
     def robot(self, index: int) -> SimResult:
         """The result of robot ``index`` of a batch, as a single-robot result."""

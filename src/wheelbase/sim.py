@@ -21,7 +21,6 @@ is the random one.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -31,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from wheelbase._io import write_csv
 from wheelbase._validate import as_float_array, positive
 from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
@@ -165,22 +165,7 @@ class Log:
         overwrite : bool
             Replace an existing file (default: raise FileExistsError).
         """
-        path = Path(path)
-        if path.exists() and not overwrite:
-            raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
-        columns = self.columns()
-        with path.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(list(columns))
-            for row in zip(*columns.values(), strict=True):
-                writer.writerow([_format(value) for value in row])
-        return path
-
-
-def _format(value: Any) -> str:
-    if isinstance(value, (np.integer, int)):
-        return str(int(value))
-    return repr(float(value))
+        return write_csv(path, self.columns(), overwrite=overwrite)
 
 
 Controller = Callable[[float, np.ndarray, Any], np.ndarray]

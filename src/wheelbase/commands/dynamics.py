@@ -16,7 +16,6 @@ writes ``reference.csv``, ``tracking.csv``, ``reference.png`` (figures 5.8–5.1
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -25,6 +24,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
+from wheelbase._io import write_csv
 from wheelbase._validate import check_choice, finite, nonnegative, positive
 from wheelbase.errors import ConfigError
 
@@ -89,11 +89,7 @@ def _prepare(out: Path, names: tuple[str, ...], force: bool) -> dict[str, Path]:
 
 
 def _write_csv(path: Path, columns: dict[str, np.ndarray]) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(list(columns))
-        for row in np.column_stack(list(columns.values())):
-            writer.writerow([f"{float(v):.10g}" for v in row])
+    write_csv(path, columns, overwrite=True)  # the command checked --force already
 
 
 def _preset(name: str, unconstrained: bool = False) -> Any:
