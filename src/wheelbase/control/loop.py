@@ -111,6 +111,15 @@ class ClosedLoopResult:
         return position, heading
 
 
+def _within(
+    poses: np.ndarray, goal: np.ndarray, tol_position: float, tol_heading: float
+) -> np.ndarray:
+    """Which robots ``(N, 3)`` are within the position [m] and heading [rad] tolerance."""
+    dx, dy = poses[:, 0] - goal[..., 0], poses[:, 1] - goal[..., 1]
+    dth = np.abs(np.angle(np.exp(1j * (poses[:, 2] - goal[..., 2]))))
+    return (np.hypot(dx, dy) <= tol_position) & (dth <= tol_heading)
+
+
 def command_to_inputs(
     command: np.ndarray, command_names: tuple[str, ...], model: KinematicModel
 ) -> np.ndarray:
@@ -211,9 +220,7 @@ def run_closed_loop(
     for k in range(times.size - 1):
         t = float(times[k])
         if goal is not None:
-            dx, dy = pose[:, 0] - goal[..., 0], pose[:, 1] - goal[..., 1]
-            dth = np.abs(np.angle(np.exp(1j * (pose[:, 2] - goal[..., 2]))))
-            inside = (np.hypot(dx, dy) <= tol_position) & (dth <= tol_heading)
+            inside = _within(pose, goal, tol_position, tol_heading)
             arrival = np.where(np.isnan(arrival) & inside, t, arrival)
             if stop_on_arrival and not np.any(np.isnan(arrival)):
                 last = k
@@ -227,9 +234,7 @@ def run_closed_loop(
         poses[k + 1] = pose
     else:
         if goal is not None:
-            dx, dy = pose[:, 0] - goal[..., 0], pose[:, 1] - goal[..., 1]
-            dth = np.abs(np.angle(np.exp(1j * (pose[:, 2] - goal[..., 2]))))
-            inside = (np.hypot(dx, dy) <= tol_position) & (dth <= tol_heading)
+            inside = _within(pose, goal, tol_position, tol_heading)
             arrival = np.where(np.isnan(arrival) & inside, times[-1], arrival)
     commands[last] = commands[last - 1] if last > 0 else commands[0]
     return ClosedLoopResult(
@@ -677,9 +682,7 @@ def run_dynamic_closed_loop(
     for k in range(times.size - 1):
         t = float(times[k])
         if goal is not None:
-            dx, dy = state[:, 0] - goal[..., 0], state[:, 1] - goal[..., 1]
-            dth = np.abs(np.angle(np.exp(1j * (state[:, 2] - goal[..., 2]))))
-            inside = (np.hypot(dx, dy) <= goal_tolerance[0]) & (dth <= goal_tolerance[1])
+            inside = _within(state[:, :3], goal, goal_tolerance[0], goal_tolerance[1])
             resting = (np.abs(state[:, 3]) <= rest_speed) & (np.abs(state[:, 5]) <= 2 * rest_speed)
             arrival = np.where(np.isnan(arrival) & inside & resting, t, arrival)
             if not np.any(np.isnan(arrival)):
