@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
 from scipy.special import ndtri
 
+from wheelbase._jax import X64, import_jax
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.control.base import (
     STEERING_COMMAND,
@@ -213,7 +214,7 @@ class MPPI:
             self._savgol = savgol_filter(np.eye(steps), window, order, axis=0, mode="interp")
         self._set_map(grid, footprint)
         if self.backend == "jax":
-            _import_jax()
+            import_jax()
         ahead = 1.2 * self.horizon_steps * self.dt * float(self._hi[0]) + 2.0 * self.path_spacing
         self._window_points = math.ceil(ahead / self.path_spacing) + 1
         self._tables: tuple[object, PathTables] | None = None
@@ -646,7 +647,7 @@ class MPPI:
 
     # ------------------------------------------------------------------ JAX
     def _costs_jax(self, pose, mean, lo, hi, window, info, last, w, noise):
-        jax, _jnp = _import_jax()
+        jax, _jnp = import_jax()
         if self._kind != _KIND_VELOCITY and self._kind not in (_KIND_REAR, _KIND_FRONT):
             raise ConfigError("the jax backend needs a unicycle, diff-drive or steered model")
         function = _jax_function(
@@ -657,7 +658,7 @@ class MPPI:
             pose, mean, lo, hi, window, info, last, noise, w, self._df,
             self._map, self._circles, np.array([self._circle_radius, self.dt, self._wheel_base]),
         )  # fmt: skip
-        with _x64(jax, self.jax_float64):
+        with X64(jax, self.jax_float64):
             costs, controls = function(*(np.asarray(v, dtype) for v in values))
             return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
 
@@ -684,32 +685,6 @@ def _model_kind(model: Any) -> tuple[int, float]:
     )
 
 
-def _import_jax():
-    try:
-        import jax
-        import jax.numpy as jnp
-    except ImportError:
-        raise ConfigError(
-            "backend='jax' needs JAX: install the extra with pip install 'wheelbase[jax]'"
-        ) from None
-    return jax, jnp
-
-
-class _x64:
-    """Enable float64 in JAX inside a block (restores the previous setting)."""
-
-    def __init__(self, jax: Any, enabled: bool) -> None:
-        self.jax, self.enabled = jax, enabled
-
-    def __enter__(self) -> None:
-        self.before = bool(self.jax.config.read("jax_enable_x64"))
-        if self.enabled:
-            self.jax.config.update("jax_enable_x64", True)
-
-    def __exit__(self, *exc: object) -> None:
-        self.jax.config.update("jax_enable_x64", self.before)
-
-
 _JAX_CACHE: dict = {}
 
 
@@ -717,7 +692,7 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
     key = (steps, stride, kind, float64)
     if key in _JAX_CACHE:
         return _JAX_CACHE[key]
-    jax, jnp = _import_jax()
+    jax, jnp = import_jax()
     lax = jax.lax
 
     def wrap(a):
