@@ -161,3 +161,12 @@ def test_bad_input_is_a_clear_error(kwargs, error, match):
     arguments = {"pose0": [0, 0, 0], "inputs": (0.8, 0.6), "t_end": 1.0, "dt": 0.1} | kwargs
     with pytest.raises(error, match=match):
         simulate(ROBOT, **arguments)
+
+
+def test_jax_backend_without_jax_names_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "jax", None)  # as if JAX were not installed
+    monkeypatch.setitem(sys.modules, "jax.numpy", None)
+    with pytest.raises(ConfigError, match=r"wheelbase\[jax\]"):
+        simulate(ROBOT, [0, 0, 0], (0.8, 0.6), t_end=1.0, dt=0.1, backend="jax")

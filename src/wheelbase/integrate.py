@@ -44,7 +44,7 @@ from wheelbase.models.base import KinematicModel
 __all__ = ["METHODS", "SimResult", "integrate_step", "simulate", "time_grid"]
 
 METHODS: tuple[str, ...] = ("euler", "midpoint", "rk4", "exact", "simpson")
-BACKENDS: tuple[str, ...] = ("auto", "numba", "numpy")
+BACKENDS: tuple[str, ...] = ("auto", "numba", "numpy", "jax")
 _METHOD_ID = {name: index for index, name in enumerate(METHODS)}
 
 InputsLike = ArrayLike | Callable[[float], ArrayLike]
@@ -380,9 +380,11 @@ def simulate(
     record_every : int
         Keep every ``record_every``-th step (and always the last) so that a long batch fits in
         memory.
-    backend : {"auto", "numba", "numpy"}
+    backend : {"auto", "numba", "numpy", "jax"}
         ``numpy`` is the reference implementation; ``numba`` runs compiled, parallel kernels
-        (same arithmetic, results equal to rounding); ``auto`` picks ``numba``.
+        (same arithmetic, results equal to rounding); ``jax`` runs one jit-compiled
+        ``lax.scan`` in float64 (extra ``wheelbase[jax]``; on a GPU when JAX has one; see
+        :mod:`wheelbase.integrate_jax`); ``auto`` picks ``numba``.
 
     Returns
     -------
@@ -418,7 +420,7 @@ def simulate(
     n_robots = poses0.shape[0]
     k = len(model.input_names)
     record = _record_indices(n_steps, int(record_every))
-    use_numba = backend != "numpy"
+    engine = {"auto": "numba"}.get(backend, backend)
 
     def per_robot(values: np.ndarray, what: str) -> np.ndarray:
         """Broadcast validated inputs (k,) or (N, k) to (N, k)."""
@@ -428,14 +430,14 @@ def simulate(
 
     if callable(inputs):
         return _simulate_callable(
-            model, poses0, inputs, times, method, record, per_robot, batch, use_numba, dt
+            model, poses0, inputs, times, method, record, per_robot, batch, engine, dt
         )
 
     values = model.validate_inputs(inputs)
     sampled_ndim = 3 if batch else 2
     if values.ndim == sampled_ndim:
         return _simulate_sampled(
-            model, poses0, values, times, method, record, per_robot, batch, use_numba, dt
+            model, poses0, values, times, method, record, per_robot, batch, engine, dt
         )
     if values.ndim > sampled_ndim:
         raise InputError(
@@ -444,9 +446,11 @@ def simulate(
         )
     constant = np.ascontiguousarray(per_robot(values, "inputs"))
     twist = np.ascontiguousarray(model.twist(constant))
-    if use_numba:
+    if engine == "numba":
         out = np.empty((record.size, n_robots, 3))
         _roll_constant(poses0, twist, times, _METHOD_ID[method], record, out)
+    elif engine == "jax":
+        out = _step_loop(poses0, times, method, record, lambda step: (twist,) * 3, engine)
     else:
         out = np.empty((record.size, n_robots, 3))
         pose = poses0.copy()
@@ -464,7 +468,7 @@ def simulate(
     return _result(times[record], out, used, model, method, batch, dt)
 
 
-def _simulate_sampled(model, poses0, values, times, method, record, per_robot, batch, numba_, dt):
+def _simulate_sampled(model, poses0, values, times, method, record, per_robot, batch, engine, dt):
     n_steps = times.size - 1
     if values.shape[0] not in (n_steps, n_steps + 1):
         raise InputError(
@@ -478,13 +482,13 @@ def _simulate_sampled(model, poses0, values, times, method, record, per_robot, b
         z = twists[step]
         return z, z, z
 
-    out = _step_loop(poses0, times, method, record, twist_at, numba_)
+    out = _step_loop(poses0, times, method, record, twist_at, engine)
     used = np.stack([rows[min(i, n_steps - 1)] for i in record])
     return _result(times[record], out, used, model, method, batch, dt)
 
 
 def _simulate_callable(
-    model, poses0, function, times, method, record, per_robot, batch, numba_, dt
+    model, poses0, function, times, method, record, per_robot, batch, engine, dt
 ):
     recorded_times = set(times[record].tolist())
     used_rows: dict[float, np.ndarray] = {}
@@ -511,13 +515,20 @@ def _simulate_callable(
         zm = twist_of(0.5 * (t0 + t1))
         return z0, zm, twist_of(t1)
 
-    out = _step_loop(poses0, times, method, record, twist_at, numba_)
+    out = _step_loop(poses0, times, method, record, twist_at, engine)
     used = np.stack([used_rows[t] for t in times[record].tolist()])
     return _result(times[record], out, used, model, method, batch, dt)
 
 
-def _step_loop(poses0, times, method, record, twist_at, use_numba):
+def _step_loop(poses0, times, method, record, twist_at, engine):
     n_steps = times.size - 1
+    if engine == "jax":
+        from wheelbase.integrate_jax import roll_twists
+
+        pose = poses0.copy()
+        pose[:, 2] = wrap_angle(pose[:, 2])
+        z0, zm, z1 = (np.stack(z) for z in zip(*(twist_at(k) for k in range(n_steps)), strict=True))
+        return roll_twists(pose, z0, zm, z1, np.diff(times), method)[record]
     out = np.empty((record.size, poses0.shape[0], 3))
     pose = poses0.copy()
     pose[:, 2] = wrap_angle(pose[:, 2])
@@ -530,7 +541,7 @@ def _step_loop(poses0, times, method, record, twist_at, use_numba):
     for step in range(n_steps):
         h = times[step + 1] - times[step]
         z0, zm, z1 = twist_at(step)
-        if use_numba:
+        if engine == "numba":
             kernel(pose, z0, zm, z1, h, method_id)
         else:
             pose = integrate_step(pose, z0, zm, z1, h, method)
