@@ -450,7 +450,11 @@ def simulate(
         out = np.empty((record.size, n_robots, 3))
         _roll_constant(poses0, twist, times, _METHOD_ID[method], record, out)
     elif engine == "jax":
-        out = _step_loop(poses0, times, method, record, lambda step: (twist,) * 3, engine)
+        from wheelbase.integrate_jax import roll_twists
+
+        pose = poses0.copy()
+        pose[:, 2] = wrap_angle(pose[:, 2])
+        out = roll_twists(pose, *(twist[None],) * 3, np.diff(times), method)[record]
     else:
         out = np.empty((record.size, n_robots, 3))
         pose = poses0.copy()

@@ -18,7 +18,7 @@ from wheelbase._jax import X64, import_jax
 
 __all__ = ["roll_twists"]
 
-_COMPILED: dict[tuple[str, bool], Any] = {}
+_COMPILED: dict[tuple[str, bool, bool], Any] = {}
 
 
 def _step_function(jnp: Any, method: str):
@@ -84,8 +84,9 @@ def roll_twists(
     ----------
     poses0 : numpy.ndarray, shape (N, 3)
         Initial poses [m, m, rad] (heading already wrapped).
-    z0, zm, z1 : numpy.ndarray, shape (S, N, 3)
-        Body twists at the start, middle and end of every step.
+    z0, zm, z1 : numpy.ndarray, shape (S, N, 3) or (1, N, 3)
+        Body twists at the start, middle and end of every step; a leading axis of 1 means
+        constant twists, which the compiled loop then keeps out of the per-step data.
     steps : numpy.ndarray, shape (S,)
         Step lengths [s].
     method : str
@@ -95,16 +96,21 @@ def roll_twists(
     """
     jax, jnp = import_jax()
     with X64(jax, float64):
-        key = (method, float64)
+        constant = z0.shape[0] == 1
+        key = (method, float64, constant)
         if key not in _COMPILED:
             step = _step_function(jnp, method)
 
             def run(pose, z0s, zms, z1s, hs):
                 def body(carry, inputs):
-                    new = step(carry, *inputs)
+                    if constant:
+                        new = step(carry, z0s[0], zms[0], z1s[0], inputs)
+                    else:
+                        new = step(carry, *inputs)
                     return new, new
 
-                _, trace = jax.lax.scan(body, pose, (z0s, zms, z1s, hs))
+                scanned = hs if constant else (z0s, zms, z1s, hs)
+                _, trace = jax.lax.scan(body, pose, scanned)
                 return jnp.concatenate([pose[None], trace], 0)
 
             _COMPILED[key] = jax.jit(run)
