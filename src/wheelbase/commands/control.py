@@ -1,4 +1,4 @@
-"""``wheelbase control``: run a pose law once, or the issue-5 benchmarks, and write the files.
+"""``wheelbase control``: one pose-law run, or the pose and tracking benchmarks, to files.
 
 ``wheelbase control --law polar --start 2 0 180deg --goal 0 0 0deg --out DIR`` drives a unicycle
 (|v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s by default) from the start to the goal with one pose law and
@@ -54,7 +54,7 @@ BENCHMARK_KEYS: tuple[str, ...] = (
     "mean_path_length_m",
     "reversals",
 )
-"""The per-law keys of ``benchmark.json`` that issue 5 names (more follow them)."""
+"""The per-law keys of ``benchmark.json`` (more follow them)."""
 
 RUN_FILES: tuple[str, ...] = ("run.csv", "run.png", "metrics.json")
 
@@ -301,7 +301,7 @@ def register(app: typer.Typer) -> None:
         dt: Annotated[float, typer.Option(help="Control period and step [s].")] = 0.01,
         force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
     ) -> None:
-        """Drive to a pose with one of the laws of issue 5, or benchmark them all."""
+        """Drive to a pose with one of the pose laws (document 002), or benchmark them all."""
         console = Console()
         if benchmark:
             report = control_benchmark_to_files(out, tracking=tracking, force=force)

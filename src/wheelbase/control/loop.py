@@ -284,7 +284,7 @@ def evaluate_pose_law(
     dt: float = 0.01,
     tolerance: tuple[float, float] = (0.01, math.radians(1.0)),
 ) -> tuple[dict[str, float], ClosedLoopResult]:
-    """Run a pose law from every start and summarise it (the issue-5 pose benchmark).
+    """Run a pose law from every start and summarise it (the 128-case pose benchmark).
 
     Parameters
     ----------
@@ -338,7 +338,7 @@ POSE_LAWS: tuple[str, ...] = (
     "via_direction",
     "line_arc",
 )
-"""Names of the pose laws of issue 5 (laws 1–6), in order."""
+"""Names of the pose laws (document 002 control list, laws 1–6), in order."""
 
 BENCHMARK_LIMITS = (0.5, 1.5)
 """|v| [m/s] and |ω| [rad/s] limits of the benchmarks."""
@@ -376,7 +376,7 @@ def pose_benchmark(
     t_end: float = 60.0,
     dt: float = 0.01,
 ) -> tuple[dict[str, dict[str, float]], dict[str, ClosedLoopResult]]:
-    """The issue-5 pose benchmark: every law from the 128 starts to the origin, on a unicycle.
+    """The pose benchmark: every law from the 128 starts to the origin, on a unicycle.
 
     |v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s, dt = 0.01 s, 60 s limit, success within 1 cm and 1°.
 
@@ -417,7 +417,7 @@ def pose_benchmark(
 
 
 def figure_eight_reference(duration: float = 30.0, dt: float = 0.01) -> Any:
-    """The figure-eight of issue 5: x = 1.1 + 0.7 sin(2πt/T), y = 0.9 + 0.7 sin(4πt/T).
+    """The figure-eight reference: x = 1.1 + 0.7 sin(2πt/T), y = 0.9 + 0.7 sin(4πt/T).
 
     Returns a :class:`wheelbase.models.PathReference` on the grid 0, dt, …, T, built from the
     analytic derivatives (document 002 eq. 10).
@@ -474,7 +474,7 @@ def three_point_turn_path(radius: float = 1.5, step: float = 0.05) -> Any:
 
 
 def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str, Any]]:
-    """The issue-5 tracking benchmark: laws 7 and 8 on the figure-eight and the cusp path.
+    """The tracking benchmark: laws 7 and 8 on the figure-eight and the cusp path.
 
     Figure-eight (T = 30 s, start (1.1, 0.8, 0)): the trackers (law 8) follow the timed
     reference; the path followers (law 7) follow its polyline at the mean reference speed.

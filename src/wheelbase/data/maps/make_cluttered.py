@@ -1,4 +1,4 @@
-"""Generate the bundled ``cluttered`` map (ROS ``map_server`` YAML + PNG) of the MPPI issue.
+"""Generate the bundled ``cluttered`` map (ROS ``map_server`` YAML + PNG) for the MPPI evaluation.
 
 Run ``python src/wheelbase/data/maps/make_cluttered.py``; the output is deterministic.
 
