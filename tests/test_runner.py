@@ -104,4 +104,7 @@ def test_mppi_scenario_runs_from_plain_gains():
     }
     metrics = run(scenario).metrics
     assert metrics["status"] == "arrived" and not metrics["collision"]
+    # The loop records what MPPI reported at each step; no step saw every rollout collide.
+    assert metrics["controller_statuses"].get("ok", 0) > 0
+    assert "all_collide" not in metrics["controller_statuses"]
     assert metrics["min_clearance_m"] > 0.05

@@ -494,6 +494,8 @@ def run(
     )
     metrics = {**base_metrics, **tracking_metrics(log, goals[-1])}
     metrics["trajectory_duration_s"] = end_time
+    if log.controller_statuses:
+        metrics["controller_statuses"] = dict(log.controller_statuses)
     deviation = distance_to_polyline(log.true_pose[:, :2], plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))

@@ -122,6 +122,9 @@ class Log:
         Names of the command columns.
     status : str
         One of :data:`STATUSES`.
+    controller_statuses : dict of str to int
+        How many steps a controller that reports a ``status`` (MPPI: ``ok``, ``all_collide``,
+        ``arrived``) reported each one.
     """
 
     t: np.ndarray
@@ -135,6 +138,7 @@ class Log:
     command_names: tuple[str, ...] = ("v", "omega")
     status: str = "timeout"
     extras: dict[str, np.ndarray] = field(default_factory=dict)
+    controller_statuses: dict[str, int] = field(default_factory=dict)
 
     def columns(self) -> dict[str, np.ndarray]:
         """The log as named columns (what :meth:`to_csv` writes)."""
@@ -263,6 +267,7 @@ def run_loop(
     rows_t, rows_true, rows_est, rows_ref = [], [], [], []
     rows_cmd, rows_rates, rows_ticks = [], [], []
     twist_true = np.zeros(3)
+    statuses: dict[str, int] = {}
     twist_estimate = np.zeros(3)
     status = "timeout"
     limit = min(duration, end_time + settle_time) if settle_time > 0 else duration
@@ -271,6 +276,9 @@ def run_loop(
         t = step * dt
         measured = estimate if dynamics is None else np.concatenate([estimate, twist_estimate])
         command = np.asarray(controller(t, measured.copy(), reference), dtype=np.float64)
+        reported = getattr(controller, "status", None)
+        if isinstance(reported, str):
+            statuses[reported] = statuses.get(reported, 0) + 1
         if command.shape != (2,) or not np.all(np.isfinite(command)):
             status = "diverged"
             command = np.zeros(2)
@@ -344,6 +352,7 @@ def run_loop(
         torques=commands if dynamics is not None else None,
         command_names=command_names,
         status=status,
+        controller_statuses=statuses,
     )
 
 
