@@ -129,3 +129,15 @@ def test_start_in_an_obstacle_writes_a_failed_partial_report(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["status"] == "failed" and "obstacle" in metrics["error"]
     assert not (out / "log.csv").exists()
+
+
+def test_control_law_mppi_runs_on_a_map(tmp_path):
+    out = tmp_path / "mppi"
+    result = invoke(
+        "control", "--law", "mppi", "--map", "cluttered", "--start", "1", "4", "0deg",
+        "--goal", "5", "4", "0deg", "--out", out,
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "arrived" and metrics["min_clearance_m"] > 0.05
+    assert (out / "animation.gif").exists()

@@ -273,6 +273,26 @@ def _tracking_table(rows: list[dict[str, Any]]) -> Table:
     return view
 
 
+def _mppi_run(map_name, start, goal, out, *, force, max_speed, max_yaw_rate, t_end) -> None:
+    """MPPI on a map through the closed loop of :func:`wheelbase.run` (a unicycle robot)."""
+    from wheelbase.commands.run import _run_and_report
+
+    scenario = {
+        "name": "mppi",
+        "map": map_name,
+        "robot": {"model": "unicycle", "footprint": [0.4, 0.4]},
+        "controller": {"law": "mppi", "gains": {"max_yaw_rate": max_yaw_rate}},
+        "odometry": {"mode": "perfect"},
+        "start": [start[0], start[1], math.degrees(start[2])],
+        "goal": [goal[0], goal[1], math.degrees(goal[2])],
+        "trajectory": {"max_speed": max_speed, "max_yaw_rate": max_yaw_rate},
+        "goal_tolerance": [0.1, 180.0],
+        "dt": 0.05,
+        "duration": t_end,
+    }
+    _run_and_report(scenario, Path(out), force=force, gif=True, console=Console())
+
+
 # --------------------------------------------------------------------------- command
 def register(app: typer.Typer) -> None:
     """Add ``wheelbase control`` to ``app``."""
@@ -280,7 +300,17 @@ def register(app: typer.Typer) -> None:
     @app.command("control")
     def control(
         out: Annotated[Path, typer.Option("--out", help="Output directory.")],
-        law: Annotated[str, typer.Option(help=f"Pose law: {', '.join(POSE_LAWS)}.")] = "polar",
+        law: Annotated[
+            str, typer.Option(help=f"Pose law: {', '.join(POSE_LAWS)}; or mppi (with --map).")
+        ] = "polar",
+        map_name: Annotated[
+            str,
+            typer.Option(
+                "--map",
+                help="With --law mppi: bundled map name or map file (Hybrid A* plans the path "
+                "MPPI follows); 'empty' for none.",
+            ),
+        ] = "empty",
         start: Annotated[
             tuple[str, str, str] | None,
             typer.Option(help="Start pose X [m] Y [m] ANGLE (90deg, 1.57rad; bare = rad)."),
@@ -312,6 +342,10 @@ def register(app: typer.Typer) -> None:
             return
         if start is None:
             raise ConfigError("--start X Y ANGLE is required unless --benchmark")
+        if law == "mppi":
+            _mppi_run(map_name, _pose(start, "start"), _pose(goal, "goal"), out, force=force,
+                      max_speed=max_speed, max_yaw_rate=max_yaw_rate, t_end=t_end)  # fmt: skip
+            return
         if law not in POSE_LAWS:
             raise ConfigError(f"unknown law {law!r}; allowed: {', '.join(POSE_LAWS)}")
         metrics = control_run_to_files(
