@@ -102,8 +102,16 @@ def test_mppi_scenario_runs_from_plain_gains():
         "dt": 0.05,
         "duration": 30.0,
     }
-    metrics = run(scenario).metrics
+    result = run(scenario)
+    metrics = result.metrics
     assert metrics["status"] == "arrived" and not metrics["collision"]
+    # Fans of sampled rollouts are kept once a second for the animation.
+    fans = result.log.rollout_fans
+    assert len(fans) >= int(metrics["duration_s"]) - 1
+    first = fans[min(fans)]
+    assert first.shape[0] == 20 and first.shape[2] == 2
+    start = np.broadcast_to(result.log.true_pose[min(fans), :2], first[:, 0].shape)
+    np.testing.assert_allclose(first[:, 0], start, atol=1e-9)  # rollouts start at the robot
     # The loop records what MPPI reported at each step; no step saw every rollout collide.
     assert metrics["controller_statuses"].get("ok", 0) > 0
     assert "all_collide" not in metrics["controller_statuses"]

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 from numpy.typing import ArrayLike
@@ -432,6 +433,7 @@ def animate(
     title: str | None = None,
     center_offset: float = 0.0,
     background: Callable[[Axes], None] | None = None,
+    overlay: Callable[[int], Sequence[np.ndarray]] | None = None,
 ) -> Path:
     """Write a GIF of the robot footprint moving along its path, with the path trace.
 
@@ -465,6 +467,9 @@ def animate(
     background : callable, optional
         ``background(ax)`` draws the static part (a map, a plan) once, after the axes limits
         are set from the path; it may change the limits.
+    overlay : callable, optional
+        ``overlay(k)`` returns polylines ``(M, 2)`` [m] drawn thinly in the frame of recorded
+        pose ``k`` (e.g. a controller's sampled rollouts); an empty sequence draws none.
 
     Returns
     -------
@@ -526,7 +531,9 @@ def animate(
 
     canvas = FigureCanvasAgg(fig)
     fig.set_dpi(positive("dpi", dpi, "dots/inch"))
-    moving = [*trails, *bodies, *noses, heading]
+    extra = LineCollection([], colors="tab:purple", linewidths=0.5, alpha=0.6)
+    ax.add_collection(extra)
+    moving = [extra, *trails, *bodies, *noses, heading]
     for artist in moving:
         artist.set_animated(True)
     canvas.draw()  # lays out and renders the static part once
@@ -541,6 +548,7 @@ def animate(
             front = 0.5 * (corners[k, i, 1] + corners[k, i, 2])
             noses[i].set_data([poses[k, i, 0], front[0]], [poses[k, i, 1], front[1]])
         heading.set_text(f"{prefix}t = {t[k]:.1f} s")
+        extra.set_segments(list(overlay(int(k))) if overlay is not None else [])
         for artist in moving:
             fig.draw_artist(artist)
         images.append(

@@ -256,10 +256,19 @@ def animate_run(
             ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.2)
         _zoom(ax, grid, plan_poses, log)
 
+    fan_rows = np.array(sorted(log.rollout_fans))
+
+    def overlay(k: int) -> list[np.ndarray]:
+        # The latest fan at or before this frame, shown while it is younger than 1.5 s.
+        if fan_rows.size == 0 or k < fan_rows[0]:
+            return []
+        row = int(fan_rows[np.searchsorted(fan_rows, k, side="right") - 1])
+        return list(log.rollout_fans[row]) if log.t[k] - log.t[row] < 1.5 else []
+
     run = SimpleNamespace(t=log.t, poses=log.true_pose)
     return animate(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
-        overwrite=True, background=background, title=log.status,
+        overwrite=True, background=background, title=log.status, overlay=overlay,
     )  # fmt: skip
 
 

@@ -42,6 +42,7 @@ from wheelbase.timing import SpeedLimits, time_parametrize
 __all__ = ["LAWS", "Robot", "RunResult", "build_robot", "run"]
 
 SETTLE_TIME = 15.0  # s after the end of the trajectory
+FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
 TURNING_MARGIN = 1.2
 
 
@@ -491,6 +492,7 @@ def run(
         settle_time=SETTLE_TIME,
         progress=None if progress is None else lambda t: progress(t, end_time),
         dynamics=robot.dynamics if dynamic else None,
+        fan_every=max(1, round(FAN_PERIOD / scenario.dt)),
     )
     metrics = {**base_metrics, **tracking_metrics(log, goals[-1])}
     metrics["trajectory_duration_s"] = end_time

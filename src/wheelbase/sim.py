@@ -125,6 +125,9 @@ class Log:
     controller_statuses : dict of str to int
         How many steps a controller that reports a ``status`` (MPPI: ``ok``, ``all_collide``,
         ``arrived``) reported each one.
+    rollout_fans : dict of int to numpy.ndarray
+        For a sampling controller (MPPI), some of its sampled rollouts ``(K, H + 1, 2)`` [m]
+        at a few steps (key: row of the log), for drawing.
     """
 
     t: np.ndarray
@@ -139,6 +142,7 @@ class Log:
     status: str = "timeout"
     extras: dict[str, np.ndarray] = field(default_factory=dict)
     controller_statuses: dict[str, int] = field(default_factory=dict)
+    rollout_fans: dict[int, np.ndarray] = field(default_factory=dict)
 
     def columns(self) -> dict[str, np.ndarray]:
         """The log as named columns (what :meth:`to_csv` writes)."""
@@ -195,6 +199,8 @@ def run_loop(
     settle_time: float = 0.0,
     progress: Callable[[float], None] | None = None,
     dynamics: Any = None,
+    fan_every: int = 0,
+    fan_size: int = 20,
 ) -> Log:
     """Run a closed loop from ``pose0`` until arrival, collision or ``duration``.
 
@@ -247,6 +253,11 @@ def run_loop(
         called with the estimated state (x, y, θ, u, v, r) of shape (6,) — the twist estimated
         from the encoder ticks of the last step (or the true one with perfect state); the
         state (pose, twist) is integrated with RK4 under torques held over the step, from rest.
+    fan_every : int
+        Every this many steps (0: never), keep ``fan_size`` of the sampled rollouts of a
+        controller that has them (``last_plan.samples`` and ``predict``, as MPPI).
+    fan_size : int
+        Rollouts kept per fan.
 
     Returns
     -------
@@ -268,6 +279,7 @@ def run_loop(
     rows_cmd, rows_rates, rows_ticks = [], [], []
     twist_true = np.zeros(3)
     statuses: dict[str, int] = {}
+    fans: dict[int, np.ndarray] = {}
     twist_estimate = np.zeros(3)
     status = "timeout"
     limit = min(duration, end_time + settle_time) if settle_time > 0 else duration
@@ -276,6 +288,11 @@ def run_loop(
         t = step * dt
         measured = estimate if dynamics is None else np.concatenate([estimate, twist_estimate])
         command = np.asarray(controller(t, measured.copy(), reference), dtype=np.float64)
+        if fan_every > 0 and step % fan_every == 0:
+            plan = getattr(controller, "last_plan", None)
+            if plan is not None and getattr(plan, "samples", None) is not None:
+                rollouts = controller.predict(plan, plan.samples[:fan_size])
+                fans[len(rows_t)] = np.asarray(rollouts)[..., :2]
         reported = getattr(controller, "status", None)
         if isinstance(reported, str):
             statuses[reported] = statuses.get(reported, 0) + 1
@@ -353,6 +370,7 @@ def run_loop(
         command_names=command_names,
         status=status,
         controller_statuses=statuses,
+        rollout_fans=fans,
     )
 
 
