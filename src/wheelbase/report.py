@@ -6,7 +6,6 @@ ran on) into numbers and pictures. Nothing here changes a result.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -270,11 +269,6 @@ def animate_run(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
         overwrite=True, background=background, title=log.status, overlay=overlay,
     )  # fmt: skip
-
-
-def heading_deg(value: float) -> float:
-    """Degrees of an angle in radians, wrapped to (−180, 180]."""
-    return math.degrees(float(wrap_angle(value)))
 
 
 REPORT_FILES = (

@@ -569,13 +569,7 @@ def _footprint(robot: Robot):
 
 
 def _check_free(grid, robot: Robot, pose: np.ndarray, name: str) -> None:
-    x0, y0 = grid.origin
-    rows, cols = grid.occupied.shape
-    inside = (
-        x0 <= pose[0] <= x0 + cols * grid.resolution
-        and y0 <= pose[1] <= y0 + rows * grid.resolution
-    )
-    if not inside:
+    if not grid.contains(pose[:2]):
         raise PlanningError(f"{name} ({pose[0]:g}, {pose[1]:g}) is outside the map")
     if grid.in_collision(_footprint(robot), pose):
         raise PlanningError(

@@ -279,6 +279,8 @@ def run_loop(
     rows_cmd, rows_rates, rows_ticks = [], [], []
     twist_true = np.zeros(3)
     statuses: dict[str, int] = {}
+    nominal = OdometrySetup(odometry.wheel_radius, odometry.half_track)
+    geometry_error = odometry.radius_scale != (1.0, 1.0) or odometry.track_scale != 1.0
     fans: dict[int, np.ndarray] = {}
     twist_estimate = np.zeros(3)
     status = "timeout"
@@ -303,16 +305,12 @@ def run_loop(
             twist = twist_true
             rates = odometry.true_wheel_rates(twist)
         else:
+            # The command was computed for the nominal geometry: the wheels turn at the rates
+            # the nominal geometry asks for, and the true geometry decides the motion.
             twist = np.asarray(model.twist(command_to_inputs(command)), dtype=np.float64)
-            rates = odometry.true_wheel_rates(twist)
-        if dynamics is None and (
-            odometry.radius_scale != (1.0, 1.0) or odometry.track_scale != 1.0
-        ):
-            # The command was computed for the nominal geometry; the true wheels turn at the
-            # rates the nominal geometry asks for, and the true geometry decides the motion.
-            nominal = OdometrySetup(odometry.wheel_radius, odometry.half_track)
             rates = nominal.true_wheel_rates(twist)
-            twist = odometry.true_twist(rates)
+            if geometry_error:
+                twist = odometry.true_twist(rates)
 
         rows_t.append(t)
         rows_true.append(pose.copy())
