@@ -454,7 +454,7 @@ def simulate(
 
         pose = poses0.copy()
         pose[:, 2] = wrap_angle(pose[:, 2])
-        out = roll_twists(pose, *(twist[None],) * 3, np.diff(times), method)[record]
+        out = roll_twists(pose, *(twist[None],) * 3, np.diff(times), method, record)
     else:
         out = np.empty((record.size, n_robots, 3))
         pose = poses0.copy()
@@ -532,7 +532,7 @@ def _step_loop(poses0, times, method, record, twist_at, engine):
         pose = poses0.copy()
         pose[:, 2] = wrap_angle(pose[:, 2])
         z0, zm, z1 = (np.stack(z) for z in zip(*(twist_at(k) for k in range(n_steps)), strict=True))
-        return roll_twists(pose, z0, zm, z1, np.diff(times), method)[record]
+        return roll_twists(pose, z0, zm, z1, np.diff(times), method, record)
     out = np.empty((record.size, poses0.shape[0], 3))
     pose = poses0.copy()
     pose[:, 2] = wrap_angle(pose[:, 2])

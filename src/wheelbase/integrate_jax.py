@@ -4,7 +4,8 @@ The same step formulas as :func:`wheelbase.integrate.integrate_step`, written wi
 ``jax.numpy`` and run over all steps by one ``jax.jit``-compiled ``lax.scan``; on a GPU this
 keeps a large batch on the device for the whole run. The twists at the start, middle and end of
 every step are computed by the model in NumPy first (models are NumPy code), so a run holds
-three ``(steps, N, 3)`` arrays; use ``record_every`` to keep the recorded poses small.
+three ``(steps, N, 3)`` arrays (one when the inputs are constant); only the poses that
+``record_every`` keeps leave the compiled loop.
 Float64 by default, so that results equal the NumPy backend to rounding; ``float32`` on request.
 """
 
@@ -61,9 +62,12 @@ def _step_function(jnp: Any, method: str):
             rate = world(theta, z0) + 4.0 * world(theta_mid, zm) + world(theta_end, z1)
             new = pose + h / 6.0 * rate
             new = new.at[..., 2].set(theta_end)
-        wrapped = jnp.arctan2(jnp.sin(new[..., 2]), jnp.cos(new[..., 2]))
-        wrapped = jnp.where(wrapped <= -jnp.pi, jnp.pi, wrapped)
-        return new.at[..., 2].set(wrapped)
+        # θ − 2π·round(θ/2π) wraps any angle at a fraction of the cost of atan2(sin, cos), and
+        # equals it to rounding; −π maps to π as everywhere in wheelbase.
+        theta = new[..., 2]
+        theta = theta - (2.0 * jnp.pi) * jnp.round(theta / (2.0 * jnp.pi))
+        theta = jnp.where(theta <= -jnp.pi, jnp.pi, theta)
+        return new.at[..., 2].set(theta)
 
     return step
 
@@ -75,10 +79,11 @@ def roll_twists(
     z1: np.ndarray,
     steps: np.ndarray,
     method: str,
+    record: np.ndarray | None = None,
     *,
     float64: bool = True,
 ) -> np.ndarray:
-    """Integrate N robots over S steps on JAX; returns the poses ``(S + 1, N, 3)``.
+    """Integrate N robots over S steps on JAX; returns the recorded poses ``(R, N, 3)``.
 
     Parameters
     ----------
@@ -91,29 +96,55 @@ def roll_twists(
         Step lengths [s].
     method : str
         One of :data:`wheelbase.integrate.METHODS`.
+    record : numpy.ndarray, optional
+        Step indices to keep: 0, e, 2e, ... and S (what ``simulate`` asks for with
+        ``record_every = e``); default every step.
     float64 : bool
         Compute in float64 (default) or float32.
     """
     jax, jnp = import_jax()
+    n_steps = steps.shape[0]
+    if record is None:
+        record = np.arange(n_steps + 1)
+    every = int(record[1] - record[0]) if record.size > 1 else max(n_steps, 1)
+    # Only the kept poses leave the loop: an outer scan over records, an inner one over the
+    # `every` steps between them. The steps are padded to a whole number of chunks with steps
+    # of length 0, which leave a pose exactly as it is.
+    chunks = record.size - 1
+    padded = chunks * every
+    hs = np.zeros(padded)
+    hs[:n_steps] = steps
+    constant = z0.shape[0] == 1
+    if not constant:
+        z0, zm, z1 = (np.concatenate([z, np.zeros((padded - n_steps, *z.shape[1:]))]) for z in
+                      (z0, zm, z1))  # fmt: skip
     with X64(jax, float64):
-        constant = z0.shape[0] == 1
         key = (method, float64, constant)
         if key not in _COMPILED:
-            step = _step_function(jnp, method)
-
-            def run(pose, z0s, zms, z1s, hs):
-                def body(carry, inputs):
-                    if constant:
-                        new = step(carry, z0s[0], zms[0], z1s[0], inputs)
-                    else:
-                        new = step(carry, *inputs)
-                    return new, new
-
-                scanned = hs if constant else (z0s, zms, z1s, hs)
-                _, trace = jax.lax.scan(body, pose, scanned)
-                return jnp.concatenate([pose[None], trace], 0)
-
-            _COMPILED[key] = jax.jit(run)
+            _COMPILED[key] = jax.jit(_run_function(jax, jnp, method, constant))
         dtype = jnp.float64 if float64 else jnp.float32
-        args = [jnp.asarray(a, dtype=dtype) for a in (poses0, z0, zm, z1, steps)]
+        shape = (chunks, every)
+        args = [jnp.asarray(poses0, dtype=dtype), jnp.asarray(hs.reshape(shape), dtype=dtype)]
+        args += [jnp.asarray(z if constant else z.reshape(*shape, *z.shape[1:]), dtype=dtype)
+                 for z in (z0, zm, z1)]  # fmt: skip
         return np.asarray(_COMPILED[key](*args), dtype=np.float64)
+
+
+def _run_function(jax: Any, jnp: Any, method: str, constant: bool):
+    step = _step_function(jnp, method)
+
+    def run(pose, hs, z0s, zms, z1s):
+        def inner(carry, inputs):
+            if constant:
+                return step(carry, z0s[0], zms[0], z1s[0], inputs), None
+            return step(carry, *inputs[1:], inputs[0]), None
+
+        def outer(carry, inputs):
+            new, _ = jax.lax.scan(inner, carry, inputs)
+            return new, new
+
+        scanned = hs if constant else (hs, z0s, zms, z1s)
+        _, trace = jax.lax.scan(outer, pose, scanned)
+        return jnp.concatenate([pose[None], trace], 0)
+
+    return run
