@@ -12,7 +12,8 @@ Prints one JSON object:
   as a path) and the three-point-turn path with two cusps, on the unicycle and the rear-wheel
   bicycle (L = 0.05 m on the figure-eight, 0.5 m on the cusp path, |δ| <= 35°): RMS and max
   distance to the path after 5 s, final distance to its end and reversals, for MPPI (numba,
-  500 × 30, dt 0.05 s, |v| <= 0.35 / 0.3 m/s), pure pursuit and rear-wheel feedback at the mean
+  500 × 30, dt 0.05 s, σ = (0.15 m/s, 0.4 rad/s or rad), |v| <= 0.35 / 0.3 m/s, stopping within
+  1 cm and 0.1 rad of the end), pure pursuit and rear-wheel feedback at the mean
   reference speed (0.22 / 0.3 m/s), all in this run (the figure-eight is closed: its end is its
   start, so also see ``path_length_driven_m``);
 - ``clearance``: the cluttered map's straight reference through three discs whose edges are
@@ -121,14 +122,14 @@ def tracking() -> list[dict]:
         steer = math.radians(35.0)
         bike = RearWheelBicycle(wheel_base=wheel_base, max_steering=steer)
         plants = (
-            ("unicycle", Unicycle(), {"limits": LIMITS}, VelocityLimits(v_mppi, 1.5), (0.2, 0.5)),
+            ("unicycle", Unicycle(), {"limits": LIMITS}, VelocityLimits(v_mppi, 1.5), (0.15, 0.4)),
             (
                 "bicycle",
                 bike,
                 {"output": "steering", "wheel_base": wheel_base,
                  "limits": SteeringLimits(steer, max_steering_rate=3.0)},
                 SteeringLimits(steer, max_speed=v_mppi),
-                (0.2, 0.3),
+                (0.15, 0.4),
             ),
         )  # fmt: skip
         for plant, model, options, mppi_limits, noise in plants:
@@ -136,7 +137,7 @@ def tracking() -> list[dict]:
                 "pure_pursuit": PurePursuit(speed=v, **options),
                 "rear_wheel_feedback": RearWheelFeedback(speed=v, **options),
                 "mppi": MPPI(model, 30, 0.05, 500, noise, 0.03, None, mppi_limits,
-                             backend="numba"),
+                             backend="numba", goal_tolerance=(0.01, 0.1)),
             }  # fmt: skip
             for law_name, law in laws.items():
                 begin = time.perf_counter()

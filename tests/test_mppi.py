@@ -143,7 +143,8 @@ def test_tiny_temperature_picks_the_best_sample():
     mppi = MPPI(Unicycle(), 20, 0.05, 64, (0.2, 0.5), 1e-9, None, LIMITS, savgol_window=0)
     noise = np.random.default_rng(0).standard_normal((64, 20, 2)) * (0.2, 0.5)
     plan = mppi.plan((1.0, 4.1, 0.0), STRAIGHT, noise)
-    best = np.clip(noise[np.argmin(plan.costs)], (-0.5, -1.5), (0.5, 1.5))
+    # a forward path section: the speed is sampled in [0, max_speed]
+    best = np.clip(noise[np.argmin(plan.costs)], (0.0, -1.5), (0.5, 1.5))
     np.testing.assert_allclose(plan.controls, best, atol=1e-12)
 
 
@@ -236,6 +237,7 @@ def test_batch_shape_and_one_robot_only():
         ({"backend": "cuda"}, "backend"),
         ({"limits": VelocityLimits(max_speed=0.5)}, "finite"),
         ({"savgol_window": 4}, "savgol_window"),
+        ({"approach_deceleration": 0.0}, "approach_deceleration"),
     ],
 )
 def test_bad_parameters(change, match):
@@ -287,9 +289,10 @@ def test_figure_eight_tracking_beside_pure_pursuit():
                 VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba")  # fmt: skip
     result = run_closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
     rms, worst = lateral_errors(result, eight)
-    rms_pp, _worst_pp = lateral_errors(pp, eight)
-    assert rms < 0.02 and worst < 0.06
-    assert rms < 3.0 * rms_pp
+    rms_pp, worst_pp = lateral_errors(pp, eight)
+    # measured 3.3 / 13 mm beside pure pursuit's 5.9 / 17 mm
+    assert rms < rms_pp and worst < worst_pp
+    assert result.reversals[0] <= 2  # no twitching backwards on a forward path
     # went all the way round (the path is closed: its end is its start)
     assert result.path_length[0] > 0.97 * eight.length
     assert np.hypot(*(result.poses[-1, 0, :2] - eight.points[-1])) < 0.05
@@ -327,7 +330,12 @@ def test_cusp_path_reverses_and_arrives(model, limits, noise):
     result = run_closed_loop(mppi, model, (0.0, 0.05, 0.0), path, 40.0, 0.05)
     assert mppi.status == "arrived"
     assert np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])) <= 0.05
-    assert 2 <= result.reversals[0] <= 10  # the two cusps, and a little dithering at them
+    assert 2 <= result.reversals[0] <= 6  # the two cusps (and a correction at the goal)
+    # in the sections before the goal, the speed keeps the sign of the path section
+    v = result.commands[:, 0, 0]
+    near_goal = np.hypot(*(result.poses[: v.size, 0, :2] - path.points[-1]).T) < 0.5
+    section = np.cumsum(np.abs(np.diff(np.sign(v), prepend=1.0)) > 1.0)
+    assert section[~near_goal].max() <= 2
     assert path.distance(result.poses[:, 0, :2]).max() < 0.15
     np.testing.assert_array_equal(result.commands[-2, 0], [0.0, 0.0])
 
@@ -388,3 +396,40 @@ def test_benchmark_quick_prints_the_promised_json():
     assert ("figure_eight", "unicycle", "pure_pursuit") in laws
     clearance = report["clearance"]
     assert clearance["pure_pursuit_collides"] and clearance["mppi_success_rate"] == 1.0
+
+
+def test_closed_path_is_driven_round_before_arriving():
+    # the figure-eight ends where it starts: arriving needs the progress near the end too
+    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, None,
+                VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba",
+                goal_tolerance=(0.2, 3.0))  # fmt: skip
+    result = run_closed_loop(mppi, Unicycle(), (1.1, 0.8, 0.0), eight, 3.0, 0.05)
+    assert mppi.status == "ok" and result.path_length[0] > 0.5
+
+
+def test_speed_is_capped_into_a_cusp():
+    # 2 cm before the cusp of a forward-then-reverse path: |v| <= √(2·a·d) with a = 0.5 m/s²
+    path = Polyline([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
+    mppi = make(samples=200, approach_deceleration=0.5, cusp_tolerance=0.01)
+    for _ in range(5):
+        command = mppi(0.0, (1.98, 0.0, 0.0), path)
+        assert 0.0 <= command[0] <= math.sqrt(2.0 * 0.5 * 0.02) + 1e-12
+        plan = mppi.last_plan
+        assert np.all(plan.samples[..., 0] >= 0.0)  # the forward section samples v >= 0
+
+
+def test_cusp_is_passed_when_the_robot_crosses_its_line():
+    # 8 cm beside the cusp (outside cusp_tolerance) but past it: the reverse section is active
+    path = Polyline([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
+    mppi = make(samples=100)
+    mppi(0.0, (1.7, 0.0, 0.0), path)
+    assert mppi._section == 0
+    command = mppi(0.0, (2.01, 0.08, 0.0), path)
+    assert mppi._section == 1 and command[0] <= 0.0
+
+
+def test_reverse_against_path_samples_both_signs():
+    mppi = make(samples=400, reverse_against_path=True)
+    mppi(0.0, (2.0, 4.0, 0.0), STRAIGHT)
+    assert np.any(mppi.last_plan.samples[..., 0] < 0.0)

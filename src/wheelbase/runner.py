@@ -440,11 +440,15 @@ def run(
         raise ScenarioError(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
+    gains = dict(scenario.controller.gains)
+    if scenario.controller.law == "mppi":
+        # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
+        # true pose, off by the odometry drift, still lands inside it.
+        position, heading_deg = scenario.goal_tolerance
+        gains.setdefault("goal_tolerance", (0.5 * position, 0.5 * math.radians(heading_deg)))
     controller, reference_kind = _field(
         "controller.gains",
-        lambda: _build_controller(
-            scenario.controller.law, robot, scenario.controller.gains, limits, grid
-        ),
+        lambda: _build_controller(scenario.controller.law, robot, gains, limits, grid),
     )
 
     dynamic = scenario.plant == "dynamic"

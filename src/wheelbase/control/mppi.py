@@ -4,7 +4,9 @@ Each call (Williams et al., "Information-theoretic MPC for model-based reinforce
 ICRA 2017; the form of Nav2's MPPI controller):
 
 1. warm start: the previous optimal command sequence U (T, 2), shifted by one step;
-2. K samples V_i = clip(U + ε_i, limits) with Gaussian ε_i ~ N(0, diag(σ²));
+2. K samples V_i = clip(U + ε_i, limits) with Gaussian ε_i ~ N(0, diag(σ²)); this call's
+   limits keep v at the sign of the path section (unless ``reverse_against_path``, near the goal
+   or where the path is blocked) and cap |v| at √(2·a·d) before a cusp or the goal, d away;
 3. each V_i is rolled out from the measured pose through the model's body twist with the
    Euler step of :func:`wheelbase.integrate.integrate_step` (the same arithmetic);
 4. the critics of :mod:`wheelbase.control.mppi_critics` score each rollout: S_i;
@@ -128,6 +130,15 @@ class MPPI:
         a point robot).
     allow_reverse : bool
         Whether v may be negative (down to −max_speed); otherwise v >= 0.
+    reverse_against_path : bool
+        Sample speeds of both signs all along the path (Nav2's way; the ``prefer_forward``
+        critic then penalises the wrong sign). Off by default: v keeps the sign of the current
+        path section except near the goal and where the path ahead is blocked, which stops the
+        robot twitching back and forth where its best speed is about zero.
+    approach_deceleration : float
+        a [m/s²], > 0: the speed is capped at √(2·a·d) with d the distance left to the next
+        cusp or the goal (at least 10 % of the top speed), so the robot stops at them instead of
+        overshooting.
     savgol_window : int
         Savitzky–Golay window (odd, >= 3; shortened to fit the horizon); 0 switches it off.
     path_spacing : float
@@ -167,10 +178,12 @@ class MPPI:
         grid: Any = None,
         footprint: Any = None,
         allow_reverse: bool = True,
+        reverse_against_path: bool = False,
+        approach_deceleration: float = 0.5,
         savgol_window: int = 9,
         path_spacing: float = 0.05,
         goal_tolerance: tuple[float, float] = (0.05, 0.25),
-        cusp_tolerance: float = 0.15,
+        cusp_tolerance: float = 0.05,
         jax_float64: bool = False,
     ) -> None:
         self.model = model
@@ -196,6 +209,10 @@ class MPPI:
             positive("goal heading tolerance", goal_tolerance[1], "rad"),
         )
         self.allow_reverse = bool(allow_reverse)
+        self.reverse_against_path = bool(reverse_against_path)
+        self.approach_deceleration = positive(
+            "approach_deceleration", approach_deceleration, "m/s²"
+        )
         self.jax_float64 = bool(jax_float64)
         self._kind, self._wheel_base = _model_kind(model)
         self.command_names = STEERING_COMMAND if self._kind != _KIND_VELOCITY else VELOCITY_COMMAND
@@ -241,7 +258,8 @@ class MPPI:
             Robot outline.
         **gains
             ``horizon_steps`` (56), ``dt`` (0.05 s), ``samples`` (2000), ``noise_std``
-            ((0.2, 0.5)), ``temperature`` (0.03), ``seed`` (0), ``backend`` ("numba"),
+            ((0.2, 0.4): Nav2's σ of v and ω), ``temperature`` (0.03), ``seed`` (0),
+            ``backend`` ("numba"),
             ``max_speed`` (0.5 m/s), ``max_yaw_rate`` (1.5 rad/s, velocity commands) or
             ``max_steering`` (the model's, steered models), any keyword of :class:`MPPI`
             (``allow_reverse``, ``savgol_window``, ...) and any critic weight of
@@ -274,8 +292,8 @@ class MPPI:
             limits = SteeringLimits(min(steering, 1.5), max_speed=max_speed)
         allowed = {
             "horizon_steps", "dt", "samples", "noise_std", "temperature", "seed", "backend",
-            "allow_reverse", "savgol_window", "path_spacing", "goal_tolerance",
-            "cusp_tolerance", "jax_float64",
+            "allow_reverse", "reverse_against_path", "approach_deceleration", "savgol_window",
+            "path_spacing", "goal_tolerance", "cusp_tolerance", "jax_float64",
         }  # fmt: skip
         unknown = sorted(set(options) - allowed)
         if unknown:
@@ -288,7 +306,7 @@ class MPPI:
             options.pop("horizon_steps", 56),
             options.pop("dt", 0.05),
             options.pop("samples", 2000),
-            options.pop("noise_std", (0.2, 0.5)),
+            options.pop("noise_std", (0.2, 0.4)),
             options.pop("temperature", 0.03),
             critics,
             limits,
@@ -388,13 +406,14 @@ class MPPI:
         pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
         tables = self._path_tables(reference)
         window, info = self._window(pose, tables)
-        if self._section == tables.n_sections - 1:
+        if self._section == tables.n_sections - 1 and info[0] > 0.5:
             gap = math.hypot(pose[0] - info[3], pose[1] - info[4])
             turn = abs(float(wrap_angle(pose[2] - info[5])))
             if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
                 return self._stop(pose, "arrived")
         weights = self.critics.vector()
-        if self._path_blocked(window):
+        blocked = self._path_blocked(window)
+        if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
         mean = self._mean
         if noise is not None:
@@ -404,7 +423,8 @@ class MPPI:
                     f"noise must have shape ({self.samples}, {self.horizon_steps}, 2) "
                     f"(got {noise.shape})"
                 )
-        args = (pose, mean, self._lo, self._hi, window, info, self._last, weights)
+        lo, hi = self._call_bounds(info, blocked, tables)
+        args = (pose, mean, lo, hi, self._hi, window, info, self._last, weights)
         if self.backend == "numpy":
             if noise is None:
                 noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
@@ -416,7 +436,7 @@ class MPPI:
             costs = np.empty(self.samples)
             controls = np.empty((self.samples, self.horizon_steps, 2))
             _mppi_kernel(
-                pose, mean, self._lo, self._hi, window, info, self._last, buffer, has_noise,
+                pose, mean, lo, hi, self._hi, window, info, self._last, buffer, has_noise,
                 self.noise_std, np.uint64(self.seed), np.uint64(self._calls), self._kind,
                 self._wheel_base, self.dt, weights, self._df, self._map, self._circles,
                 self._circle_radius, int(self.critics.path_stride), _NORMAL_TABLE, costs, controls,
@@ -436,7 +456,28 @@ class MPPI:
                     f"extra critic must return shape ({self.samples},) (got {extra.shape})"
                 )
             costs = costs + np.where(np.isfinite(extra), np.maximum(extra, 0.0), 1e6)
-        return self._update(pose, costs, controls)
+        return self._update(pose, costs, controls, lo, hi)
+
+    def _call_bounds(
+        self, info: np.ndarray, blocked: bool, tables: PathTables
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Command bounds of this call: the speed keeps the sign of the path section unless
+        ``reverse_against_path``, the path ahead is blocked, or the robot is settling at the goal
+        (where a small correction backwards may be needed). Sampling both signs where the optimum
+        is about zero makes the weighted mean flip sign: the robot would twitch back and forth."""
+        lo, hi = self._lo.copy(), self._hi.copy()
+        # Slow down into cusps and the goal: |v| <= √(2·a·d), d the distance left to the
+        # section's end, as the time parametrisation of the path does (floor: 10 % of top speed).
+        cap = max(math.sqrt(2.0 * self.approach_deceleration * info[7]), 0.1 * hi[0])
+        lo[0], hi[0] = max(lo[0], -cap), min(hi[0], cap)
+        settling = self._section == tables.n_sections - 1 and info[0] > 0.5
+        if self.reverse_against_path or blocked or settling or not self.allow_reverse:
+            return lo, hi
+        if info[6] > 0.0:
+            lo[0] = 0.0
+        else:
+            hi[0] = 0.0
+        return lo, hi
 
     def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
         self.status = status
@@ -451,7 +492,14 @@ class MPPI:
         self.last_plan = plan
         return plan
 
-    def _update(self, pose: np.ndarray, costs: np.ndarray, controls: np.ndarray) -> MPPIPlan:
+    def _update(
+        self,
+        pose: np.ndarray,
+        costs: np.ndarray,
+        controls: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+    ) -> MPPIPlan:
         best = float(np.min(costs))
         with np.errstate(over="ignore", under="ignore"):  # exp(−inf) = 0: the intended limit
             weights = np.exp(-(costs - best) / self.temperature)
@@ -465,7 +513,7 @@ class MPPI:
         else:
             self.status = "ok"
             sequence = np.tensordot(weights, controls, axes=1)
-            sequence = np.clip(self._smooth(sequence), self._lo, self._hi)
+            sequence = np.clip(self._smooth(sequence), lo, hi)  # this call's bounds
             command = sequence[0].copy()
             self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
         self._last = command
@@ -512,7 +560,8 @@ class MPPI:
         return tables
 
     def _window(self, pose: np.ndarray, tab: PathTables) -> tuple[np.ndarray, np.ndarray]:
-        """The local path window (M, 4) = (x, y, heading, 0) and the scalars the critics need."""
+        """The local path window (M, 4) = (x, y, heading, arc length from its first point) and the
+        scalars the critics need."""
         end = int(tab.section_end[self._section])
         start = 0 if self._section == 0 else int(tab.section_end[self._section - 1])
         if self._progress is None:
@@ -529,15 +578,15 @@ class MPPI:
             index = lo + int(np.argmax(near))
         self._progress = max(index, self._progress or 0) if self._progress is not None else index
         last_section = self._section == tab.n_sections - 1
-        at_cusp = np.hypot(*(tab.xy[end] - pose[:2])) <= self.cusp_tolerance
-        if not last_section and at_cusp:
+        if not last_section and self._reached_cusp(pose, tab, end):
             self._section += 1
             self._progress = end
             return self._window(pose, tab)
         stop = min(self._progress + self._window_points, end + 1)
         idx = np.arange(self._progress, self._progress + self._window_points)
         idx = np.minimum(idx, stop - 1)
-        window = np.stack([tab.xy[idx, 0], tab.xy[idx, 1], tab.heading[idx]], -1)
+        along = tab.arc[idx] - tab.arc[self._progress]
+        window = np.stack([tab.xy[idx, 0], tab.xy[idx, 1], tab.heading[idx], along], -1)
         remaining = tab.arc[end] - tab.arc[self._progress]
         goal_mode = 1.0 if remaining <= self.critics.goal_distance else 0.0
         target = tab.xy[stop - 1]
@@ -550,9 +599,24 @@ class MPPI:
                 tab.xy[end, 1],
                 tab.heading[end],
                 tab.direction[end],
+                # distance left to the section's end: along the path, or straight if farther
+                max(remaining, float(np.hypot(*(tab.xy[end] - pose[:2])))),
             ]
         )
         return np.ascontiguousarray(window), info
+
+    def _reached_cusp(self, pose: np.ndarray, tab: PathTables, end: int) -> bool:
+        """Within ``cusp_tolerance`` of the cusp, or past the line through it square to the path
+        while within ``goal_distance`` of it (as the path followers switch): a car that cannot
+        close the last few centimetres sideways must not stall before the cusp."""
+        offset = pose[:2] - tab.xy[end]
+        distance = float(np.hypot(*offset))
+        if distance <= self.cusp_tolerance:
+            return True
+        if distance > self.critics.goal_distance or end == 0:
+            return False
+        incoming = tab.xy[end] - tab.xy[end - 1]
+        return float(offset @ incoming) >= 0.0
 
     def _path_blocked(self, window: np.ndarray) -> bool:
         """Whether more than 7 % of the window's poses put the footprint in collision (Nav2's
@@ -589,7 +653,7 @@ class MPPI:
             poses[:, t + 1] = integrate_step(poses[:, t], z, z, z, self.dt, "euler")
         return poses
 
-    def _costs_numpy(self, pose, mean, lo, hi, window, info, last, w, noise):
+    def _costs_numpy(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
         c = self.critics
         controls = np.clip(mean[None] + noise, lo, hi)
         poses = self._rollout_many(pose, controls)
@@ -597,20 +661,19 @@ class MPPI:
         steps = self.horizon_steps
         cost = np.zeros(self.samples)
         goal_mode = info[0] > 0.5
+        checked = np.arange(c.path_stride - 1, steps, c.path_stride)
+        if checked.size:
+            pts = after[:, checked]
+            d2 = (pts[..., 0, None] - window[:, 0]) ** 2 + (pts[..., 1, None] - window[:, 1]) ** 2
+            nearest = np.argmin(d2, axis=-1)
+            dmin = np.take_along_axis(d2, nearest[..., None], -1)[..., 0]
+            err = wrap_angle(pts[..., 2] - window[nearest, 2])
+            cost += w[0] * np.sum(np.sqrt(dmin), axis=1) / checked.size
+            cost += w[1] * np.sum(err * err, axis=1) / checked.size
         if not goal_mode:
-            checked = np.arange(c.path_stride - 1, steps, c.path_stride)
-            if checked.size:
-                pts = after[:, checked]
-                d2 = (pts[..., 0, None] - window[:, 0]) ** 2 + (
-                    pts[..., 1, None] - window[:, 1]
-                ) ** 2
-                nearest = np.argmin(d2, axis=-1)
-                dmin = np.take_along_axis(d2, nearest[..., None], -1)[..., 0]
-                err = wrap_angle(pts[..., 2] - window[nearest, 2])
-                cost += w[0] * np.sum(dmin, axis=1) / checked.size
-                cost += w[1] * np.sum(err * err, axis=1) / checked.size
             end = after[:, -1]
-            cost += c.follow * np.hypot(end[:, 0] - info[1], end[:, 1] - info[2])
+            d2 = (end[:, 0, None] - window[:, 0]) ** 2 + (end[:, 1, None] - window[:, 1]) ** 2
+            cost += c.follow * (window[-1, 3] - window[np.argmin(d2, axis=-1), 3])
         else:
             dist = np.hypot(after[..., 0] - info[3], after[..., 1] - info[4])
             cost += c.goal * np.sum(dist, axis=1) / steps
@@ -635,7 +698,6 @@ class MPPI:
             cost += np.where(collided, c.collision_cost, 0.0)
         v = controls[..., 0]
         cost += c.prefer_forward * np.sum(np.maximum(-info[6] * v, 0.0), axis=1) * self.dt
-        scale = hi
         cost += c.effort * np.sum((controls / scale) ** 2, axis=(1, 2)) / steps
         previous = np.concatenate(
             [np.broadcast_to(last, (self.samples, 1, 2)), controls[:, :-1]], 1
@@ -646,7 +708,7 @@ class MPPI:
         return cost, controls
 
     # ------------------------------------------------------------------ JAX
-    def _costs_jax(self, pose, mean, lo, hi, window, info, last, w, noise):
+    def _costs_jax(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
         jax, _jnp = import_jax()
         if self._kind != _KIND_VELOCITY and self._kind not in (_KIND_REAR, _KIND_FRONT):
             raise ConfigError("the jax backend needs a unicycle, diff-drive or steered model")
@@ -655,7 +717,7 @@ class MPPI:
         )
         dtype = np.float64 if self.jax_float64 else np.float32
         values = (
-            pose, mean, lo, hi, window, info, last, noise, w, self._df,
+            pose, mean, lo, hi, scale, window, info, last, noise, w, self._df,
             self._map, self._circles, np.array([self._circle_radius, self.dt, self._wheel_base]),
         )  # fmt: skip
         with X64(jax, self.jax_float64):
@@ -700,7 +762,7 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
 
     checked = np.arange(stride - 1, steps, stride)
 
-    def run(pose, mean, lo, hi, window, info, last, noise, w, df, mp, circles, extra):
+    def run(pose, mean, lo, hi, scale, window, info, last, noise, w, df, mp, circles, extra):
         # The scan rolls the samples out; the critics then score all steps at once.
         radius, dt, wheel_base = extra[0], extra[1], extra[2]
         controls = jnp.clip(mean[None] + noise, lo, hi)
@@ -733,8 +795,9 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
             nearest = jnp.argmin(d2, axis=-1)
             dmin = jnp.min(d2, axis=-1)
             err = wrap(pth - window[nearest, 2])
-            path = (w[0] * jnp.sum(dmin, 0) + w[1] * jnp.sum(err * err, 0)) / checked.size
-            cost = cost + jnp.where(goal_mode, 0.0, path)
+            cost = cost + (w[0] * jnp.sum(jnp.sqrt(dmin), 0) + w[1] * jnp.sum(err * err, 0)) / (
+                checked.size
+            )
         goal = w[3] * jnp.sum(jnp.hypot(xs - info[3], ys - info[4]), 0) / steps
         cost = cost + jnp.where(goal_mode, goal, 0.0)
         c, s = jnp.cos(ths), jnp.sin(ths)
@@ -752,12 +815,13 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
             cost = cost + jnp.where(has_map, w[5] * jnp.sum(gap * gap, 0) / steps, 0.0)
         v = controls[..., 0]
         cost = cost + w[6] * jnp.sum(jnp.maximum(-info[6] * v, 0.0), 1) * dt
-        cost = cost + w[7] * jnp.sum((controls / hi) ** 2, axis=(1, 2)) / steps
+        cost = cost + w[7] * jnp.sum((controls / scale) ** 2, axis=(1, 2)) / steps
         previous = jnp.concatenate([jnp.broadcast_to(last, (n, 1, 2)), controls[:, :-1]], 1)
-        cost = cost + w[8] * jnp.sum(((controls - previous) / hi) ** 2, axis=(1, 2)) / steps
+        cost = cost + w[8] * jnp.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
         if kind == _KIND_VELOCITY:
-            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., 1]), 1) / (steps * hi[1])
-        follow = w[2] * jnp.hypot(x - info[1], y - info[2])
+            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., 1]), 1) / (steps * scale[1])
+        d2_end = (x[:, None] - window[:, 0]) ** 2 + (y[:, None] - window[:, 1]) ** 2
+        follow = w[2] * (window[-1, 3] - window[jnp.argmin(d2_end, axis=-1), 3])
         heading = w[4] * jnp.abs(wrap(th - info[5]))
         cost = cost + jnp.where(goal_mode, heading, follow)
         cost = cost + jnp.where(collided, w[11], 0.0)
@@ -812,7 +876,7 @@ def _wrap_scalar(a):
 
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def _mppi_kernel(
-    pose, mean, lo, hi, window, info, last, noise, has_noise, sigma, seed, call, kind,
+    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, sigma, seed, call, kind,
     wheel_base, dt, w, df, mp, circles, radius, stride, table, costs, controls,
 ):  # fmt: skip
     """Draw, roll out and score every sample in one pass (the numba backend).
@@ -830,7 +894,7 @@ def _mppi_kernel(
     w_path, w_align = w[0] / n_checked, w[1] / n_checked
     w_goal, w_obstacle = w[3] / steps, w[5] / steps
     w_forward = w[6] * dt
-    a0, a1 = 1.0 / hi[0], 1.0 / hi[1]
+    a0, a1 = 1.0 / scale[0], 1.0 / scale[1]
     w_effort, w_rate, w_twirl = w[7] / steps, w[8] / steps, w[9] / steps * a1
     inflation, direction = w[10], info[6]
     n_circles = circles.shape[0]
@@ -866,18 +930,17 @@ def _mppi_kernel(
             elif th <= -math.pi:
                 th += 2.0 * math.pi
             c, s = math.cos(th), math.sin(th)
-            if not goal_mode:
-                if t == next_check:
-                    next_check += stride
-                    best, bj = np.inf, 0
-                    for j in range(m):
-                        dx, dy = x - window[j, 0], y - window[j, 1]
-                        d2 = dx * dx + dy * dy
-                        if d2 < best:
-                            best, bj = d2, j
-                    err = _wrap_scalar(th - window[bj, 2])
-                    cost += w_path * best + w_align * err * err
-            else:
+            if t == next_check:
+                next_check += stride
+                best, bj = np.inf, 0
+                for j in range(m):
+                    dx, dy = x - window[j, 0], y - window[j, 1]
+                    d2 = dx * dx + dy * dy
+                    if d2 < best:
+                        best, bj = d2, j
+                err = _wrap_scalar(th - window[bj, 2])
+                cost += w_path * math.sqrt(best) + w_align * err * err
+            if goal_mode:
                 cost += w_goal * math.hypot(x - info[3], y - info[4])
             if has_map:
                 for k in range(n_circles):
@@ -904,7 +967,13 @@ def _mppi_kernel(
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[5]))
         else:
-            cost += w[2] * math.hypot(x - info[1], y - info[2])
+            best, bj = np.inf, 0
+            for j in range(m):
+                dx, dy = x - window[j, 0], y - window[j, 1]
+                d2 = dx * dx + dy * dy
+                if d2 < best:
+                    best, bj = d2, j
+            cost += w[2] * (window[m - 1, 3] - window[bj, 3])
         if collided:
             cost += w[11]
         costs[i] = cost

@@ -7,11 +7,12 @@ after step t, u_t the sampled command and dt the step:
 ==================  ==============================================================  ============
 critic (weight)     cost of one rollout                                              weight unit
 ==================  ==============================================================  ============
-``path``            mean over checked steps of d², d = distance from p_t to the      1/m²
+``path``            mean over checked steps of d, d = distance from p_t to the       1/m
                     nearest point of the local path window (every ``path_stride``)
 ``path_align``      mean over the same steps of wrap(θ_t − θ_path)², θ_path the      1/rad²
                     travel heading of the robot at that nearest window point
-``follow``          distance from p_T to the window's last point (progress)          1/m
+``follow``          path length left in the window past the window point nearest     1/m
+                    p_T (progress along the path, without cutting corners)
 ``goal``            mean over t of |p_t − goal| once the section end is near         1/m
 ``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
 ``obstacle``        mean over t, covering circles of (r_infl − c)² for 0 < c <        1/m²
@@ -25,8 +26,12 @@ critic (weight)     cost of one rollout                                         
 ==================  ==============================================================  ============
 
 While the end of the current path section (the goal, or a cusp) is closer than
-``goal_distance``, ``path``/``path_align``/``follow`` are off and ``goal``/``goal_heading`` on,
-as Nav2's critics do (Macenski et al., Nav2 MPPI controller documentation). Also as in Nav2
+``goal_distance``, ``follow`` is off and ``goal``/``goal_heading`` on, as Nav2's critics do
+(Macenski et al., Nav2 MPPI controller documentation); unlike Nav2, ``path`` and ``path_align``
+stay on, so the robot does not cut straight to a cusp. ``path`` is linear in the distance (as
+Nav2's path-align critic): a squared distance gives millimetre errors too little weight against
+the sampling noise. ``follow`` counts progress along the path, not the straight distance to a
+point ahead, which would pull the rollouts across the inside of bends. Also as in Nav2
 (``max_path_occupancy_ratio``), ``path`` and ``path_align`` are off for a call when more than
 7 % of the window's poses put the footprint in collision: a path that cuts through obstacles
 must not pull the robot onto them (``follow`` still asks for progress). A user critic
@@ -78,10 +83,10 @@ class MPPICritics:
     follow: float = 2.0
     goal: float = 5.0
     goal_heading: float = 3.0
-    obstacle: float = 20.0
+    obstacle: float = 10.0
     prefer_forward: float = 5.0
     effort: float = 0.1
-    rate: float = 0.5
+    rate: float = 0.1
     twirl: float = 0.0
     inflation: float = 0.4
     collision_cost: float = 1.0e6
