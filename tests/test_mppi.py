@@ -234,6 +234,7 @@ def test_batch_shape_and_one_robot_only():
         ({"noise_std": (0.0, 0.5)}, "noise_std"),
         ({"critics": {"obstacle": -1.0}}, "obstacle"),
         ({"critics": {"nonsense": 1.0}}, "nonsense"),
+        ({"critics": {"near_goal_distance": -1.0}}, "near_goal_distance"),
         ({"backend": "cuda"}, "backend"),
         ({"limits": VelocityLimits(max_speed=0.5)}, "finite"),
         ({"savgol_window": 4}, "savgol_window"),
@@ -433,3 +434,18 @@ def test_reverse_against_path_samples_both_signs():
     mppi = make(samples=400, reverse_against_path=True)
     mppi(0.0, (2.0, 4.0, 0.0), STRAIGHT)
     assert np.any(mppi.last_plan.samples[..., 0] < 0.0)
+
+
+def test_goal_next_to_an_obstacle_is_reached(cluttered):
+    # The goal's footprint clearance is ~0.08 m, inside the 0.4 m inflation: with the obstacle
+    # repulsion kept on to the end the robot is pushed 0.18 m aside; off within 1 m, it arrives.
+    path = Polyline([[1.5, 4.0], [2.85, 4.0]])
+    ends = {}
+    for near in (0.0, 1.0):
+        mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, {"near_goal_distance": near},
+                    LIMITS, backend="numba", grid=cluttered, footprint=ROBOT)  # fmt: skip
+        result = run_closed_loop(mppi, Unicycle(), (1.5, 4.0, 0.0), path, 20.0, 0.05)
+        assert not cluttered.in_collision(ROBOT, result.poses[:, 0]).any()
+        ends[near] = (mppi.status, np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])))
+    assert ends[1.0][0] == "arrived" and ends[1.0][1] <= 0.05
+    assert ends[0.0][0] != "arrived" and ends[0.0][1] > 0.1

@@ -412,6 +412,9 @@ class MPPI:
             if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
                 return self._stop(pose, "arrived")
         weights = self.critics.vector()
+        last_section = self._section == tables.n_sections - 1
+        if last_section and info[7] <= self.critics.near_goal_distance:
+            weights[5] = 0.0  # obstacle repulsion off near the goal (collisions stay lethal)
         blocked = self._path_blocked(window)
         if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it

@@ -16,7 +16,8 @@ critic (weight)     cost of one rollout                                         
 ``goal``            mean over t of |p_t − goal| once the section end is near         1/m
 ``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
 ``obstacle``        mean over t, covering circles of (r_infl − c)² for 0 < c <        1/m²
-                    r_infl, c = distance field − circle radius − √2·cell (clearance)
+                    r_infl, c = distance field − circle radius − √2·cell (clearance);
+                    off within ``near_goal_distance`` of the goal
 (lethal)            ``collision_cost`` once if any c <= 0 or a circle leaves the map  —
 ``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
 ``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
@@ -65,6 +66,10 @@ class MPPICritics:
         Clearance r_infl [m] below which the obstacle critic starts to cost, > 0.
     collision_cost : float
         Cost added to a rollout that collides or leaves the map, > 0 (finite: no NaN ever).
+    near_goal_distance : float
+        Distance [m] to the goal (the end of the last path section) under which the
+        ``obstacle`` cost is off — collisions stay lethal — so that a goal close to an obstacle
+        (a parking bay) can be reached (Nav2's ``near_goal_distance``), >= 0.
     goal_distance : float
         Distance [m] to the end of the path section under which the goal critics take over.
     path_stride : int
@@ -91,6 +96,7 @@ class MPPICritics:
     inflation: float = 0.4
     collision_cost: float = 1.0e6
     goal_distance: float = 0.5
+    near_goal_distance: float = 1.0
     path_stride: int = 4
     extra: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
 
@@ -118,6 +124,10 @@ class MPPICritics:
         object.__setattr__(
             self, "goal_distance", positive("goal_distance", self.goal_distance, "m")
         )
+        near = finite("near_goal_distance", self.near_goal_distance)
+        if near < 0.0:
+            raise ConfigError(f"near_goal_distance must be >= 0 m (got {near:g})")
+        object.__setattr__(self, "near_goal_distance", near)
         stride = self.path_stride
         if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
             raise ConfigError(f"path_stride must be an integer >= 1 (got {stride!r})")
