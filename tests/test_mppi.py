@@ -28,7 +28,7 @@ from wheelbase.control import (
 from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.models import Bicycle, BodyTwist, DiffDrive, RearWheelBicycle, Unicycle
-from wheelbase.planning import Footprint, load_map
+from wheelbase.planning import Footprint, OccupancyGrid, load_map
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
 STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])  # the cluttered map's reference path
@@ -449,3 +449,20 @@ def test_goal_next_to_an_obstacle_is_reached(cluttered):
         ends[near] = (mppi.status, np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])))
     assert ends[1.0][0] == "arrived" and ends[1.0][1] <= 0.05
     assert ends[0.0][0] != "arrived" and ends[0.0][1] > 0.1
+
+
+def test_a_car_backs_up_to_a_wall_behind_it():
+    # A 4.5 × 1.8 m car, 0.3 m in front of a wall behind it: its covering circles would reach
+    # 0.56 m past its rear and call every rollout a collision; its outline disks do not.
+    occupied = np.zeros((200, 200), bool)
+    occupied[:, :20] = True  # wall: x < 1 m
+    grid = OccupancyGrid.from_array(occupied, 0.05)
+    car = Footprint.rectangle(4.5, 1.8, rear_axle_to_center=1.35)
+    pose = np.array([1.0 + 0.9 + 0.3, 5.0, 0.0])  # rear bumper 0.3 m from the wall
+    assert grid.footprint_clearance(car, pose[None])[0] == pytest.approx(0.3, abs=0.06)
+    bike = RearWheelBicycle(wheel_base=2.7, max_steering=0.6)
+    mppi = MPPI(bike, 30, 0.05, 200, (0.2, 0.3), 0.03, None, SteeringLimits(0.6, max_speed=1.0),
+                backend="numba", grid=grid, footprint=car)  # fmt: skip
+    reverse = Polyline([[2.2, 5.0], [6.0, 5.0]], [1])
+    plan = mppi.plan(pose, reverse)
+    assert plan.status == "ok" and plan.costs.min() < mppi.critics.collision_cost

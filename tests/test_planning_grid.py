@@ -182,3 +182,20 @@ def test_footprint_clearance_known_value():
     assert grid.in_collision(fp, [2.51, 2.05, 0.0])
     assert not grid.in_collision(fp, [2.49, 2.05, 0.0])
     assert grid.in_collision(fp, [2.49, 2.05, 0.0], margin=0.02)
+
+
+def test_outline_circles_follow_a_car_closely():
+    car = Footprint.rectangle(4.5, 1.8, rear_axle_to_center=1.35)
+    # the covering circles reach 0.56 m past the car's ends
+    assert car.circle_overshoot == pytest.approx(math.hypot(0.45, 0.9) - 0.45, abs=1e-3)
+    disks = car.outline_circles(0.2)
+    assert car.outline_distance(disks[:, :2], disks[:, 2]) <= 0.1 + 1e-9
+    # every point of the outline lies inside a disk
+    corners = car.polygon
+    t = np.linspace(0.0, 1.0, 200)[:, None]
+    edges = zip(corners, np.roll(corners, -1, 0), strict=True)
+    outline = np.concatenate([a + t * (b - a) for a, b in edges])
+    gaps = np.hypot(*(outline[:, None, :] - disks[None, :, :2]).transpose(2, 0, 1)) - disks[:, 2]
+    assert np.all(gaps.min(axis=1) <= 1e-9)
+    with pytest.raises(ConfigError, match="spacing"):
+        car.outline_circles(0.0)

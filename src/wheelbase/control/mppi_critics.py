@@ -15,10 +15,11 @@ critic (weight)     cost of one rollout                                         
                     p_T (progress along the path, without cutting corners)
 ``goal``            mean over t of |p_t − goal| once the section end is near         1/m
 ``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
-``obstacle``        mean over t, covering circles of (r_infl − c)² for 0 < c <        1/m²
-                    r_infl, c = distance field − circle radius − √2·cell (clearance);
-                    off within ``near_goal_distance`` of the goal
-(lethal)            ``collision_cost`` once if any c <= 0 or a circle leaves the map  —
+``obstacle``        mean over t of (r_infl − c)² for 0 < c < r_infl, c the           1/m²
+                    footprint's clearance: the least over its disks of distance
+                    field − disk radius − √2·cell; off within ``near_goal_distance``
+                    of the goal
+(lethal)            ``collision_cost`` once if any c <= 0 or a disk leaves the map    —
 ``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
 ``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
 ``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —

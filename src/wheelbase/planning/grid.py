@@ -666,6 +666,85 @@ class Footprint:
         long_side, short_side = max(length, width), min(length, width)
         return float(math.hypot(long_side / (2 * n), short_side / 2))
 
+    @property
+    def circle_overshoot(self) -> float:
+        """How far [m] the covering :attr:`circles` reach beyond the polygon at most (at the
+        ends of a long outline: 0.56 m for a 4.5 × 1.8 m car)."""
+        return float(self.outline_distance(self.circles, np.full(len(self.circles),
+                                                                 self.circle_radius)))  # fmt: skip
+
+    def outline_distance(self, centres: np.ndarray, radii: np.ndarray) -> float:
+        """Largest distance [m] from the polygon to a point of the disks ``(centres, radii)``.
+
+        The farthest point of a disk from a convex polygon lies on its rim; 64 rim points per
+        disk bound it to 0.1 % of the radius.
+
+        Parameters
+        ----------
+        centres : numpy.ndarray, shape (K, 2)
+            Disk centres [m] in the body frame.
+        radii : numpy.ndarray, shape (K,)
+            Disk radii [m].
+
+        Returns
+        -------
+        float
+            0 when every disk lies inside the polygon.
+        """
+        angle = np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)
+        rim = np.stack([np.cos(angle), np.sin(angle)], -1)
+        points = (centres[:, None, :] + radii[:, None, None] * rim).reshape(-1, 2)
+        return float(np.max(_polygon_distance(self.polygon, points), initial=0.0))
+
+    def outline_circles(self, spacing: float) -> np.ndarray:
+        """Disks ``(K, 3)`` = (x [m], y [m], radius [m]) that follow the outline closely.
+
+        Disks of radius ``spacing / 2`` centred on the edges every ``spacing`` at most (the
+        vertices included) cover a band along the outline and reach at most ``spacing / 2``
+        beyond it; disks inscribed in the polygon along its long axis (every half its width)
+        fill the middle. Unlike :attr:`circles`, which reach 0.56 m past the ends of a car, this
+        lets a critic see a wall close behind a reversing car; a point obstacle can only get
+        into the uncovered pockets at the corners by crossing the band, which a step shorter
+        than ``spacing`` does not skip.
+
+        Parameters
+        ----------
+        spacing : float
+            Largest gap [m] between neighbouring edge disks, > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        spacing = positive("spacing", spacing, "m")
+        poly = self.polygon
+        rows = []
+        for start, end in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+            count = max(1, math.ceil(float(np.hypot(*(end - start))) / spacing - 1e-9))
+            frac = np.arange(count)[:, None] / count
+            rows.append(start + frac * (end - start))
+        edge = np.concatenate(rows)
+        (xmin, ymin), (xmax, ymax) = poly.min(0), poly.max(0)
+        along_x = xmax - xmin >= ymax - ymin
+        short = min(xmax - xmin, ymax - ymin)
+        lo, hi = (xmin, xmax) if along_x else (ymin, ymax)
+        first, last = lo + short / 2.0, hi - short / 2.0
+        count = max(1, math.ceil((last - first) / (short / 2.0) - 1e-9))
+        t = first + (last - first) * np.arange(count + 1) / count
+        mid = (ymin + ymax) / 2.0 if along_x else (xmin + xmax) / 2.0
+        inner = np.stack([t, np.full_like(t, mid)], -1) if along_x else np.stack(
+            [np.full_like(t, mid), t], -1)  # fmt: skip
+        inner_radius = np.maximum(-_polygon_distance(poly, inner), 0.0)
+        keep = inner_radius > 0.0
+        return np.ascontiguousarray(
+            np.concatenate(
+                [
+                    np.column_stack([edge, np.full(len(edge), spacing / 2.0)]),
+                    np.column_stack([inner[keep], inner_radius[keep]]),
+                ]
+            )
+        )
+
     @cached_property
     def max_radius(self) -> float:
         """Largest distance [m] from the reference point to a vertex."""
@@ -709,6 +788,20 @@ class Footprint:
             a = np.array([normals[j], normals[i]])
             out[i] = np.linalg.solve(a, [offset[j], offset[i]])
         return Footprint(out)
+
+
+def _polygon_distance(poly: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Signed distance [m] from ``points (P, 2)`` to a convex counter-clockwise polygon
+    (negative inside)."""
+    edges = np.roll(poly, -1, axis=0) - poly
+    normals = np.stack([edges[:, 1], -edges[:, 0]], -1)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    # outside: the distance to the nearest edge segment; inside: minus the nearest edge line
+    rel = points[:, None, :] - poly[None]
+    t = np.clip(np.sum(rel * edges, -1) / np.sum(edges * edges, -1), 0.0, 1.0)
+    gap = np.linalg.norm(rel - t[..., None] * edges, axis=-1).min(1)
+    side = np.max(np.sum(rel * normals, -1), axis=1)
+    return np.where(side > 0.0, gap, side)
 
 
 # ---------------------------------------------------------------------- Numba kernels
