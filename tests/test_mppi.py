@@ -365,6 +365,29 @@ def test_jax_float32_is_close_to_the_float64_reference():
     np.testing.assert_allclose(single.command, reference.command, atol=1e-3)
 
 
+def test_jax_draws_its_noise_on_the_device(monkeypatch):
+    # On a GPU the noise is drawn inside the compiled function; pretend to be on one.
+    jax = pytest.importorskip("jax")
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    wide = VelocityLimits(max_speed=50.0, max_yaw_rate=50.0)
+
+    def samples(seed):
+        mppi = MPPI(Unicycle(), 20, 0.05, 4000, (0.2, 0.5), 0.03, None, wide, seed=seed,
+                    backend="jax", reverse_against_path=True, approach_deceleration=1e6,
+                    savgol_window=0)  # fmt: skip
+        first = mppi.plan((5.0, 4.0, 0.0), STRAIGHT).samples
+        return first, mppi.plan((5.0, 4.0, 0.0), STRAIGHT).samples
+
+    first, second = samples(7)
+    # the first call perturbs a zero warm start: the samples are the noise itself
+    np.testing.assert_allclose(first.reshape(-1, 2).std(axis=0), (0.2, 0.5), rtol=0.02)
+    np.testing.assert_allclose(first.reshape(-1, 2).mean(axis=0), 0.0, atol=0.01)
+    again, _ = samples(7)
+    np.testing.assert_array_equal(first, again)  # seeded
+    assert not np.allclose(first, samples(8)[0])
+    assert not np.allclose(first - first.mean(0), second - second.mean(0))  # new noise per call
+
+
 @settings(
     max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )

@@ -356,6 +356,7 @@ class MPPI:
             radius = np.full((len(circles), 1), float(footprint.circle_radius))
             self._circles = np.ascontiguousarray(np.hstack([circles, radius]))
         self.footprint = footprint
+        self._jax_map: tuple | None = None  # the map on the JAX device, made at the first call
 
     def reset(self) -> None:
         """Forget the warm start, the path progress and the noise counter."""
@@ -451,9 +452,6 @@ class MPPI:
                 int(self.critics.path_stride), _NORMAL_TABLE, costs, controls,
             )  # fmt: skip
         else:
-            if noise is None:
-                noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
-                noise *= self.noise_std
             costs, controls = self._costs_jax(*args, noise)
         self._calls += 1
         if self.critics.extra is not None:
@@ -720,19 +718,34 @@ class MPPI:
 
     # ------------------------------------------------------------------ JAX
     def _costs_jax(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
-        jax, _jnp = import_jax()
-        if self._kind != _KIND_VELOCITY and self._kind not in (_KIND_REAR, _KIND_FRONT):
-            raise ConfigError("the jax backend needs a unicycle, diff-drive or steered model")
+        """Costs and sampled commands from the JAX backend; with ``noise=None`` the noise is
+        drawn on the device from a key folded from (seed, call)."""
+        jax, jnp = import_jax()
+        if noise is None and jax.default_backend() == "cpu":
+            # NumPy draws normals about twice as fast as XLA's threefry on a CPU; on a GPU the
+            # draw stays on the device (no (K, T, 2) transfer at every call).
+            noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
+            noise *= self.noise_std
+        draw = noise is None
         function = _jax_function(
-            self.horizon_steps, int(self.critics.path_stride), self._kind, self.jax_float64
-        )
-        dtype = np.float64 if self.jax_float64 else np.float32
-        values = (
-            pose, mean, lo, hi, scale, window, info, last, noise, w, self._df,
-            self._map, self._circles, np.array([0.0, self.dt, self._wheel_base]),
+            self.horizon_steps, int(self.critics.path_stride), self._kind, self.jax_float64,
+            self.samples if draw else None,
         )  # fmt: skip
+        dtype = np.float64 if self.jax_float64 else np.float32
         with X64(jax, self.jax_float64):
-            costs, controls = function(*(np.asarray(v, dtype) for v in values))
+            if self._jax_map is None or self._jax_map[0] != dtype:
+                # The map goes to the device once, not at every call.
+                arrays = (self._df, self._map, self._circles)
+                self._jax_map = (dtype, *(jnp.asarray(a, dtype=dtype) for a in arrays))
+            _, df, mp, circles = self._jax_map
+            if draw:
+                noise = jax.random.fold_in(jax.random.PRNGKey(self.seed), self._calls)
+            else:
+                noise = np.asarray(noise, dtype)
+            extra = np.array([0.0, self.dt, self._wheel_base, *self.noise_std])
+            small = (np.asarray(v, dtype) for v in (pose, mean, lo, hi, scale, window, info, last))
+            costs, controls = function(*small, noise, np.asarray(w, dtype), df, mp, circles,
+                                       np.asarray(extra, dtype))  # fmt: skip
             return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
 
 
@@ -764,8 +777,12 @@ OUTLINE_SPACING = 0.2
 """Spacing [m] of the edge disks that stand for a long footprint (see ``_set_map``)."""
 
 
-def _jax_function(steps: int, stride: int, kind: int, float64: bool):
-    key = (steps, stride, kind, float64)
+def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int | None):
+    """The jit-compiled JAX iteration: a ``lax.scan`` rolls the samples out, then the critics
+    score all steps at once (on a CPU this beat a per-step fusion of rollout and critics:
+    5.8 against 7.5 ms at 2,000 × 56). ``samples``: draw that many noise sequences inside from a
+    PRNG key; ``None``: take the noise as an argument."""
+    key = (steps, stride, kind, float64, samples)
     if key in _JAX_CACHE:
         return _JAX_CACHE[key]
     jax, jnp = import_jax()
@@ -777,8 +794,9 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool):
     checked = np.arange(stride - 1, steps, stride)
 
     def run(pose, mean, lo, hi, scale, window, info, last, noise, w, df, mp, circles, extra):
-        # The scan rolls the samples out; the critics then score all steps at once.
-        dt, wheel_base = extra[1], extra[2]
+        dt, wheel_base, sigma = extra[1], extra[2], extra[3:5]
+        if samples is not None:  # `noise` is the PRNG key
+            noise = jax.random.normal(noise, (samples, steps, 2), pose.dtype) * sigma
         controls = jnp.clip(mean[None] + noise, lo, hi)
         n = noise.shape[0]
         goal_mode = info[0] > 0.5
