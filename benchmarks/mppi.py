@@ -21,6 +21,9 @@ Prints one JSON object:
   ``--seeds`` noise seeds: success = no collision, footprint clearance >= 0.1 m all along and
   the end of the path reached within 0.2 m.
 
+- ``gpu_hz_2000x56``, ``gpu_hz_100000x56``, ``gpu_hz_1000000x56``: the jax backend (float32)
+  where JAX sees a GPU (install ``jax[cuda12]``), else ``null`` with the reason in ``gpu``.
+
 Usage: ``python benchmarks/mppi.py [--quick] [--seeds N]`` (``--quick``: 5 seeds, 5 timed calls).
 """
 
@@ -60,8 +63,8 @@ def cluttered():
     return load_map(Path(str(resources.files("wheelbase") / "data" / "maps" / "cluttered.yaml")))
 
 
-def rate(backend: str, grid, calls: int, **options) -> float:
-    mppi = MPPI(Unicycle(), 56, 0.05, 2000, (0.2, 0.5), 0.03, None, LIMITS, seed=0,
+def rate(backend: str, grid, calls: int, samples: int = 2000, **options) -> float:
+    mppi = MPPI(Unicycle(), 56, 0.05, samples, (0.2, 0.5), 0.03, None, LIMITS, seed=0,
                 backend=backend, grid=grid, footprint=ROBOT, **options)  # fmt: skip
     pose = np.array([2.4, 3.9, 0.1])
     for _ in range(3):  # compile / warm up
@@ -98,6 +101,21 @@ def speed(grid, calls: int) -> dict:
     except ImportError:
         out["pytorch_mppi"] = None
     return out
+
+
+def gpu(grid, calls: int) -> dict:
+    """``gpu_hz_{2000,100000,1000000}x56`` with the jax backend (float32, noise drawn on the
+    device) where JAX sees a GPU; ``null`` and the reason otherwise."""
+    sizes = (2_000, 100_000, 1_000_000)
+    keys = [f"gpu_hz_{n}x56" for n in sizes]
+    try:
+        import jax
+    except ImportError:
+        return dict.fromkeys(keys) | {"gpu": "none: JAX is not installed"}
+    if jax.default_backend() == "cpu":
+        return dict.fromkeys(keys) | {"gpu": "none: JAX sees only the CPU"}
+    out = {key: rate("jax", grid, calls, samples=n) for key, n in zip(keys, sizes, strict=True)}
+    return out | {"gpu": str(jax.devices()[0]), "target_gpu_hz": [2000.0, 1000.0, 300.0]}
 
 
 def errors(result, path) -> dict:
@@ -203,6 +221,7 @@ def main() -> None:
     }
     out["cpu_hz_2000x56"] = speed(grid, calls)
     out["target_cpu_hz"] = 200.0
+    out |= gpu(grid, calls)
     out["tracking"] = tracking()
     out["clearance"] = clearance(grid, seeds)
     print(json.dumps(out, indent=2))

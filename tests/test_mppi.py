@@ -420,6 +420,10 @@ def test_benchmark_quick_prints_the_promised_json():
     assert ("figure_eight", "unicycle", "pure_pursuit") in laws
     clearance = report["clearance"]
     assert clearance["pure_pursuit_collides"] and clearance["mppi_success_rate"] == 1.0
+    # the GPU keys are there, null with the reason where JAX sees no GPU
+    for key in ("gpu_hz_2000x56", "gpu_hz_100000x56", "gpu_hz_1000000x56"):
+        assert key in report
+    assert report["gpu"].startswith("none") == (report["gpu_hz_2000x56"] is None)
 
 
 def test_closed_path_is_driven_round_before_arriving():
