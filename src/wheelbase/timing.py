@@ -181,7 +181,9 @@ def _drive(poses: np.ndarray, headings: np.ndarray, direction: int, limits: Spee
     curvature[:-1] = np.abs(k_mid)
     curvature[1:] = np.maximum(curvature[1:], np.abs(k_mid))
     top = limits.max_speed * (limits.reverse_speed_factor if direction < 0 else 1.0)
-    with np.errstate(divide="ignore"):
+    # A straight (κ = 0) or all but straight (subnormal κ) stretch has no curvature limit:
+    # the quotient is inf, and the minimum keeps the top speed.
+    with np.errstate(divide="ignore", over="ignore"):
         cap = np.minimum(top, limits.max_yaw_rate / curvature)
         if math.isfinite(limits.max_lateral_acceleration):
             cap = np.minimum(cap, np.sqrt(limits.max_lateral_acceleration / curvature))
