@@ -7,7 +7,8 @@ Prints one JSON object:
   steps, dt 0.05 s) per backend — ``numpy``, ``numba`` (all Numba threads), ``numba_1_thread``,
   ``jax`` (CPU, float32) and ``jax_float64`` where JAX is installed — with the default critics
   (path, path alignment, follow, goal, obstacles through the distance field with a 0.4 × 0.4 m
-  footprint, prefer-forward, effort, rate) on the cluttered map; ``pytorch_mppi`` where installed;
+  footprint, prefer-forward, effort, rate) on the cluttered map; ``pytorch_mppi`` (goal and
+  distance-field obstacle costs only) where PyTorch and pytorch_mppi are installed, else null;
 - ``tracking``: the figure-eight of issue 5 (x = 1.1 + 0.7 sin(2πt/30), y = 0.9 + 0.7 sin(4πt/30),
   as a path) and the three-point-turn path with two cusps, on the unicycle and the rear-wheel
   bicycle (L = 0.05 m on the figure-eight, 0.5 m on the cusp path, |δ| <= 35°): RMS and max
@@ -94,13 +95,51 @@ def speed(grid, calls: int) -> dict:
     except ImportError as error:
         out["jax"] = None
         out["jax_error"] = str(error)
-    try:
-        import pytorch_mppi  # noqa: F401
-
-        out["pytorch_mppi"] = "installed but not wired: see the report"
-    except ImportError:
-        out["pytorch_mppi"] = None
+    out["pytorch_mppi"] = peer_rate(grid, max(1, calls // 10))
     return out
+
+
+def peer_rate(grid, calls: int, samples: int = 2000, device: str = "cpu"):
+    """Calls per second of ``pytorch_mppi.MPPI.command`` on the same problem size (unicycle,
+    56 steps of 0.05 s) with a goal cost and the map's distance-field obstacle cost (lighter
+    than our default critics), or ``None`` where PyTorch or pytorch_mppi is not installed."""
+    try:
+        import torch
+        from pytorch_mppi import MPPI as TorchMPPI
+    except ImportError:
+        return None
+    field = torch.tensor(grid.distance_field, dtype=torch.float32, device=device)
+    rows, cols = field.shape
+    x0, y0 = (float(v) for v in grid.origin)
+    res, goal = float(grid.resolution), torch.tensor([11.0, 4.0], device=device)
+
+    def dynamics(state, action):
+        x, y, th = state[:, 0], state[:, 1], state[:, 2]
+        v, w = action[:, 0], action[:, 1]
+        return torch.stack([x + 0.05 * v * torch.cos(th), y + 0.05 * v * torch.sin(th),
+                            th + 0.05 * w], dim=1)  # fmt: skip
+
+    def running_cost(state, action):
+        col = ((state[:, 0] - x0) / res).long().clamp(0, cols - 1)
+        row = ((state[:, 1] - y0) / res).long().clamp(0, rows - 1)
+        clear = field[row, col] - 0.283
+        obstacle = torch.where(clear <= 0.0, 1e6, 20.0 * torch.clamp(0.4 - clear, min=0.0) ** 2)
+        return torch.linalg.norm(state[:, :2] - goal, dim=1) + obstacle
+
+    low, high = torch.tensor([-0.5, -1.5]), torch.tensor([0.5, 1.5])
+    controller = TorchMPPI(dynamics, running_cost, 3, torch.diag(torch.tensor([0.04, 0.25])),
+                           num_samples=samples, horizon=56, device=device, lambda_=0.03,
+                           u_min=low, u_max=high)  # fmt: skip
+    state = torch.tensor([2.4, 3.9, 0.1])
+    for _ in range(3):
+        controller.command(state)
+    best = np.inf
+    for _ in range(3):
+        begin = time.perf_counter()
+        for _ in range(calls):
+            controller.command(state)
+        best = min(best, (time.perf_counter() - begin) / calls)
+    return 1.0 / best
 
 
 def gpu(grid, calls: int) -> dict:
