@@ -44,7 +44,7 @@ def test_errors_in_the_robot_frame():
 def test_linear_tracker_poles(v_r, omega_r, zeta, g):
     # Jacobian of the error dynamics ė_x = ω e_y − v + v_r cos e_θ, ė_y = −ω e_x + v_r sin e_θ,
     # ė_θ = ω_r − ω at e = 0 under the law: poles −2ζω_n and −ζω_n ± ω_n√(ζ² − 1)
-    law = LinearTracker(zeta=zeta, g=g)
+    law = LinearTracker(zeta=zeta, g=g, min_natural_frequency=0.0)  # the textbook law
     k_x, k_y, k_theta = law.gains(v_r, omega_r)
     jac = np.array([[-k_x, omega_r, 0.0], [-omega_r, 0.0, v_r], [0.0, -k_y, -k_theta]])
     natural = math.sqrt(omega_r**2 + g * v_r**2)
@@ -86,7 +86,19 @@ def test_kanayama_on_the_reference_is_the_feed_forward():
 
 def test_bad_tracking_input():
     with pytest.raises(InputError, match="moving reference"):
-        LinearTracker()(0.0, [0.0, 0.0, 0.0], ([1.0, 0.0, 0.0], 0.0, 0.0))
+        LinearTracker(min_natural_frequency=0.0)(0.0, [0.0, 0.0, 0.0], ([1.0, 0.0, 0.0], 0.0, 0.0))
+    with pytest.raises(ConfigError, match="min_natural_frequency"):
+        LinearTracker(min_natural_frequency=-1.0)
+
+
+def test_linear_tracker_holds_a_standing_reference():
+    # At rest, K_x = K_θ = 2ζ·a_min: the x and heading errors are corrected, y is not.
+    law = LinearTracker(zeta=0.7, min_natural_frequency=0.5)
+    v, omega = law(0.0, [0.0, 0.0, 0.1], ([0.2, 0.0, 0.0], 0.0, 0.0))
+    assert v == pytest.approx(0.7 * 0.2 * math.cos(0.1), rel=1e-9)
+    assert omega == pytest.approx(-0.7 * 0.1, rel=1e-9)
+    v, omega = law(0.0, [0.0, 0.0, 0.0], ([0.0, 0.3, 0.0], 0.0, 0.0))
+    assert v == pytest.approx(0.0) and omega == pytest.approx(0.0)
     with pytest.raises(ConfigError, match="k_y"):
         Kanayama(k_y=-1.0)
     with pytest.raises(ConfigError, match="zeta"):

@@ -452,14 +452,22 @@ def run(
     )
 
     dynamic = scenario.plant == "dynamic"
-    if dynamic != (scenario.controller.law == "computed_torque"):
+    if not dynamic and scenario.controller.law == "computed_torque":
         raise ScenarioError(
-            "plant: a dynamic plant is driven by wheel torques: use it with controller.law "
-            f"computed_torque, and computed_torque with it (got plant {scenario.plant!r}, law "
-            f"{scenario.controller.law!r})"
+            "controller.law: computed_torque gives wheel torques: use it with plant: dynamic"
         )
     if dynamic and robot.dynamics is None:
         raise ScenarioError("plant: dynamic needs a robot with a dynamics preset (rm100)")
+    if dynamic and scenario.controller.law != "computed_torque":
+        from wheelbase.control.torque import TwistTorqueLoop
+
+        loop = scenario.controller.torque_loop
+        controller = _field(
+            "controller.torque_loop",
+            lambda: TwistTorqueLoop(
+                controller, robot.dynamics, bandwidth=loop.bandwidth, max_torque=loop.max_torque
+            ),
+        )
     plan, planning = _plan(grid, robot, scenario, start, goals)
     base_metrics = {"name": scenario.name, "seed": scenario.seed, **planning}
     if plan is None:
@@ -481,7 +489,7 @@ def run(
     log = run_loop(
         robot.model,
         controller,
-        reference if reference_kind == "trajectory" else _polyline(plan),
+        reference if reference_kind == "trajectory" else plan,
         start,
         dt=scenario.dt,
         duration=scenario.duration,
@@ -636,13 +644,6 @@ def _concatenate(legs, path_type):
 def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PathReference:
     """Time-parametrise each forward/backward run of the plan; stops at every goal."""
     return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
-
-
-def _polyline(plan):
-    from wheelbase.control.path import Polyline
-
-    directions = np.where(plan.directions[1:] < 0, -1.0, 1.0)
-    return Polyline(plan.poses[:, :2], directions)
 
 
 def _odometry(scenario: Scenario, robot: Robot) -> OdometrySetup:

@@ -108,6 +108,13 @@ class TrajectorySpec(_Strict):
     reverse_speed_factor: float = Field(1.0, gt=0, le=1, description="Reverse speed fraction.")
 
 
+class TorqueLoopSpec(_Strict):
+    """How a kinematic law drives a dynamic plant: its (v, ω) tracked by computed torque."""
+
+    bandwidth: float = Field(10.0, gt=0, description="Twist-loop bandwidth k [1/s].")
+    max_torque: float = Field(5.0, gt=0, description="Wheel-torque saturation [N·m].")
+
+
 class ControllerSpec(_Strict):
     """The tracking controller: a law of :mod:`wheelbase.control` and its gains."""
 
@@ -116,6 +123,11 @@ class ControllerSpec(_Strict):
         default_factory=dict,
         description="Gains and options of the law (numbers; MPPI also takes backend names, "
         "flags and per-input noise tuples).",
+    )
+    torque_loop: TorqueLoopSpec = Field(
+        default_factory=TorqueLoopSpec,
+        description="On a dynamic plant, a law other than computed_torque commands (v, ω), "
+        "tracked by computed torque with these settings.",
     )
 
 

@@ -39,6 +39,7 @@ from wheelbase.control.torque import (
     ComputedTorquePID,
     TorqueGains,
     TrackingResult,
+    TwistTorqueLoop,
     track_trajectory,
     tune_computed_torque,
 )
@@ -76,6 +77,7 @@ __all__: list[str] = [
     "SteeringLimits",
     "TorqueGains",
     "TrackingResult",
+    "TwistTorqueLoop",
     "VelocityLimits",
     "ViaDirection",
     "ViaPoint",

@@ -561,7 +561,11 @@ class MPPI:
         if self._tables is not None and self._tables[0] is reference:
             return self._tables[1]
         line = _as_polyline(reference)
-        tables = PathTables(np.asarray(line.points), np.asarray(line.directions), self.path_spacing)
+        poses = getattr(reference, "poses", None)  # a planned path also has the goal heading
+        end_heading = None if poses is None else float(np.asarray(poses)[-1, 2])
+        tables = PathTables(
+            np.asarray(line.points), np.asarray(line.directions), self.path_spacing, end_heading
+        )
         self._tables = (reference, tables)
         self._progress, self._section = None, 0
         return tables

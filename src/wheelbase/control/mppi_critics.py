@@ -173,11 +173,18 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
 class PathTables:
     """A reference path densified every ``spacing`` metres, with its sections (private helper).
 
-    Attributes: ``xy`` (P, 2), ``heading`` (P,) robot heading when travelling the path there,
+    Attributes: ``xy`` (P, 2), ``heading`` (P,) robot heading when travelling the path there
+    (the chord's, or ``end_heading`` at the last point),
     ``direction`` (P,), ``arc`` (P,), ``section`` (P,) index of the direction run of each point.
     """
 
-    def __init__(self, points: np.ndarray, directions: np.ndarray, spacing: float) -> None:
+    def __init__(
+        self,
+        points: np.ndarray,
+        directions: np.ndarray,
+        spacing: float,
+        end_heading: float | None = None,
+    ) -> None:
         xy, heading, direction, arc, section = [points[:1]], [], [], [0.0], []
         seg = np.diff(points, axis=0)
         length = np.hypot(seg[:, 0], seg[:, 1])
@@ -200,6 +207,10 @@ class PathTables:
         self.direction = np.array([direction[0], *direction], dtype=np.float64)
         self.arc = np.array(arc)
         self.section = np.array([section[0], *section], dtype=np.int64)
+        if end_heading is not None:
+            # The goal's heading (a planned path knows it): the last chord's direction differs
+            # from it by half the turn of the last segment.
+            self.heading[-1] = _wrap(np.array([end_heading]))[0]
         # A cusp point belongs to the section that ends there.
         self.n_sections = run + 1
         self.section_end = np.array(

@@ -53,6 +53,7 @@ __all__ = [
     "ComputedTorquePID",
     "TorqueGains",
     "TrackingResult",
+    "TwistTorqueLoop",
     "track_trajectory",
     "tune_computed_torque",
 ]
@@ -308,6 +309,112 @@ class ComputedTorquePID:
 
 
 # --------------------------------------------------------------------------- closed loop
+class TwistTorqueLoop:
+    """A kinematic control law on the dynamic plant: its (v, ω) tracked by computed torque.
+
+    Any law of :mod:`wheelbase.control` with velocity commands (pure pursuit, Kanayama, MPPI,
+    ...) thinks in body twists; a dynamic plant takes wheel torques. Each call asks the law for
+    (v, ω) at the estimated pose, makes it the twist reference ζ_ref = (v, 0, ω) and commands the
+    body acceleration a = k·(ζ_ref − ζ) (a_v = 0: the no-slip constraint leaves the lateral
+    velocity to the ground), turned into wheel torques by the model's inverse dynamics
+    τ = M·a + C(ζ)·ζ (+ resistances), τ* = Wᵀ·τ, saturated at ``max_torque``. With an exact
+    model and no saturation, u and r follow the law's commands as first-order lags of time
+    constant 1/k.
+
+    Parameters
+    ----------
+    law : callable
+        ``law(t, pose (3,), reference) -> (v [m/s], ω [rad/s])`` with
+        ``command_names == ("v", "omega")``.
+    model : DiffDriveDynamics
+        The controller's model of the robot.
+    bandwidth : float
+        k [1/s], > 0.
+    max_torque : float
+        Wheel-torque saturation [N·m], > 0 (inf: none).
+
+    Examples
+    --------
+    >>> from wheelbase.control import PurePursuit
+    >>> from wheelbase.dynamics import RM100
+    >>> loop = TwistTorqueLoop(PurePursuit(speed=0.3), RM100, bandwidth=8.0, max_torque=5.0)
+    >>> loop(0.0, np.zeros(6), [[0.0, 0.0], [2.0, 0.0]]).round(3).tolist()
+    [2.044, 2.044]
+    """
+
+    command_names: ClassVar[tuple[str, ...]] = ("tau_left", "tau_right")
+
+    def __init__(
+        self,
+        law: object,
+        model: DiffDriveDynamics,
+        *,
+        bandwidth: float = 10.0,
+        max_torque: float = math.inf,
+    ) -> None:
+        if not callable(law):
+            raise ConfigError(f"law must be a control law (got {type(law).__name__})")
+        names = tuple(getattr(law, "command_names", ("v", "omega")))
+        if names != ("v", "omega"):
+            raise ConfigError(f"the torque loop tracks (v, omega) commands; this law gives {names}")
+        if not isinstance(model, DiffDriveDynamics):
+            raise ConfigError(f"model must be a DiffDriveDynamics (got {type(model).__name__})")
+        self.law = law
+        self.model = model
+        self.bandwidth = positive("bandwidth", bandwidth, "1/s")
+        if max_torque != math.inf:
+            max_torque = positive("max_torque", max_torque, "N·m")
+        self.max_torque = float(max_torque)
+        self.last_command = np.zeros(2)
+
+    def reset(self) -> None:
+        """Reset the law."""
+        reset = getattr(self.law, "reset", None)
+        if reset is not None:
+            reset()
+        self.last_command = np.zeros(2)
+
+    @property
+    def status(self) -> str | None:
+        """The law's status (MPPI's ``ok`` / ``all_collide`` / ``arrived``), if it has one."""
+        return getattr(self.law, "status", None)
+
+    @property
+    def last_plan(self) -> object:
+        """The law's last plan (MPPI), if it has one."""
+        return getattr(self.law, "last_plan", None)
+
+    def predict(self, *args: object, **kwargs: object) -> np.ndarray:
+        """The law's rollouts (MPPI's :meth:`~wheelbase.control.MPPI.predict`)."""
+        return self.law.predict(*args, **kwargs)  # type: ignore[attr-defined]
+
+    def __call__(self, t: float, state: ArrayLike, reference: object) -> np.ndarray:
+        """Wheel torques (left, right) [N·m].
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        state : array_like, shape (6,)
+            Estimated (x [m], y [m], θ [rad], u [m/s], v [m/s], r [rad/s]).
+        reference : object
+            Passed to the law unchanged.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2,)
+        """
+        state = as_float_array("state", state, 6, max_ndim=1)
+        command = np.asarray(self.law(t, state[:3].copy(), reference), dtype=np.float64)
+        command = command.reshape(2)
+        self.last_command = command
+        target = np.array([command[0], 0.0, command[1]])
+        acceleration = self.bandwidth * (target - state[3:])
+        acceleration[1] = 0.0
+        _force, torques = self.model.inverse(state[3:], acceleration)
+        return np.clip(torques, -self.max_torque, self.max_torque)
+
+
 @dataclass(frozen=True)
 class TrackingResult:
     """Reference and actual motion of a tracking run (open loop or closed loop).

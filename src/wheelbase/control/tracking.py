@@ -32,7 +32,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, finite, positive
+from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.control.base import VELOCITY_COMMAND, VelocityLimits, saturate_velocity
 from wheelbase.errors import ConfigError, InputError
 
@@ -138,21 +138,34 @@ class LinearTracker(_Tracker):
         Damping ratio ζ [-], > 0 (0 < ζ < 1 for the usual underdamped design).
     g : float
         g [1/m²], > 0; K_y = g·v_r.
+    min_natural_frequency : float
+        a_min [rad/s], >= 0: K_x = K_θ = 2ζ·max(√(ω_r² + g·v_r²), a_min). The textbook law
+        (a_min = 0) has no gain at all when the reference stands still — at the start and the
+        end of every trajectory — and could not even hold the final heading; with a_min > 0
+        the x and heading errors keep being corrected there (K_y = g·v_r stays 0: a
+        nonholonomic robot cannot correct a sideways error without moving).
     limits : VelocityLimits, optional
         Command limits.
 
     Raises
     ------
     InputError
-        When called with v_r = ω_r = 0: the gains vanish and nothing is controlled.
+        When called with v_r = ω_r = 0 and ``min_natural_frequency`` = 0: the gains vanish and
+        nothing is controlled.
     """
 
     zeta: float = 0.7
     g: float = 60.0
+    min_natural_frequency: float = 0.5
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "zeta", positive("zeta", self.zeta, ""))
         object.__setattr__(self, "g", positive("g", self.g, "1/m²"))
+        object.__setattr__(
+            self,
+            "min_natural_frequency",
+            nonnegative("min_natural_frequency", self.min_natural_frequency, "rad/s"),
+        )
 
     def gains(self, v_r: ArrayLike, omega_r: ArrayLike) -> tuple[np.ndarray, ...]:
         """(K_x, K_y, K_θ) for the reference inputs.
@@ -165,12 +178,12 @@ class LinearTracker(_Tracker):
             Reference yaw rate [rad/s].
         """
         v_r, omega_r = np.asarray(v_r, float), np.asarray(omega_r, float)
-        natural = np.sqrt(omega_r**2 + self.g * v_r**2)
+        natural = np.maximum(np.sqrt(omega_r**2 + self.g * v_r**2), self.min_natural_frequency)
         k = 2.0 * self.zeta * natural
         return k, self.g * v_r, k
 
     def _law(self, e_x, e_y, e_theta, v_r, omega_r):
-        if np.any((v_r == 0.0) & (omega_r == 0.0)):
+        if self.min_natural_frequency == 0.0 and np.any((v_r == 0.0) & (omega_r == 0.0)):
             raise InputError(
                 "LinearTracker needs a moving reference: v_r = omega_r = 0 makes every gain 0 "
                 "(use a pose controller to hold a pose)"
