@@ -25,7 +25,11 @@ Prints one JSON object:
 - ``gpu_hz_2000x56``, ``gpu_hz_100000x56``, ``gpu_hz_1000000x56``: the jax backend (float32)
   where JAX sees a GPU (install ``jax[cuda12]``), else ``null`` with the reason in ``gpu``.
 
-Usage: ``python benchmarks/mppi.py [--quick] [--seeds N]`` (``--quick``: 5 seeds, 5 timed calls).
+- ``parking``: the bundled parking scenario (4.5 m car) driven by MPPI over
+  ``--parking-seeds`` seeds (none with ``--quick``): statuses, final errors, path deviation.
+
+Usage: ``python benchmarks/mppi.py [--quick] [--seeds N] [--parking-seeds N]`` (``--quick``: 5
+seeds, 5 timed calls).
 """
 
 from __future__ import annotations
@@ -241,10 +245,38 @@ def clearance(grid, seeds: int) -> dict:
     }
 
 
+def parking(seeds: int) -> dict:
+    """The bundled ``parking`` scenario (4.5 × 1.8 m car, one cusp, reverse into a bay)
+    driven by MPPI (1,000 × 56, Numba) over noise seeds instead of rear-wheel feedback."""
+    from wheelbase.runner import run
+    from wheelbase.scenario import load_scenario
+
+    base = load_scenario("parking")
+    rows = []
+    for seed in range(seeds):
+        controller = {"law": "mppi", "gains": {"samples": 1000, "max_speed": 1.5, "seed": seed}}
+        scenario = base.model_validate(base.model_dump() | {"controller": controller})
+        begin = time.perf_counter()
+        metrics = run(scenario).metrics
+        rows.append(
+            {
+                "status": metrics["status"],
+                "final_position_error_m": metrics["final_position_error_true_m"],
+                "path_deviation_max_m": metrics["path_deviation_max_m"],
+                "min_clearance_m": metrics["min_clearance_m"],
+                "duration_s": metrics["duration_s"],
+                "wall_time_s": time.perf_counter() - begin,
+            }
+        )
+    arrived = sum(row["status"] == "arrived" for row in rows)
+    return {"seeds": seeds, "arrived": arrived, "runs": rows}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="5 seeds, 5 timed calls")
     parser.add_argument("--seeds", type=int, default=50, help="noise seeds of the clearance run")
+    parser.add_argument("--parking-seeds", type=int, default=4, help="seeds of the parking run")
     args = parser.parse_args()
     seeds = 5 if args.quick else args.seeds
     calls = 5 if args.quick else 50
@@ -263,6 +295,7 @@ def main() -> None:
     out |= gpu(grid, calls)
     out["tracking"] = tracking()
     out["clearance"] = clearance(grid, seeds)
+    out["parking"] = parking(0 if args.quick else args.parking_seeds)
     print(json.dumps(out, indent=2))
 
 

@@ -424,6 +424,7 @@ def test_benchmark_quick_prints_the_promised_json():
     for key in ("gpu_hz_2000x56", "gpu_hz_100000x56", "gpu_hz_1000000x56"):
         assert key in report
     assert report["gpu"].startswith("none") == (report["gpu_hz_2000x56"] is None)
+    assert report["parking"]["seeds"] == 0  # the 4.5 m car runs only in the full benchmark
 
 
 def test_closed_path_is_driven_round_before_arriving():
@@ -493,3 +494,42 @@ def test_a_car_backs_up_to_a_wall_behind_it():
     reverse = Polyline([[2.2, 5.0], [6.0, 5.0]], [1])
     plan = mppi.plan(pose, reverse)
     assert plan.status == "ok" and plan.costs.min() < mppi.critics.collision_cost
+
+
+def test_conservative_collisions_do_not_freeze_a_clear_robot():
+    # The car's rear is 0.1 m from a wall: clear, but the critics' disks and their cell margin
+    # (0.17 m) see it in collision. Only rollouts that get deeper count as collisions then.
+    occupied = np.zeros((200, 200), bool)
+    occupied[:, :20] = True  # wall: x < 1 m
+    grid = OccupancyGrid.from_array(occupied, 0.05)
+    car = Footprint.rectangle(4.5, 1.8, rear_axle_to_center=1.35)
+    pose = np.array([1.0 + 0.9 + 0.1, 5.0, 0.0])
+    assert not grid.in_collision(car, pose[None]).any()
+    bike = RearWheelBicycle(wheel_base=2.7, max_steering=0.6)
+    mppi = MPPI(bike, 30, 0.05, 200, (0.2, 0.3), 0.03, None, SteeringLimits(0.6, max_speed=1.0),
+                backend="numba", grid=grid, footprint=car)  # fmt: skip
+    now, _ = mppi._clearance(pose)
+    assert now <= 0.0
+    plan = mppi.plan(pose, Polyline([[2.0, 5.0], [6.0, 5.0]]))
+    assert plan.status == "ok"
+    best = mppi.predict(plan, plan.samples[np.argmin(plan.costs)])
+    assert mppi._clearance(best)[0].min() >= now - 0.01
+    # truly inside the wall, every rollout stays lethal: a safe stop
+    assert mppi.plan(np.array([1.5, 5.0, 0.0]), Polyline([[2.0, 5.0], [6.0, 5.0]])).status == (
+        "all_collide"
+    )
+
+
+def test_after_all_rollouts_collided_both_signs_are_sampled():
+    occupied = np.zeros((200, 200), bool)
+    occupied[:, :20] = True  # wall: x < 1 m, far from the path
+    grid = OccupancyGrid.from_array(occupied, 0.05)
+    path = Polyline([[5.0, 5.0], [9.0, 5.0]])
+    mppi = make("numba", samples=400, grid=grid, footprint=ROBOT)
+    mppi(0.0, (0.5, 5.0, 0.0), path)  # inside the wall
+    assert mppi.status == "all_collide"
+    mppi(0.1, (5.0, 5.0, 0.0), path)
+    assert mppi.status == "ok"
+    assert np.any(mppi.last_plan.samples[..., 0] < 0.0)  # backing off is allowed once
+    mppi(0.2, (5.0, 5.0, 0.0), path)
+    assert np.all(mppi.last_plan.samples[..., 0] >= 0.0)  # then forward only again

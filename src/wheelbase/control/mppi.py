@@ -423,6 +423,15 @@ class MPPI:
         if last_section and info[7] <= self.critics.near_goal_distance:
             weights[5] = 0.0  # obstacle repulsion off near the goal (collisions stay lethal)
         blocked = self._path_blocked(window)
+        if self._map[3] > 0.5:
+            # Where the critics already see the footprint in collision (their clearance is
+            # conservative by a cell diagonal and the disks' overshoot; a planned path may pass
+            # closer), every rollout would be lethal and the robot frozen for good: then only
+            # rollouts that get deeper than now (by 1 cm) count as collisions. A footprint that
+            # truly overlaps an obstacle keeps every rollout lethal: a safe stop.
+            now, _ = self._clearance(pose)
+            if now <= 0.0 and not self._truly_colliding(pose):
+                info[8] = float(now) - 0.01
         if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
         mean = self._mean
@@ -469,8 +478,9 @@ class MPPI:
         self, info: np.ndarray, blocked: bool, tables: PathTables
     ) -> tuple[np.ndarray, np.ndarray]:
         """Command bounds of this call: the speed keeps the sign of the path section unless
-        ``reverse_against_path``, the path ahead is blocked, or the robot is settling at the goal
-        (where a small correction backwards may be needed). Sampling both signs where the optimum
+        ``reverse_against_path``, the path ahead is blocked, the last call found every rollout
+        colliding, or the robot is settling at the goal (where a small correction backwards may
+        be needed). Sampling both signs where the optimum
         is about zero makes the weighted mean flip sign: the robot would twitch back and forth."""
         lo, hi = self._lo.copy(), self._hi.copy()
         # Slow down into cusps and the goal: |v| <= √(2·a·d), d the distance left to the
@@ -478,7 +488,9 @@ class MPPI:
         cap = max(math.sqrt(2.0 * self.approach_deceleration * info[7]), 0.1 * hi[0])
         lo[0], hi[0] = max(lo[0], -cap), min(hi[0], cap)
         settling = self._section == tables.n_sections - 1 and info[0] > 0.5
-        if self.reverse_against_path or blocked or settling or not self.allow_reverse:
+        # After a call where every rollout collided, both signs: backing off may be the way out.
+        recovering = self.status == "all_collide"
+        if self.reverse_against_path or blocked or settling or recovering or not self.allow_reverse:
             return lo, hi
         if info[6] > 0.0:
             lo[0] = 0.0
@@ -612,6 +624,7 @@ class MPPI:
                 tab.direction[end],
                 # distance left to the section's end: along the path, or straight if farther
                 max(remaining, float(np.hypot(*(tab.xy[end] - pose[:2])))),
+                0.0,  # collision relief, set by ``plan``
             ]
         )
         return np.ascontiguousarray(window), info
@@ -634,19 +647,36 @@ class MPPI:
         ``max_path_occupancy_ratio``): the path critics are then switched off for this call."""
         if self._map[3] < 0.5:
             return False
+        _clearance, collided = self._clearance(window[:, :3])
+        return bool(np.mean(collided) > 0.07)
+
+    def _truly_colliding(self, pose: np.ndarray) -> bool:
+        """Whether the exact footprint (or the point) overlaps an obstacle or leaves the map."""
+        if self.footprint is None:
+            inside = bool(self.grid.contains(pose[None, :2])[0])
+            return not inside or bool(self.grid.is_occupied(pose[None, :2])[0])
+        return bool(np.asarray(self.grid.in_collision(self.footprint, pose[None])).reshape(-1)[0])
+
+    def _clearance(self, poses: np.ndarray, relief: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The critics' footprint clearance [m] of poses ``(..., 3)`` (the least over the disks
+        of distance field − disk radius − √2·cell − ``relief``; 0 off the map) and whether each
+        is in collision (<= 0 or off the map)."""
         x0, y0, res = self._map[:3]
-        cos, sin = np.cos(window[:, 2]), np.sin(window[:, 2])
-        hit = np.zeros(window.shape[0], bool)
+        cos, sin = np.cos(poses[..., 2]), np.sin(poses[..., 2])
+        rows, cols = self._df.shape
+        collided = np.zeros(poses.shape[:-1], bool)
+        clearance = np.full(poses.shape[:-1], np.inf)
         for cx, cy, radius in self._circles:
-            px = window[:, 0] + cos * cx - sin * cy
-            py = window[:, 1] + sin * cx + cos * cy
+            px = poses[..., 0] + cos * cx - sin * cy
+            py = poses[..., 1] + sin * cx + cos * cy
             col = np.floor((px - x0) / res).astype(np.int64)
             row = np.floor((py - y0) / res).astype(np.int64)
-            rows, cols = self._df.shape
             inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
             field = self._df[np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)]
-            hit |= ~inside | (field - radius - math.sqrt(2.0) * res <= 0.0)
-        return bool(np.mean(hit) > 0.07)
+            clear = field - radius - math.sqrt(2.0) * res - relief
+            collided |= ~inside | (clear <= 0.0)
+            clearance = np.minimum(clearance, np.where(inside, clear, 0.0))
+        return clearance, collided
 
     # ------------------------------------------------------------------ NumPy reference
     def _twist(self, controls: np.ndarray) -> np.ndarray:
@@ -690,22 +720,8 @@ class MPPI:
             cost += c.goal * np.sum(dist, axis=1) / steps
             cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[5]))
         if self._map[3] > 0.5:
-            x0, y0, res = self._map[:3]
-            cos, sin = np.cos(after[..., 2]), np.sin(after[..., 2])
-            collided = np.zeros(self.samples, bool)
-            clearance = np.full(after.shape[:2], np.inf)
-            for cx, cy, radius in self._circles:
-                px = after[..., 0] + cos * cx - sin * cy
-                py = after[..., 1] + sin * cx + cos * cy
-                col = np.floor((px - x0) / res).astype(np.int64)
-                row = np.floor((py - y0) / res).astype(np.int64)
-                inside = (row >= 0) & (row < self._df.shape[0]) & (col >= 0)
-                inside &= col < self._df.shape[1]
-                field = self._df[np.clip(row, 0, self._df.shape[0] - 1),
-                                 np.clip(col, 0, self._df.shape[1] - 1)]  # fmt: skip
-                clear = field - radius - math.sqrt(2.0) * res
-                collided |= np.any(~inside | (clear <= 0.0), axis=1)
-                clearance = np.minimum(clearance, np.where(inside, clear, 0.0))
+            clearance, collided = self._clearance(after, info[8])
+            collided = np.any(collided, axis=1)
             gap = np.where(clearance > 0.0, np.maximum(c.inflation - clearance, 0.0), 0.0)
             cost += w[5] * np.sum(gap * gap, axis=1) / steps
             cost += np.where(collided, c.collision_cost, 0.0)
@@ -846,7 +862,7 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: in
             row = jnp.floor((cy - y0) / res).astype(jnp.int32)
             inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
             field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
-            clear = field - circles[k, 2] - math.sqrt(2.0) * res
+            clear = field - circles[k, 2] - math.sqrt(2.0) * res - info[8]
             collided = collided | (has_map & jnp.any(~inside | (clear <= 0.0), axis=0))
             clearance = jnp.minimum(clearance, jnp.where(inside, clear, 0.0))
         gap = jnp.where(clearance > 0.0, jnp.maximum(w[10] - clearance, 0.0), 0.0)
@@ -928,7 +944,7 @@ def _mppi_kernel(
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     inv_res = 1.0 / res
     n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
-    margin = math.sqrt(2.0) * res
+    margin = math.sqrt(2.0) * res + info[8]
     w_path, w_align = w[0] / n_checked, w[1] / n_checked
     w_goal, w_obstacle = w[3] / steps, w[5] / steps
     w_forward = w[6] * dt
