@@ -314,10 +314,11 @@ class TwistTorqueLoop:
 
     Any law of :mod:`wheelbase.control` with velocity commands (pure pursuit, Kanayama, MPPI,
     ...) thinks in body twists; a dynamic plant takes wheel torques. Each call asks the law for
-    (v, ω) at the estimated pose, makes it the twist reference ζ_ref = (v, 0, ω) and commands the
-    body acceleration a = k·(ζ_ref − ζ) (a_v = 0: the no-slip constraint leaves the lateral
-    velocity to the ground), turned into wheel torques by the model's inverse dynamics
-    τ = M·a + C(ζ)·ζ (+ resistances), τ* = Wᵀ·τ, saturated at ``max_torque``. With an exact
+    (v, ω) at the estimated pose and turns it into wheel torques with
+    :func:`~wheelbase.control.loop.velocity_torques`: body acceleration a = k·(ζ_ref − ζ) with
+    ζ_ref = (v, 0, ω) (a_v = 0: the no-slip constraint leaves the lateral velocity to the
+    ground), inverse dynamics τ = M·a + C(ζ)·ζ (+ resistances), τ* = Wᵀ·τ, saturated at
+    ``max_torque``. With an exact
     model and no saturation, u and r follow the law's commands as first-order lags of time
     constant 1/k.
 
@@ -408,11 +409,10 @@ class TwistTorqueLoop:
         command = np.asarray(self.law(t, state[:3].copy(), reference), dtype=np.float64)
         command = command.reshape(2)
         self.last_command = command
-        target = np.array([command[0], 0.0, command[1]])
-        acceleration = self.bandwidth * (target - state[3:])
-        acceleration[1] = 0.0
-        _force, torques = self.model.inverse(state[3:], acceleration)
-        return np.clip(torques, -self.max_torque, self.max_torque)
+        from wheelbase.control.loop import velocity_torques
+
+        gains = (self.bandwidth, self.bandwidth)
+        return velocity_torques(self.model, state, command, gains, self.max_torque)
 
 
 @dataclass(frozen=True)
