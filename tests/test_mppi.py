@@ -27,7 +27,14 @@ from wheelbase.control import (
 )
 from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.models import Bicycle, BodyTwist, DiffDrive, RearWheelBicycle, Unicycle
+from wheelbase.models import (
+    Bicycle,
+    BodyTwist,
+    DiffDrive,
+    RearWheelBicycle,
+    Unicycle,
+    mecanum4,
+)
 from wheelbase.planning import Footprint, OccupancyGrid, load_map
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
@@ -76,18 +83,21 @@ def backends():
             STRAIGHT,
             (5.0, 3.8, 0.4),
         ),
+        (BodyTwist(), LIMITS, STRAIGHT, (2.6, 3.9, 0.2)),
+        (mecanum4(0.05, 0.2, 0.15), LIMITS, STRAIGHT, (5.2, 4.3, 1.2)),
     ],
-    ids=["unicycle", "diffdrive", "bicycle_cusp", "front_bicycle"],
+    ids=["unicycle", "diffdrive", "bicycle_cusp", "front_bicycle", "body_twist", "mecanum"],
 )
 def test_backends_agree_on_the_command(cluttered, model, limits, reference, pose):
     names = backends()
+    sigma = (0.2, 0.4) if len(model.input_names) == 2 else (0.2, 0.2, 0.4)
     controllers = {
         name: MPPI(
             model,
             24,
             0.05,
             128,
-            (0.2, 0.4),
+            sigma,
             0.05,
             {"twirl": 1.0},
             limits,
@@ -100,7 +110,7 @@ def test_backends_agree_on_the_command(cluttered, model, limits, reference, pose
     }
     rng = np.random.default_rng(7)
     for _ in range(3):  # three calls: the warm start is carried the same way
-        noise = rng.standard_normal((128, 24, 2)) * (0.2, 0.4)
+        noise = rng.standard_normal((128, 24, len(sigma))) * sigma
         plans = {name: c.plan(pose, reference, noise) for name, c in controllers.items()}
         reference_plan = plans["numpy"]
         for plan in plans.values():
@@ -250,8 +260,34 @@ def test_bad_parameters(change, match):
 
 
 def test_unsupported_model():
-    with pytest.raises(ConfigError, match="BodyTwist"):
-        MPPI(BodyTwist(), 10, 0.05, 8, 0.2, 0.1, None, LIMITS)
+    class Sledge:
+        input_names = ("push", "pull")
+
+    with pytest.raises(ConfigError, match="holonomic wheeled bases"):
+        MPPI(Sledge(), 10, 0.05, 8, 0.2, 0.1, None, LIMITS)
+    with pytest.raises(ConfigError, match="3 values"):
+        MPPI(BodyTwist(), 10, 0.05, 8, (0.2, 0.4), 0.1, None, LIMITS)
+
+
+def test_holonomic_bases_follow_the_path_and_use_their_lateral_speed():
+    # A mecanum base facing +y follows a path along +x. With the default critics it turns to
+    # the path and arrives; with the heading critics off it strafes more than it drives ahead.
+    base = mecanum4(0.05, 0.2, 0.15)
+    path = Polyline([[0.0, 0.0], [3.0, 0.0]])
+    lateral = {}
+    for critics in (None, {"path_align": 0.0, "goal_heading": 0.0, "twirl": 5.0}):
+        mppi = MPPI(base, 30, 0.05, 300, (0.2, 0.2, 0.4), 0.03, critics, LIMITS,
+                    backend="numba", goal_tolerance=(0.05, 3.2))  # fmt: skip
+        assert mppi.command_names == ("vx", "vy", "omega")
+        result = run_closed_loop(mppi, base, (0.0, 0.0, math.pi / 2), path, 20.0, 0.05)
+        assert mppi.status == "arrived"
+        assert np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])) <= 0.05
+        assert path.distance(result.poses[:, 0, :2]).max() < 0.05
+        # the speed limit holds in every direction (no √2 on the diagonal)
+        assert np.hypot(*result.commands[:, 0, :2].T).max() <= 0.5 + 1e-12
+        commands = np.abs(result.commands[:, 0])
+        lateral[critics is None] = commands[:, 1].mean() / commands[:, 0].mean()
+    assert lateral[False] > 1.0 > lateral[True]
 
 
 def test_nan_pose_and_bad_noise():

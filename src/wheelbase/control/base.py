@@ -46,6 +46,7 @@ from wheelbase._validate import as_float_array, finite, positive
 from wheelbase.errors import ConfigError, InputError
 
 __all__ = [
+    "HOLONOMIC_COMMAND",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
     "Controller",
@@ -64,6 +65,9 @@ VELOCITY_COMMAND: tuple[str, str] = ("v", "omega")
 
 STEERING_COMMAND: tuple[str, str] = ("speed", "steering")
 """Names of a steered-vehicle command ``(v [m/s], δ [rad])``."""
+
+HOLONOMIC_COMMAND: tuple[str, str, str] = ("vx", "vy", "omega")
+"""Names of a holonomic-base command, the body twist ``(v_x [m/s], v_y [m/s], ω [rad/s])``."""
 
 
 @runtime_checkable

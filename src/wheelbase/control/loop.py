@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.control.base import (
+    HOLONOMIC_COMMAND,
     STEERING_COMMAND,
     VELOCITY_COMMAND,
     Controller,
@@ -123,13 +124,14 @@ def _within(
 def command_to_inputs(
     command: np.ndarray, command_names: tuple[str, ...], model: KinematicModel
 ) -> np.ndarray:
-    """Model inputs ``(..., k)`` for controller commands ``(..., 2)``.
+    """Model inputs ``(..., k)`` for controller commands ``(..., 2)`` (or ``(..., 3)``).
 
     ``(v, ω)`` drives a :class:`~wheelbase.models.Unicycle` directly, a
     :class:`~wheelbase.models.DiffDrive` through its wheel speeds and a steered model
     (inputs ``(speed, steering)``) through δ = atan(L·ω/v) clipped to its steering stop;
-    ``(v, δ)`` drives a steered model directly. Any other model gets ``model.inverse`` of the
-    twist (v, 0, ω).
+    ``(v, δ)`` drives a steered model directly; ``(v_x, v_y, ω)`` drives
+    :class:`~wheelbase.models.BodyTwist` directly and a holonomic wheeled base through its
+    inverse kinematics. Any other model gets ``model.inverse`` of the twist (v, 0, ω).
 
     Parameters
     ----------
@@ -141,6 +143,14 @@ def command_to_inputs(
         The plant.
     """
     names = tuple(model.input_names)
+    if tuple(command_names) == HOLONOMIC_COMMAND:
+        if names == ("u", "v", "r"):
+            return command
+        if not getattr(model, "is_holonomic", False):
+            raise ConfigError(
+                f"a (vx, vy, omega) controller needs a holonomic base (got {type(model).__name__})"
+            )
+        return model.inverse(command)  # type: ignore[attr-defined]
     if tuple(command_names) == STEERING_COMMAND:
         if names != STEERING_COMMAND:
             raise ConfigError(
@@ -213,7 +223,7 @@ def run_closed_loop(
     names = tuple(getattr(controller, "command_names", VELOCITY_COMMAND))
     controller.reset()
     poses = np.empty((times.size, n, 3))
-    commands = np.zeros((times.size, n, 2))
+    commands = np.zeros((times.size, n, len(names)))
     arrival = np.full(n, np.nan)
     poses[0] = pose
     last = times.size - 1
@@ -225,7 +235,8 @@ def run_closed_loop(
             if stop_on_arrival and not np.any(np.isnan(arrival)):
                 last = k
                 break
-        command = np.asarray(controller(t, pose, reference), dtype=np.float64).reshape(n, 2)
+        command = np.asarray(controller(t, pose, reference), dtype=np.float64)
+        command = command.reshape(n, len(names))
         if goal is not None and stop_on_arrival:
             command = np.where(np.isnan(arrival)[:, None], command, 0.0)
         commands[k] = command

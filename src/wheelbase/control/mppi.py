@@ -3,7 +3,8 @@
 Each call (Williams et al., "Information-theoretic MPC for model-based reinforcement learning",
 ICRA 2017; the form of Nav2's MPPI controller):
 
-1. warm start: the previous optimal command sequence U (T, 2), shifted by one step;
+1. warm start: the previous optimal command sequence U (T, m), shifted by one step (m = 2
+   command components, 3 for a holonomic base);
 2. K samples V_i = clip(U + ε_i, limits) with Gaussian ε_i ~ N(0, diag(σ²)); this call's
    limits keep v at the sign of the path section (unless ``reverse_against_path``, near the goal
    or where the path is blocked) and cap |v| at √(2·a·d) before a cusp or the goal, d away;
@@ -28,7 +29,11 @@ backends return the same command to rounding.
 
 Commands are ``(v [m/s], ω [rad/s])`` for :class:`~wheelbase.models.Unicycle` and
 :class:`~wheelbase.models.DiffDrive` (``limits``: :class:`VelocityLimits`), and
-``(v [m/s], δ [rad])`` for the steered models (``limits``: :class:`SteeringLimits`).
+``(v [m/s], δ [rad])`` for the steered models (``limits``: :class:`SteeringLimits`), and the
+body twist ``(v_x [m/s], v_y [m/s], ω [rad/s])`` for :class:`~wheelbase.models.BodyTwist` and
+holonomic wheeled bases (mecanum, omni; ``limits``: :class:`VelocityLimits`, whose
+``max_speed`` bounds the speed √(v_x² + v_y²) in every direction). A holonomic base samples
+speeds of both signs: it has no forward.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from scipy.special import ndtri
 from wheelbase._jax import X64, import_jax
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.control.base import (
+    HOLONOMIC_COMMAND,
     STEERING_COMMAND,
     VELOCITY_COMMAND,
     SteeringLimits,
@@ -63,8 +69,9 @@ __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
 STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
 
-# twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α)
-_KIND_VELOCITY, _KIND_REAR, _KIND_FRONT = 0, 1, 2
+# twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α);
+# holonomic (v_x, v_y, ω)
+_KIND_VELOCITY, _KIND_REAR, _KIND_FRONT, _KIND_HOLONOMIC = 0, 1, 2, 3
 
 
 @dataclass(frozen=True)
@@ -75,7 +82,7 @@ class MPPIPlan:
     ----------
     command : numpy.ndarray, shape (2,)
         The command sent (first of ``controls``, or a stop).
-    controls : numpy.ndarray, shape (T, 2)
+    controls : numpy.ndarray, shape (T, m)
         The smoothed optimal command sequence.
     costs : numpy.ndarray, shape (K,)
         Cost of each sample.
@@ -85,7 +92,7 @@ class MPPIPlan:
         ``"ok"`` or ``"all_collide"``.
     pose : numpy.ndarray, shape (3,)
         The measured pose the plan starts from (see :meth:`MPPI.predict`).
-    samples : numpy.ndarray, shape (K, T, 2)
+    samples : numpy.ndarray, shape (K, T, m)
         The sampled (clipped) command sequences, e.g. for a fan of rollouts.
     """
 
@@ -104,7 +111,8 @@ class MPPI:
     Parameters
     ----------
     model : KinematicModel
-        Unicycle, DiffDrive, Bicycle, RearWheelBicycle or Ackermann.
+        Unicycle, DiffDrive, Bicycle, RearWheelBicycle, Ackermann, BodyTwist or a holonomic
+        WheeledBase (``mecanum4``, ``omni3``).
     horizon_steps : int
         T, steps of the horizon, >= 1.
     dt : float
@@ -112,7 +120,8 @@ class MPPI:
     samples : int
         K, rollouts per call, >= 1.
     noise_std : sequence of float
-        σ of the Gaussian perturbation of each command component (SI units), > 0.
+        σ of the Gaussian perturbation of each command component (SI units), > 0: two values,
+        three for a holonomic base (one value: the same for all).
     temperature : float
         λ of the softmin, > 0.
     critics : MPPICritics, dict or None
@@ -193,11 +202,15 @@ class MPPI:
         self.samples = _count("samples", samples)
         self.dt = positive("dt", dt, "s")
         self.temperature = positive("temperature", temperature)
+        self._kind, self._wheel_base = _model_kind(model)
+        self.nu = 3 if self._kind == _KIND_HOLONOMIC else 2
         sigma = np.asarray(noise_std, dtype=np.float64).reshape(-1)
         if sigma.size == 1:
-            sigma = np.repeat(sigma, 2)
-        if sigma.size != 2 or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0.0):
-            raise ConfigError(f"noise_std must be two values > 0 (got {noise_std!r})")
+            sigma = np.repeat(sigma, self.nu)
+        if sigma.size != self.nu or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0.0):
+            raise ConfigError(
+                f"noise_std must be {self.nu} values > 0, one per command (got {noise_std!r})"
+            )
         self.noise_std = sigma
         self.critics = MPPICritics.from_mapping(critics)
         self.backend = check_choice("backend", backend, MPPI_BACKENDS)
@@ -216,8 +229,9 @@ class MPPI:
             "approach_deceleration", approach_deceleration, "m/s²"
         )
         self.jax_float64 = bool(jax_float64)
-        self._kind, self._wheel_base = _model_kind(model)
-        self.command_names = STEERING_COMMAND if self._kind != _KIND_VELOCITY else VELOCITY_COMMAND
+        self.command_names = {
+            _KIND_VELOCITY: VELOCITY_COMMAND, _KIND_HOLONOMIC: HOLONOMIC_COMMAND,
+        }.get(self._kind, STEERING_COMMAND)  # fmt: skip
         self._lo, self._hi = self._bounds(limits)
         self.limits = limits
         window = int(savgol_window)
@@ -286,7 +300,7 @@ class MPPI:
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = _model_kind(model)
-        if kind == _KIND_VELOCITY:
+        if kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
             limits: Any = VelocityLimits(max_speed=max_speed, max_yaw_rate=max_yaw_rate)
             options.pop("max_steering", None)
         else:
@@ -308,7 +322,7 @@ class MPPI:
             options.pop("horizon_steps", 56),
             options.pop("dt", 0.05),
             options.pop("samples", 2000),
-            options.pop("noise_std", (0.2, 0.4)),
+            options.pop("noise_std", (0.2, 0.2, 0.4) if kind == _KIND_HOLONOMIC else (0.2, 0.4)),
             options.pop("temperature", 0.03),
             critics,
             limits,
@@ -321,10 +335,14 @@ class MPPI:
 
     # ------------------------------------------------------------------ set-up
     def _bounds(self, limits: Any) -> tuple[np.ndarray, np.ndarray]:
-        if self._kind == _KIND_VELOCITY:
+        if self._kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
             if not isinstance(limits, VelocityLimits):
-                raise ConfigError("limits must be VelocityLimits for (v, ω) commands")
-            top = np.array([limits.max_speed, limits.max_yaw_rate])
+                raise ConfigError(
+                    "limits must be VelocityLimits for (v, ω) or (vx, vy, ω) commands"
+                )
+            # a holonomic base: |v_y| is bounded by max_speed as |v_x| is
+            speeds = [limits.max_speed] * (self.nu - 1)
+            top = np.array([*speeds, limits.max_yaw_rate])
         else:
             if not isinstance(limits, SteeringLimits):
                 raise ConfigError("limits must be SteeringLimits for (v, δ) commands")
@@ -360,9 +378,9 @@ class MPPI:
 
     def reset(self) -> None:
         """Forget the warm start, the path progress and the noise counter."""
-        self._mean = np.zeros((self.horizon_steps, 2))
+        self._mean = np.zeros((self.horizon_steps, self.nu))
         self._mean[:, 0] = np.clip(0.0, self._lo[0], self._hi[0])
-        self._last = np.zeros(2)
+        self._last = np.zeros(self.nu)
         self._progress: int | None = None
         self._section = 0
         self._calls = 0
@@ -386,13 +404,13 @@ class MPPI:
         Returns
         -------
         numpy.ndarray
-            Command of shape (2,) or (1, 2) like ``pose``.
+            Command of shape (m,) or (1, m) like ``pose`` (m = 2, or 3 for a holonomic base).
         """
         array = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=2)
         if array.ndim == 2 and array.shape[0] != 1:
             raise InputError(f"MPPI controls one robot: pose (3,) or (1, 3) (got {array.shape})")
         plan = self.plan(array.reshape(3), reference)
-        return plan.command.reshape((*array.shape[:-1], 2))
+        return plan.command.reshape((*array.shape[:-1], self.nu))
 
     def plan(self, pose: ArrayLike, reference: Any, noise: ArrayLike | None = None) -> MPPIPlan:
         """One MPPI iteration from ``pose``; updates the warm start.
@@ -403,7 +421,7 @@ class MPPI:
             Measured pose (x [m], y [m], θ [rad]).
         reference : Polyline, Path or array_like (M, 2)
             The reference path.
-        noise : array_like, shape (K, T, 2), optional
+        noise : array_like, shape (K, T, m), optional
             The perturbations ε to use instead of drawing them (cross-backend checks).
 
         Returns
@@ -436,24 +454,24 @@ class MPPI:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
         mean = self._mean
         if noise is not None:
-            noise = as_float_array("noise", noise, 2, min_ndim=3, max_ndim=3)
+            noise = as_float_array("noise", noise, self.nu, min_ndim=3, max_ndim=3)
             if noise.shape[:2] != (self.samples, self.horizon_steps):
                 raise InputError(
-                    f"noise must have shape ({self.samples}, {self.horizon_steps}, 2) "
+                    f"noise must have shape ({self.samples}, {self.horizon_steps}, {self.nu}) "
                     f"(got {noise.shape})"
                 )
         lo, hi = self._call_bounds(info, blocked, tables)
         args = (pose, mean, lo, hi, self._hi, window, info, self._last, weights)
         if self.backend == "numpy":
             if noise is None:
-                noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
+                noise = self._rng.standard_normal((self.samples, self.horizon_steps, self.nu))
                 noise *= self.noise_std
             costs, controls = self._costs_numpy(*args, noise)
         elif self.backend == "numba":
             has_noise = noise is not None
-            buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, 2))
+            buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, self.nu))
             costs = np.empty(self.samples)
-            controls = np.empty((self.samples, self.horizon_steps, 2))
+            controls = np.empty((self.samples, self.horizon_steps, self.nu))
             _mppi_kernel(
                 pose, mean, lo, hi, self._hi, window, info, self._last, buffer, has_noise,
                 self.noise_std, np.uint64(self.seed), np.uint64(self._calls), self._kind,
@@ -486,11 +504,13 @@ class MPPI:
         # Slow down into cusps and the goal: |v| <= √(2·a·d), d the distance left to the
         # section's end, as the time parametrisation of the path does (floor: 10 % of top speed).
         cap = max(math.sqrt(2.0 * self.approach_deceleration * info[7]), 0.1 * hi[0])
-        lo[0], hi[0] = max(lo[0], -cap), min(hi[0], cap)
+        speeds = self.nu - 1  # v, or v_x and v_y of a holonomic base
+        lo[:speeds], hi[:speeds] = np.maximum(lo[:speeds], -cap), np.minimum(hi[:speeds], cap)
         settling = self._section == tables.n_sections - 1 and info[0] > 0.5
         # After a call where every rollout collided, both signs: backing off may be the way out.
         recovering = self.status == "all_collide"
-        if self.reverse_against_path or blocked or settling or recovering or not self.allow_reverse:
+        free = self.reverse_against_path or self._kind == _KIND_HOLONOMIC  # holonomic: any way
+        if free or blocked or settling or recovering or not self.allow_reverse:
             return lo, hi
         if info[6] > 0.0:
             lo[0] = 0.0
@@ -501,12 +521,12 @@ class MPPI:
     def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
         self.status = status
         self._mean = np.zeros_like(self._mean)
-        self._last = np.zeros(2)
+        self._last = np.zeros(self.nu)
         costs = np.zeros(self.samples)
         weights = np.full(self.samples, 1.0 / self.samples)
-        samples = np.zeros((0, self.horizon_steps, 2))
+        samples = np.zeros((0, self.horizon_steps, self.nu))
         plan = MPPIPlan(
-            np.zeros(2), self._mean.copy(), costs, weights, status, pose.copy(), samples
+            np.zeros(self.nu), self._mean.copy(), costs, weights, status, pose.copy(), samples
         )
         self.last_plan = plan
         return plan
@@ -525,20 +545,32 @@ class MPPI:
         weights /= np.sum(weights)
         if best >= self.critics.collision_cost:
             self.status = "all_collide"
-            command = np.zeros(2)
+            command = np.zeros(self.nu)
             sequence = np.zeros_like(self._mean)
             self._mean = np.zeros_like(self._mean)
             self._mean[:, 0] = np.clip(0.0, self._lo[0], self._hi[0])
         else:
             self.status = "ok"
             sequence = np.tensordot(weights, controls, axes=1)
-            sequence = np.clip(self._smooth(sequence), lo, hi)  # this call's bounds
+            sequence = self._clip(self._smooth(sequence), lo, hi)  # this call's bounds
             command = sequence[0].copy()
             self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
         self._last = command
         plan = MPPIPlan(command, sequence, costs, weights, self.status, pose.copy(), controls)
         self.last_plan = plan
         return plan
+
+    def _clip(self, controls: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Commands clipped to the bounds; a holonomic base's (v_x, v_y) also to the disk of
+        radius ``hi[0]``: its speed limit holds in every direction (a box would let it go √2
+        faster diagonally, and the progress critic would turn it 45° to do so)."""
+        out = np.clip(controls, lo, hi)
+        if self._kind == _KIND_HOLONOMIC:
+            speed = np.hypot(out[..., 0], out[..., 1])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                scale = np.where(speed > hi[0], hi[0] / speed, 1.0)
+            out[..., :2] *= scale[..., None]
+        return out
 
     def _smooth(self, sequence: np.ndarray) -> np.ndarray:
         return sequence if self._savgol is None else self._savgol @ sequence
@@ -552,7 +584,7 @@ class MPPI:
         ----------
         plan : MPPIPlan, optional
             The plan (default: the last one).
-        controls : array_like, shape (T, 2) or (K, T, 2), optional
+        controls : array_like, shape (T, m) or (K, T, m), optional
             Sequences to roll out (default: the plan's optimal one), e.g. a few samples for a
             fan of rollouts.
 
@@ -563,7 +595,7 @@ class MPPI:
         plan = self.last_plan if plan is None else plan
         if plan is None:
             raise InputError("predict needs a plan: call the controller first")
-        seq = plan.controls if controls is None else as_float_array("controls", controls, 2)
+        seq = plan.controls if controls is None else as_float_array("controls", controls, self.nu)
         many = seq.ndim == 3
         poses = self._rollout_many(plan.pose, seq if many else seq[None])
         return poses if many else poses[0]
@@ -696,7 +728,7 @@ class MPPI:
 
     def _costs_numpy(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
         c = self.critics
-        controls = np.clip(mean[None] + noise, lo, hi)
+        controls = self._clip(mean[None] + noise, lo, hi)
         poses = self._rollout_many(pose, controls)
         after = poses[:, 1:]
         steps = self.horizon_steps
@@ -729,11 +761,11 @@ class MPPI:
         cost += c.prefer_forward * np.sum(np.maximum(-info[6] * v, 0.0), axis=1) * self.dt
         cost += c.effort * np.sum((controls / scale) ** 2, axis=(1, 2)) / steps
         previous = np.concatenate(
-            [np.broadcast_to(last, (self.samples, 1, 2)), controls[:, :-1]], 1
+            [np.broadcast_to(last, (self.samples, 1, self.nu)), controls[:, :-1]], 1
         )
         cost += c.rate * np.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
-        if self._kind == _KIND_VELOCITY:
-            cost += c.twirl * np.sum(np.abs(controls[..., 1]), axis=1) / (steps * scale[1])
+        if self._kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
+            cost += c.twirl * np.sum(np.abs(controls[..., -1]), axis=1) / (steps * scale[-1])
         return cost, controls
 
     # ------------------------------------------------------------------ JAX
@@ -743,8 +775,8 @@ class MPPI:
         jax, jnp = import_jax()
         if noise is None and jax.default_backend() == "cpu":
             # NumPy draws normals about twice as fast as XLA's threefry on a CPU; on a GPU the
-            # draw stays on the device (no (K, T, 2) transfer at every call).
-            noise = self._rng.standard_normal((self.samples, self.horizon_steps, 2))
+            # draw stays on the device (no (K, T, m) transfer at every call).
+            noise = self._rng.standard_normal((self.samples, self.horizon_steps, self.nu))
             noise *= self.noise_std
         draw = noise is None
         function = _jax_function(
@@ -782,12 +814,14 @@ def _model_kind(model: Any) -> tuple[int, float]:
     names = tuple(getattr(model, "input_names", ()))
     if names in (VELOCITY_COMMAND, ("omega_left", "omega_right")):
         return _KIND_VELOCITY, 0.0
+    if names == ("u", "v", "r") or getattr(model, "is_holonomic", False):
+        return _KIND_HOLONOMIC, 0.0
     if names == STEERING_COMMAND:
         front = isinstance(model, Bicycle)
         return (_KIND_FRONT if front else _KIND_REAR), float(model.wheel_base)
     raise ConfigError(
-        "MPPI supports Unicycle, DiffDrive, Bicycle, RearWheelBicycle and Ackermann "
-        f"(got {type(model).__name__})"
+        "MPPI supports Unicycle, DiffDrive, Bicycle, RearWheelBicycle, Ackermann, BodyTwist "
+        f"and holonomic wheeled bases (got {type(model).__name__})"
     )
 
 
@@ -814,10 +848,15 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: in
     checked = np.arange(stride - 1, steps, stride)
 
     def run(pose, mean, lo, hi, scale, window, info, last, noise, w, df, mp, circles, extra):
-        dt, wheel_base, sigma = extra[1], extra[2], extra[3:5]
+        dt, wheel_base, sigma = extra[1], extra[2], extra[3:]
         if samples is not None:  # `noise` is the PRNG key
-            noise = jax.random.normal(noise, (samples, steps, 2), pose.dtype) * sigma
+            noise = jax.random.normal(noise, (samples, steps, sigma.shape[0]), pose.dtype) * sigma
         controls = jnp.clip(mean[None] + noise, lo, hi)
+        if kind == _KIND_HOLONOMIC:  # (v_x, v_y) in the disk of radius hi[0], as MPPI._clip
+            speed = jnp.hypot(controls[..., 0], controls[..., 1])
+            shrink = jnp.where(speed > hi[0], hi[0] / jnp.where(speed > 0.0, speed, 1.0), 1.0)
+            planar = controls[..., :2] * shrink[..., None]
+            controls = jnp.concatenate([planar, controls[..., 2:]], -1)
         n = noise.shape[0]
         goal_mode = info[0] > 0.5
         rows, cols = df.shape
@@ -826,14 +865,17 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: in
         def step(carry, u):
             x, y, th = carry
             v, second = u[:, 0], u[:, 1]
+            lateral = 0.0
             if kind == _KIND_VELOCITY:
                 speed, rate = v, second
             elif kind == _KIND_REAR:
                 speed, rate = v, v * jnp.tan(second) / wheel_base
-            else:
+            elif kind == _KIND_FRONT:
                 speed, rate = v * jnp.cos(second), v * jnp.sin(second) / wheel_base
-            x = x + dt * (jnp.cos(th) * speed)
-            y = y + dt * (jnp.sin(th) * speed)
+            else:
+                speed, lateral, rate = v, second, u[:, 2]
+            x = x + dt * (jnp.cos(th) * speed - jnp.sin(th) * lateral)
+            y = y + dt * (jnp.sin(th) * speed + jnp.cos(th) * lateral)
             th = wrap(th + dt * rate)
             return (x, y, th), (x, y, th)
 
@@ -870,10 +912,12 @@ def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: in
         v = controls[..., 0]
         cost = cost + w[6] * jnp.sum(jnp.maximum(-info[6] * v, 0.0), 1) * dt
         cost = cost + w[7] * jnp.sum((controls / scale) ** 2, axis=(1, 2)) / steps
-        previous = jnp.concatenate([jnp.broadcast_to(last, (n, 1, 2)), controls[:, :-1]], 1)
+        previous = jnp.concatenate(
+            [jnp.broadcast_to(last, (n, 1, last.shape[0])), controls[:, :-1]], 1
+        )
         cost = cost + w[8] * jnp.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
-        if kind == _KIND_VELOCITY:
-            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., 1]), 1) / (steps * scale[1])
+        if kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
+            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., -1]), 1) / (steps * scale[-1])
         d2_end = (x[:, None] - window[:, 0]) ** 2 + (y[:, None] - window[:, 1]) ** 2
         follow = w[2] * (window[-1, 3] - window[jnp.argmin(d2_end, axis=-1), 3])
         heading = w[4] * jnp.abs(wrap(th - info[5]))
@@ -949,35 +993,60 @@ def _mppi_kernel(
     w_goal, w_obstacle = w[3] / steps, w[5] / steps
     w_forward = w[6] * dt
     a0, a1 = 1.0 / scale[0], 1.0 / scale[1]
-    w_effort, w_rate, w_twirl = w[7] / steps, w[8] / steps, w[9] / steps * a1
+    holonomic = controls.shape[2] == 3  # (v_x, v_y, ω); else (v, ω) or (v, δ)
+    a2 = 1.0 / scale[2] if holonomic else 0.0
+    w_effort, w_rate = w[7] / steps, w[8] / steps
+    w_twirl = w[9] / steps * (a2 if holonomic else a1)
     inflation, direction = w[10], info[6]
     n_circles = circles.shape[0]
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
         c, s = math.cos(th), math.sin(th)
         p0, p1 = last[0], last[1]
+        p2 = last[2] if holonomic else 0.0
         cost = 0.0
         collided = False
         next_check = stride - 1
         for t in range(steps):
+            e2 = 0.0
             if has_noise:
                 e0, e1 = noise[i, t, 0], noise[i, t, 1]
+                if holonomic:
+                    e2 = noise[i, t, 2]
             else:
                 e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t), table)
                 e0 *= sigma[0]
                 e1 *= sigma[1]
+                if holonomic:  # a third draw from the counters of a step past the horizon
+                    e2, _unused = _normal_pair(
+                        seed, call, np.uint64(i), np.uint64(t + steps), table
+                    )
+                    e2 *= sigma[2]
             u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
             u1 = min(max(mean[t, 1] + e1, lo[1]), hi[1])
             controls[i, t, 0] = u0
             controls[i, t, 1] = u1
+            u2 = 0.0
+            if holonomic:
+                u2 = min(max(mean[t, 2] + e2, lo[2]), hi[2])
+                planar = math.hypot(u0, u1)
+                if planar > hi[0]:  # (v_x, v_y) in the disk of radius hi[0], as MPPI._clip
+                    u0 *= hi[0] / planar
+                    u1 *= hi[0] / planar
+                controls[i, t, 0] = u0
+                controls[i, t, 1] = u1
+                controls[i, t, 2] = u2
+            lateral = 0.0
             if kind == 0:
                 speed, rate = u0, u1
             elif kind == 1:
                 speed, rate = u0, u0 * math.tan(u1) / wheel_base
-            else:
+            elif kind == 2:
                 speed, rate = u0 * math.cos(u1), u0 * math.sin(u1) / wheel_base
-            x = x + dt * (c * speed)
-            y = y + dt * (s * speed)
+            else:
+                speed, lateral, rate = u0, u1, u2
+            x = x + dt * (c * speed - s * lateral)
+            y = y + dt * (s * speed + c * lateral)
             th = th + dt * rate
             if th > math.pi:  # one step turns by less than 2π: a cheap wrap
                 th -= 2.0 * math.pi
@@ -1015,12 +1084,15 @@ def _mppi_kernel(
                     gap = inflation - clearance
                     cost += w_obstacle * gap * gap
             cost += w_forward * max(-direction * u0, 0.0)
-            q0, q1 = u0 * a0, u1 * a1
-            r0, r1 = (u0 - p0) * a0, (u1 - p1) * a1
-            cost += w_effort * (q0 * q0 + q1 * q1) + w_rate * (r0 * r0 + r1 * r1)
+            q0, q1, q2 = u0 * a0, u1 * a1, u2 * a2
+            r0, r1, r2 = (u0 - p0) * a0, (u1 - p1) * a1, (u2 - p2) * a2
+            cost += w_effort * (q0 * q0 + q1 * q1 + q2 * q2)
+            cost += w_rate * (r0 * r0 + r1 * r1 + r2 * r2)
             if kind == 0:
                 cost += w_twirl * abs(u1)
-            p0, p1 = u0, u1
+            elif kind == 3:
+                cost += w_twirl * abs(u2)
+            p0, p1, p2 = u0, u1, u2
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[5]))
         else:
