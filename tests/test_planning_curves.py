@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from wheelbase.errors import ConfigError, InputError
@@ -41,6 +41,7 @@ def test_all_48_reeds_shepp_words_occur_and_end_at_the_goal():
 
 @settings(max_examples=150, deadline=None)
 @given(pose, pose, radius)
+@example((0.0, 0.0, 0.0), (0.0, 1e-12, 0.0), 1.0)
 def test_dubins_candidates_end_at_goal_and_rs_is_never_longer(start, goal, r):
     candidates = dubins_candidates(start, goal, r)
     assert candidates  # Dubins paths always exist
@@ -50,7 +51,9 @@ def test_dubins_candidates_end_at_goal_and_rs_is_never_longer(start, goal, r):
     dub = dubins_length(start, goal, r)
     assert dub == pytest.approx(min(p.length for p in candidates), rel=1e-12)
     rs = reeds_shepp_length(start, goal, r)
-    assert rs <= dub + 1e-9
+    # Both solvers end within 1e-9 of the goal; a sideways offset ε that one of them rounds
+    # away costs the other arcs of length ~ 2√(ε·r) (a goal 1e-12 m aside: RS 2.8e-6 m, Dubins 0).
+    assert rs <= dub + 1e-9 + 4.0 * math.sqrt(1e-9 * r)
     assert rs >= math.dist(start[:2], goal[:2]) - 1e-9
 
 
