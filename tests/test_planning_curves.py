@@ -42,11 +42,13 @@ def test_all_48_reeds_shepp_words_occur_and_end_at_the_goal():
 @settings(max_examples=150, deadline=None)
 @given(pose, pose, radius)
 @example((0.0, 0.0, 0.0), (0.0, 1e-12, 0.0), 1.0)
+@example((0.0, 0.0, 0.0), (0.0, 3.424362380703804e-07, 0.0), 3.0)
 def test_dubins_candidates_end_at_goal_and_rs_is_never_longer(start, goal, r):
     candidates = dubins_candidates(start, goal, r)
     assert candidates  # Dubins paths always exist
     for path in candidates:
-        assert _pose_error(path.end, goal) < 1e-9, path.word
+        # rounding grows along the path: 2e-9 m at the end of a 19 m loop
+        assert _pose_error(path.end, goal) < 1e-9 * max(1.0, path.length), path.word
         assert np.all(path.segment_lengths >= 0)
     dub = dubins_length(start, goal, r)
     assert dub == pytest.approx(min(p.length for p in candidates), rel=1e-12)

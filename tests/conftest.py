@@ -1,0 +1,13 @@
+"""Test-suite settings.
+
+Hypothesis runs derandomized by default, so that ``pytest`` (and CI) tries the same examples
+on every run and a red build always means a change, never the luck of the draw. To hunt for new
+counterexamples, run ``pytest --hypothesis-profile=explore`` (random, 10× the examples) and keep
+what it finds as ``@example``.
+"""
+
+from hypothesis import settings
+
+settings.register_profile("default", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False, max_examples=1000)
+settings.load_profile("default")
