@@ -129,7 +129,8 @@ def test_numba_noise_is_reproducible_and_seeded():
 
 
 def test_numba_noise_is_standard_normal():
-    from wheelbase.control.mppi import _NORMAL_TABLE, _normal_pair
+    from wheelbase.control.mppi_numba import NORMAL_TABLE as _NORMAL_TABLE
+    from wheelbase.control.mppi_numba import _normal_pair
 
     draws = np.array([_normal_pair(np.uint64(5), np.uint64(0), np.uint64(i), np.uint64(0),
                                    _NORMAL_TABLE) for i in range(20000)])  # fmt: skip

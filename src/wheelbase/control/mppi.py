@@ -18,10 +18,11 @@ ICRA 2017; the form of Nav2's MPPI controller):
 When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
 warm start is cleared and :attr:`MPPI.status` is ``"all_collide"``.
 
-Backends: ``numpy`` (the reference; noise from ``numpy.random.Generator``), ``numba`` (one
-parallel compiled loop that draws the noise, rolls each sample out and scores it, ``cache=True``;
-its noise comes from a counter-based SplitMix64 stream keyed by (seed, call, sample, step)
-through an inverse-CDF table, so it does not depend on the threads), ``jax`` (``jax.jit`` +
+Backends: ``numpy`` (the reference, in this module; noise from ``numpy.random.Generator``),
+``numba`` (:mod:`wheelbase.control.mppi_numba`: one parallel compiled loop that draws the noise,
+rolls each sample out and scores it, ``cache=True``; its noise comes from a counter-based
+SplitMix64 stream keyed by (seed, call, sample, step) through an inverse-CDF table, so it does
+not depend on the threads), ``jax`` (:mod:`wheelbase.control.mppi_jax`: ``jax.jit`` +
 ``lax.scan`` over the horizon; float32 by default, float64 with ``jax_float64=True``; install
 ``wheelbase[jax]``).
 Steps 1, 5 and 6 are shared NumPy code, so with the same noise (``plan(..., noise=...)``) the
@@ -43,11 +44,9 @@ from dataclasses import dataclass
 from dataclasses import fields as dataclass_fields
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
-from scipy.special import ndtri
 
 from wheelbase._jax import X64, import_jax
 from wheelbase._validate import as_float_array, check_choice, positive
@@ -59,6 +58,15 @@ from wheelbase.control.base import (
     VelocityLimits,
 )
 from wheelbase.control.mppi_critics import MPPICritics, PathTables
+from wheelbase.control.mppi_jax import jax_function
+from wheelbase.control.mppi_numba import (
+    KIND_FRONT,
+    KIND_HOLONOMIC,
+    KIND_REAR,
+    KIND_VELOCITY,
+    NORMAL_TABLE,
+    mppi_kernel,
+)
 from wheelbase.control.path import _as_polyline
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -68,10 +76,6 @@ __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
 STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
-
-# twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α);
-# holonomic (v_x, v_y, ω)
-_KIND_VELOCITY, _KIND_REAR, _KIND_FRONT, _KIND_HOLONOMIC = 0, 1, 2, 3
 
 
 @dataclass(frozen=True)
@@ -203,7 +207,7 @@ class MPPI:
         self.dt = positive("dt", dt, "s")
         self.temperature = positive("temperature", temperature)
         self._kind, self._wheel_base = _model_kind(model)
-        self.nu = 3 if self._kind == _KIND_HOLONOMIC else 2
+        self.nu = 3 if self._kind == KIND_HOLONOMIC else 2
         sigma = np.asarray(noise_std, dtype=np.float64).reshape(-1)
         if sigma.size == 1:
             sigma = np.repeat(sigma, self.nu)
@@ -230,7 +234,7 @@ class MPPI:
         )
         self.jax_float64 = bool(jax_float64)
         self.command_names = {
-            _KIND_VELOCITY: VELOCITY_COMMAND, _KIND_HOLONOMIC: HOLONOMIC_COMMAND,
+            KIND_VELOCITY: VELOCITY_COMMAND, KIND_HOLONOMIC: HOLONOMIC_COMMAND,
         }.get(self._kind, STEERING_COMMAND)  # fmt: skip
         self._lo, self._hi = self._bounds(limits)
         self.limits = limits
@@ -300,7 +304,7 @@ class MPPI:
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = _model_kind(model)
-        if kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
+        if kind in (KIND_VELOCITY, KIND_HOLONOMIC):
             limits: Any = VelocityLimits(max_speed=max_speed, max_yaw_rate=max_yaw_rate)
             options.pop("max_steering", None)
         else:
@@ -322,7 +326,7 @@ class MPPI:
             options.pop("horizon_steps", 56),
             options.pop("dt", 0.05),
             options.pop("samples", 2000),
-            options.pop("noise_std", (0.2, 0.2, 0.4) if kind == _KIND_HOLONOMIC else (0.2, 0.4)),
+            options.pop("noise_std", (0.2, 0.2, 0.4) if kind == KIND_HOLONOMIC else (0.2, 0.4)),
             options.pop("temperature", 0.03),
             critics,
             limits,
@@ -335,7 +339,7 @@ class MPPI:
 
     # ------------------------------------------------------------------ set-up
     def _bounds(self, limits: Any) -> tuple[np.ndarray, np.ndarray]:
-        if self._kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
+        if self._kind in (KIND_VELOCITY, KIND_HOLONOMIC):
             if not isinstance(limits, VelocityLimits):
                 raise ConfigError(
                     "limits must be VelocityLimits for (v, ω) or (vx, vy, ω) commands"
@@ -472,11 +476,11 @@ class MPPI:
             buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, self.nu))
             costs = np.empty(self.samples)
             controls = np.empty((self.samples, self.horizon_steps, self.nu))
-            _mppi_kernel(
+            mppi_kernel(
                 pose, mean, lo, hi, self._hi, window, info, self._last, buffer, has_noise,
                 self.noise_std, np.uint64(self.seed), np.uint64(self._calls), self._kind,
                 self._wheel_base, self.dt, weights, self._df, self._map, self._circles,
-                int(self.critics.path_stride), _NORMAL_TABLE, costs, controls,
+                int(self.critics.path_stride), NORMAL_TABLE, costs, controls,
             )  # fmt: skip
         else:
             costs, controls = self._costs_jax(*args, noise)
@@ -509,7 +513,7 @@ class MPPI:
         settling = self._section == tables.n_sections - 1 and info[0] > 0.5
         # After a call where every rollout collided, both signs: backing off may be the way out.
         recovering = self.status == "all_collide"
-        free = self.reverse_against_path or self._kind == _KIND_HOLONOMIC  # holonomic: any way
+        free = self.reverse_against_path or self._kind == KIND_HOLONOMIC  # holonomic: any way
         if free or blocked or settling or recovering or not self.allow_reverse:
             return lo, hi
         if info[6] > 0.0:
@@ -565,7 +569,7 @@ class MPPI:
         radius ``hi[0]``: its speed limit holds in every direction (a box would let it go √2
         faster diagonally, and the progress critic would turn it 45° to do so)."""
         out = np.clip(controls, lo, hi)
-        if self._kind == _KIND_HOLONOMIC:
+        if self._kind == KIND_HOLONOMIC:
             speed = np.hypot(out[..., 0], out[..., 1])
             with np.errstate(divide="ignore", invalid="ignore"):
                 scale = np.where(speed > hi[0], hi[0] / speed, 1.0)
@@ -764,7 +768,7 @@ class MPPI:
             [np.broadcast_to(last, (self.samples, 1, self.nu)), controls[:, :-1]], 1
         )
         cost += c.rate * np.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
-        if self._kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
+        if self._kind in (KIND_VELOCITY, KIND_HOLONOMIC):
             cost += c.twirl * np.sum(np.abs(controls[..., -1]), axis=1) / (steps * scale[-1])
         return cost, controls
 
@@ -779,7 +783,7 @@ class MPPI:
             noise = self._rng.standard_normal((self.samples, self.horizon_steps, self.nu))
             noise *= self.noise_std
         draw = noise is None
-        function = _jax_function(
+        function = jax_function(
             self.horizon_steps, int(self.critics.path_stride), self._kind, self.jax_float64,
             self.samples if draw else None,
         )  # fmt: skip
@@ -813,296 +817,17 @@ def _model_kind(model: Any) -> tuple[int, float]:
 
     names = tuple(getattr(model, "input_names", ()))
     if names in (VELOCITY_COMMAND, ("omega_left", "omega_right")):
-        return _KIND_VELOCITY, 0.0
+        return KIND_VELOCITY, 0.0
     if names == ("u", "v", "r") or getattr(model, "is_holonomic", False):
-        return _KIND_HOLONOMIC, 0.0
+        return KIND_HOLONOMIC, 0.0
     if names == STEERING_COMMAND:
         front = isinstance(model, Bicycle)
-        return (_KIND_FRONT if front else _KIND_REAR), float(model.wheel_base)
+        return (KIND_FRONT if front else KIND_REAR), float(model.wheel_base)
     raise ConfigError(
         "MPPI supports Unicycle, DiffDrive, Bicycle, RearWheelBicycle, Ackermann, BodyTwist "
         f"and holonomic wheeled bases (got {type(model).__name__})"
     )
 
 
-_JAX_CACHE: dict = {}
-
 OUTLINE_SPACING = 0.2
 """Spacing [m] of the edge disks that stand for a long footprint (see ``_set_map``)."""
-
-
-def _jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int | None):
-    """The jit-compiled JAX iteration: a ``lax.scan`` rolls the samples out, then the critics
-    score all steps at once (on a CPU this beat a per-step fusion of rollout and critics:
-    5.8 against 7.5 ms at 2,000 × 56). ``samples``: draw that many noise sequences inside from a
-    PRNG key; ``None``: take the noise as an argument."""
-    key = (steps, stride, kind, float64, samples)
-    if key in _JAX_CACHE:
-        return _JAX_CACHE[key]
-    jax, jnp = import_jax()
-    lax = jax.lax
-
-    def wrap(a):
-        return jnp.arctan2(jnp.sin(a), jnp.cos(a))
-
-    checked = np.arange(stride - 1, steps, stride)
-
-    def run(pose, mean, lo, hi, scale, window, info, last, noise, w, df, mp, circles, extra):
-        dt, wheel_base, sigma = extra[1], extra[2], extra[3:]
-        if samples is not None:  # `noise` is the PRNG key
-            noise = jax.random.normal(noise, (samples, steps, sigma.shape[0]), pose.dtype) * sigma
-        controls = jnp.clip(mean[None] + noise, lo, hi)
-        if kind == _KIND_HOLONOMIC:  # (v_x, v_y) in the disk of radius hi[0], as MPPI._clip
-            speed = jnp.hypot(controls[..., 0], controls[..., 1])
-            shrink = jnp.where(speed > hi[0], hi[0] / jnp.where(speed > 0.0, speed, 1.0), 1.0)
-            planar = controls[..., :2] * shrink[..., None]
-            controls = jnp.concatenate([planar, controls[..., 2:]], -1)
-        n = noise.shape[0]
-        goal_mode = info[0] > 0.5
-        rows, cols = df.shape
-        x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
-
-        def step(carry, u):
-            x, y, th = carry
-            v, second = u[:, 0], u[:, 1]
-            lateral = 0.0
-            if kind == _KIND_VELOCITY:
-                speed, rate = v, second
-            elif kind == _KIND_REAR:
-                speed, rate = v, v * jnp.tan(second) / wheel_base
-            elif kind == _KIND_FRONT:
-                speed, rate = v * jnp.cos(second), v * jnp.sin(second) / wheel_base
-            else:
-                speed, lateral, rate = v, second, u[:, 2]
-            x = x + dt * (jnp.cos(th) * speed - jnp.sin(th) * lateral)
-            y = y + dt * (jnp.sin(th) * speed + jnp.cos(th) * lateral)
-            th = wrap(th + dt * rate)
-            return (x, y, th), (x, y, th)
-
-        zeros = jnp.zeros(n, dtype=pose.dtype)
-        carry = (zeros + pose[0], zeros + pose[1], zeros + pose[2])
-        (x, y, th), (xs, ys, ths) = lax.scan(step, carry, jnp.swapaxes(controls, 0, 1))
-        cost = zeros
-        if checked.size:
-            px, py, pth = xs[checked], ys[checked], ths[checked]  # (C, N)
-            d2 = (px[..., None] - window[:, 0]) ** 2 + (py[..., None] - window[:, 1]) ** 2
-            nearest = jnp.argmin(d2, axis=-1)
-            dmin = jnp.min(d2, axis=-1)
-            err = wrap(pth - window[nearest, 2])
-            cost = cost + (w[0] * jnp.sum(jnp.sqrt(dmin), 0) + w[1] * jnp.sum(err * err, 0)) / (
-                checked.size
-            )
-        goal = w[3] * jnp.sum(jnp.hypot(xs - info[3], ys - info[4]), 0) / steps
-        cost = cost + jnp.where(goal_mode, goal, 0.0)
-        c, s = jnp.cos(ths), jnp.sin(ths)
-        collided = jnp.zeros(n, dtype=bool)
-        clearance = jnp.full(xs.shape, jnp.inf, dtype=xs.dtype)
-        for k in range(circles.shape[0]):
-            cx = xs + c * circles[k, 0] - s * circles[k, 1]
-            cy = ys + s * circles[k, 0] + c * circles[k, 1]
-            col = jnp.floor((cx - x0) / res).astype(jnp.int32)
-            row = jnp.floor((cy - y0) / res).astype(jnp.int32)
-            inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
-            field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
-            clear = field - circles[k, 2] - math.sqrt(2.0) * res - info[8]
-            collided = collided | (has_map & jnp.any(~inside | (clear <= 0.0), axis=0))
-            clearance = jnp.minimum(clearance, jnp.where(inside, clear, 0.0))
-        gap = jnp.where(clearance > 0.0, jnp.maximum(w[10] - clearance, 0.0), 0.0)
-        cost = cost + jnp.where(has_map, w[5] * jnp.sum(gap * gap, 0) / steps, 0.0)
-        v = controls[..., 0]
-        cost = cost + w[6] * jnp.sum(jnp.maximum(-info[6] * v, 0.0), 1) * dt
-        cost = cost + w[7] * jnp.sum((controls / scale) ** 2, axis=(1, 2)) / steps
-        previous = jnp.concatenate(
-            [jnp.broadcast_to(last, (n, 1, last.shape[0])), controls[:, :-1]], 1
-        )
-        cost = cost + w[8] * jnp.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
-        if kind in (_KIND_VELOCITY, _KIND_HOLONOMIC):
-            cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., -1]), 1) / (steps * scale[-1])
-        d2_end = (x[:, None] - window[:, 0]) ** 2 + (y[:, None] - window[:, 1]) ** 2
-        follow = w[2] * (window[-1, 3] - window[jnp.argmin(d2_end, axis=-1), 3])
-        heading = w[4] * jnp.abs(wrap(th - info[5]))
-        cost = cost + jnp.where(goal_mode, heading, follow)
-        cost = cost + jnp.where(collided, w[11], 0.0)
-        return cost, controls
-
-    function = jax.jit(run)
-    _JAX_CACHE[key] = function
-    return function
-
-
-# --------------------------------------------------------------------------- Numba kernel
-# Inverse normal CDF at the midpoints of 2,048 equal-probability bins: the numba backend draws
-# a normal as Φ⁻¹(u), linearly interpolated in this table (tails truncated at ±3.5σ, where the
-# outermost midpoints lie; the standard deviation of the draws is 0.998).
-_NORMAL_TABLE_SIZE = 2048
-_NORMAL_TABLE = ndtri((np.arange(_NORMAL_TABLE_SIZE) + 0.5) / _NORMAL_TABLE_SIZE)
-
-
-@numba.njit(cache=True, inline="always")
-def _table_normal(bits, table):
-    """A normal draw from 32 random bits through the inverse-CDF table."""
-    position = float(bits) * (table.shape[0] / 4294967296.0) - 0.5
-    if position <= 0.0:
-        return table[0]
-    k = int(position)
-    if k >= table.shape[0] - 1:
-        return table[table.shape[0] - 1]
-    frac = position - k
-    return table[k] + frac * (table[k + 1] - table[k])
-
-
-@numba.njit(cache=True, inline="always")
-def _normal_pair(seed, call, sample, step, table):
-    """Two standard normals from a counter-based generator (SplitMix64 + inverse-CDF table).
-
-    The stream depends only on (seed, call, sample, step), so it is the same whatever thread
-    runs a sample."""
-    z = seed * np.uint64(0x9E3779B97F4A7C15) + call * np.uint64(0xD1B54A32D192ED03)
-    z = z + sample * np.uint64(0x8CB92BA72F3D8DD7) + step * np.uint64(0x2545F4914F6CDD1D)
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    z = z ^ (z >> np.uint64(31))
-    low = z & np.uint64(0xFFFFFFFF)
-    return _table_normal(low, table), _table_normal(z >> np.uint64(32), table)
-
-
-@numba.njit(cache=True, inline="always")
-def _wrap_scalar(a):
-    w = math.atan2(math.sin(a), math.cos(a))
-    return math.pi if w <= -math.pi else w
-
-
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def _mppi_kernel(
-    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, sigma, seed, call, kind,
-    wheel_base, dt, w, df, mp, circles, stride, table, costs, controls,
-):  # fmt: skip
-    """Draw, roll out and score every sample in one pass (the numba backend).
-
-    The same costs as ``MPPI._costs_numpy`` (to rounding: ``fastmath`` lets the compiler
-    reorder the sums), one sample per iteration of the parallel loop."""
-    n, steps = controls.shape[0], controls.shape[1]
-    m = window.shape[0]
-    goal_mode = info[0] > 0.5
-    rows, cols = df.shape[0], df.shape[1]
-    x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
-    inv_res = 1.0 / res
-    n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
-    margin = math.sqrt(2.0) * res + info[8]
-    w_path, w_align = w[0] / n_checked, w[1] / n_checked
-    w_goal, w_obstacle = w[3] / steps, w[5] / steps
-    w_forward = w[6] * dt
-    a0, a1 = 1.0 / scale[0], 1.0 / scale[1]
-    holonomic = controls.shape[2] == 3  # (v_x, v_y, ω); else (v, ω) or (v, δ)
-    a2 = 1.0 / scale[2] if holonomic else 0.0
-    w_effort, w_rate = w[7] / steps, w[8] / steps
-    w_twirl = w[9] / steps * (a2 if holonomic else a1)
-    inflation, direction = w[10], info[6]
-    n_circles = circles.shape[0]
-    for i in numba.prange(n):
-        x, y, th = pose[0], pose[1], pose[2]
-        c, s = math.cos(th), math.sin(th)
-        p0, p1 = last[0], last[1]
-        p2 = last[2] if holonomic else 0.0
-        cost = 0.0
-        collided = False
-        next_check = stride - 1
-        for t in range(steps):
-            e2 = 0.0
-            if has_noise:
-                e0, e1 = noise[i, t, 0], noise[i, t, 1]
-                if holonomic:
-                    e2 = noise[i, t, 2]
-            else:
-                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t), table)
-                e0 *= sigma[0]
-                e1 *= sigma[1]
-                if holonomic:  # a third draw from the counters of a step past the horizon
-                    e2, _unused = _normal_pair(
-                        seed, call, np.uint64(i), np.uint64(t + steps), table
-                    )
-                    e2 *= sigma[2]
-            u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
-            u1 = min(max(mean[t, 1] + e1, lo[1]), hi[1])
-            controls[i, t, 0] = u0
-            controls[i, t, 1] = u1
-            u2 = 0.0
-            if holonomic:
-                u2 = min(max(mean[t, 2] + e2, lo[2]), hi[2])
-                planar = math.hypot(u0, u1)
-                if planar > hi[0]:  # (v_x, v_y) in the disk of radius hi[0], as MPPI._clip
-                    u0 *= hi[0] / planar
-                    u1 *= hi[0] / planar
-                controls[i, t, 0] = u0
-                controls[i, t, 1] = u1
-                controls[i, t, 2] = u2
-            lateral = 0.0
-            if kind == 0:
-                speed, rate = u0, u1
-            elif kind == 1:
-                speed, rate = u0, u0 * math.tan(u1) / wheel_base
-            elif kind == 2:
-                speed, rate = u0 * math.cos(u1), u0 * math.sin(u1) / wheel_base
-            else:
-                speed, lateral, rate = u0, u1, u2
-            x = x + dt * (c * speed - s * lateral)
-            y = y + dt * (s * speed + c * lateral)
-            th = th + dt * rate
-            if th > math.pi:  # one step turns by less than 2π: a cheap wrap
-                th -= 2.0 * math.pi
-            elif th <= -math.pi:
-                th += 2.0 * math.pi
-            c, s = math.cos(th), math.sin(th)
-            if t == next_check:
-                next_check += stride
-                best, bj = np.inf, 0
-                for j in range(m):
-                    dx, dy = x - window[j, 0], y - window[j, 1]
-                    d2 = dx * dx + dy * dy
-                    if d2 < best:
-                        best, bj = d2, j
-                err = _wrap_scalar(th - window[bj, 2])
-                cost += w_path * math.sqrt(best) + w_align * err * err
-            if goal_mode:
-                cost += w_goal * math.hypot(x - info[3], y - info[4])
-            if has_map:
-                clearance = np.inf  # the footprint's: the least over its disks
-                for k in range(n_circles):
-                    px = x + c * circles[k, 0] - s * circles[k, 1]
-                    py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) * inv_res)
-                    row = math.floor((py - y0) * inv_res)
-                    if row < 0 or row >= rows or col < 0 or col >= cols:
-                        collided = True
-                        clearance = 0.0
-                        continue
-                    clear = df[row, col] - circles[k, 2] - margin
-                    if clear <= 0.0:
-                        collided = True
-                    clearance = min(clearance, clear)
-                if 0.0 < clearance < inflation:
-                    gap = inflation - clearance
-                    cost += w_obstacle * gap * gap
-            cost += w_forward * max(-direction * u0, 0.0)
-            q0, q1, q2 = u0 * a0, u1 * a1, u2 * a2
-            r0, r1, r2 = (u0 - p0) * a0, (u1 - p1) * a1, (u2 - p2) * a2
-            cost += w_effort * (q0 * q0 + q1 * q1 + q2 * q2)
-            cost += w_rate * (r0 * r0 + r1 * r1 + r2 * r2)
-            if kind == 0:
-                cost += w_twirl * abs(u1)
-            elif kind == 3:
-                cost += w_twirl * abs(u2)
-            p0, p1, p2 = u0, u1, u2
-        if goal_mode:
-            cost += w[4] * abs(_wrap_scalar(th - info[5]))
-        else:
-            best, bj = np.inf, 0
-            for j in range(m):
-                dx, dy = x - window[j, 0], y - window[j, 1]
-                d2 = dx * dx + dy * dy
-                if d2 < best:
-                    best, bj = d2, j
-            cost += w[2] * (window[m - 1, 3] - window[bj, 3])
-        if collided:
-            cost += w[11]
-        costs[i] = cost
