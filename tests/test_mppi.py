@@ -402,6 +402,22 @@ def test_jax_float32_is_close_to_the_float64_reference():
     np.testing.assert_allclose(single.command, reference.command, atol=1e-3)
 
 
+def test_jax_on_a_gpu_reduces_on_the_device_and_agrees(monkeypatch, cluttered):
+    # On a GPU the weighted mean is taken on the device; the command is the same.
+    jax = pytest.importorskip("jax")
+    noise = np.random.default_rng(2).standard_normal((128, 24, 2)) * (0.2, 0.4)
+    reference = make("numpy", samples=128, steps=24, grid=cluttered, footprint=ROBOT)
+    expected = [reference.plan((2.6, 3.9, 0.2), STRAIGHT, noise) for _ in range(2)]
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    device = make("jax", samples=128, steps=24, grid=cluttered, footprint=ROBOT,
+                  jax_float64=True)  # fmt: skip
+    for want in expected:
+        got = device.plan((2.6, 3.9, 0.2), STRAIGHT, noise)
+        np.testing.assert_allclose(got.costs, want.costs, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(got.controls, want.controls, atol=1e-9)
+        np.testing.assert_allclose(got.samples, want.samples, atol=1e-12)
+
+
 def test_jax_draws_its_noise_on_the_device(monkeypatch):
     # On a GPU the noise is drawn inside the compiled function; pretend to be on one.
     jax = pytest.importorskip("jax")
@@ -416,6 +432,7 @@ def test_jax_draws_its_noise_on_the_device(monkeypatch):
         return first, mppi.plan((5.0, 4.0, 0.0), STRAIGHT).samples
 
     first, second = samples(7)
+    assert first.shape == (256, 20, 2)  # the rest of the 4,000 samples stay on the device
     # the first call perturbs a zero warm start: the samples are the noise itself
     np.testing.assert_allclose(first.reshape(-1, 2).std(axis=0), (0.2, 0.5), rtol=0.02)
     np.testing.assert_allclose(first.reshape(-1, 2).mean(axis=0), 0.0, atol=0.01)

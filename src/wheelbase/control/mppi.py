@@ -97,7 +97,8 @@ class MPPIPlan:
     pose : numpy.ndarray, shape (3,)
         The measured pose the plan starts from (see :meth:`MPPI.predict`).
     samples : numpy.ndarray, shape (K, T, m)
-        The sampled (clipped) command sequences, e.g. for a fan of rollouts.
+        The sampled (clipped) command sequences, e.g. for a fan of rollouts (the jax backend
+        keeps the first ``KEPT_DEVICE_SAMPLES`` = 256 only: the rest stay on the device).
     """
 
     command: np.ndarray
@@ -486,6 +487,7 @@ class MPPI:
             costs, controls = self._costs_jax(*args, noise)
         self._calls += 1
         if self.critics.extra is not None:
+            controls = np.asarray(controls, np.float64)  # the user's critic is NumPy code
             extra = np.asarray(
                 self.critics.extra(self._rollout_many(pose, controls), controls), np.float64
             )
@@ -555,11 +557,15 @@ class MPPI:
             self._mean[:, 0] = np.clip(0.0, self._lo[0], self._hi[0])
         else:
             self.status = "ok"
-            sequence = np.tensordot(weights, controls, axes=1)
+            sequence = _weighted_mean(weights, controls, self.jax_float64)
             sequence = self._clip(self._smooth(sequence), lo, hi)  # this call's bounds
             command = sequence[0].copy()
             self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
         self._last = command
+        if not isinstance(controls, np.ndarray):  # JAX: keep the first samples on the host
+            jax, _jnp = import_jax()
+            with X64(jax, self.jax_float64):
+                controls = np.asarray(controls[:KEPT_DEVICE_SAMPLES], np.float64)
         plan = MPPIPlan(command, sequence, costs, weights, self.status, pose.copy(), controls)
         self.last_plan = plan
         return plan
@@ -802,10 +808,30 @@ class MPPI:
             small = (np.asarray(v, dtype) for v in (pose, mean, lo, hi, scale, window, info, last))
             costs, controls = function(*small, noise, np.asarray(w, dtype), df, mp, circles,
                                        np.asarray(extra, dtype))  # fmt: skip
-            return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
+            if jax.default_backend() == "cpu":  # host and device are one: NumPy is quicker
+                return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
+            # On a GPU the sampled commands stay there: (K, T, m) is 0.9 GB at a million
+            # samples in float64; the weighted mean is taken there (see _weighted_mean).
+            return np.asarray(costs, np.float64), controls
 
 
 # --------------------------------------------------------------------------- helpers
+KEPT_DEVICE_SAMPLES = 256
+"""With the jax backend, :attr:`MPPIPlan.samples` holds the first this many samples (enough for a
+fan of rollouts); the others never leave the device."""
+
+
+def _weighted_mean(weights: np.ndarray, controls: Any, float64: bool) -> np.ndarray:
+    """Σ_i w_i V_i, shape (T, m): on the host for NumPy arrays, on the device for JAX arrays
+    (only K weights go there and T·m numbers come back), in float64 when ``float64``."""
+    if isinstance(controls, np.ndarray):
+        return np.tensordot(weights, controls, axes=1)
+    jax, jnp = import_jax()
+    with X64(jax, float64):
+        device_weights = jnp.asarray(weights, dtype=controls.dtype)
+        return np.asarray(jnp.tensordot(device_weights, controls, axes=1), np.float64)
+
+
 def _count(name: str, value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ConfigError(f"{name} must be an integer >= 1 (got {value!r})")
