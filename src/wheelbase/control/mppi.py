@@ -437,13 +437,13 @@ class MPPI:
         tables = self._path_tables(reference)
         window, info = self._window(pose, tables)
         if self._section == tables.n_sections - 1 and info[0] > 0.5:
-            gap = math.hypot(pose[0] - info[3], pose[1] - info[4])
-            turn = abs(float(wrap_angle(pose[2] - info[5])))
+            gap = math.hypot(pose[0] - info[1], pose[1] - info[2])
+            turn = abs(float(wrap_angle(pose[2] - info[3])))
             if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
                 return self._stop(pose, "arrived")
         weights = self.critics.vector()
         last_section = self._section == tables.n_sections - 1
-        if last_section and info[7] <= self.critics.near_goal_distance:
+        if last_section and info[5] <= self.critics.near_goal_distance:
             weights[5] = 0.0  # obstacle repulsion off near the goal (collisions stay lethal)
         blocked = self._path_blocked(window)
         if self._map[3] > 0.5:
@@ -454,7 +454,7 @@ class MPPI:
             # truly overlaps an obstacle keeps every rollout lethal: a safe stop.
             now, _ = self._clearance(pose)
             if now <= 0.0 and not self._truly_colliding(pose):
-                info[8] = float(now) - 0.01
+                info[6] = float(now) - 0.01
         if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
         mean = self._mean
@@ -509,7 +509,7 @@ class MPPI:
         lo, hi = self._lo.copy(), self._hi.copy()
         # Slow down into cusps and the goal: |v| <= √(2·a·d), d the distance left to the
         # section's end, as the time parametrisation of the path does (floor: 10 % of top speed).
-        cap = max(math.sqrt(2.0 * self.approach_deceleration * info[7]), 0.1 * hi[0])
+        cap = max(math.sqrt(2.0 * self.approach_deceleration * info[5]), 0.1 * hi[0])
         speeds = self.nu - 1  # v, or v_x and v_y of a holonomic base
         lo[:speeds], hi[:speeds] = np.maximum(lo[:speeds], -cap), np.minimum(hi[:speeds], cap)
         settling = self._section == tables.n_sections - 1 and info[0] > 0.5
@@ -518,7 +518,7 @@ class MPPI:
         free = self.reverse_against_path or self._kind == KIND_HOLONOMIC  # holonomic: any way
         if free or blocked or settling or recovering or not self.allow_reverse:
             return lo, hi
-        if info[6] > 0.0:
+        if info[4] > 0.0:
             lo[0] = 0.0
         else:
             hi[0] = 0.0
@@ -626,7 +626,8 @@ class MPPI:
 
     def _window(self, pose: np.ndarray, tab: PathTables) -> tuple[np.ndarray, np.ndarray]:
         """The local path window (M, 4) = (x, y, heading, arc length from its first point) and the
-        scalars the critics need."""
+        scalars the critics need: (goal mode 0/1, section end x, y, heading, direction ±1,
+        distance left to it [m], collision relief [m])."""
         end = int(tab.section_end[self._section])
         start = 0 if self._section == 0 else int(tab.section_end[self._section - 1])
         if self._progress is None:
@@ -654,12 +655,9 @@ class MPPI:
         window = np.stack([tab.xy[idx, 0], tab.xy[idx, 1], tab.heading[idx], along], -1)
         remaining = tab.arc[end] - tab.arc[self._progress]
         goal_mode = 1.0 if remaining <= self.critics.goal_distance else 0.0
-        target = tab.xy[stop - 1]
         info = np.array(
             [
                 goal_mode,
-                target[0],
-                target[1],
                 tab.xy[end, 0],
                 tab.xy[end, 1],
                 tab.heading[end],
@@ -758,17 +756,17 @@ class MPPI:
             d2 = (end[:, 0, None] - window[:, 0]) ** 2 + (end[:, 1, None] - window[:, 1]) ** 2
             cost += c.follow * (window[-1, 3] - window[np.argmin(d2, axis=-1), 3])
         else:
-            dist = np.hypot(after[..., 0] - info[3], after[..., 1] - info[4])
+            dist = np.hypot(after[..., 0] - info[1], after[..., 1] - info[2])
             cost += c.goal * np.sum(dist, axis=1) / steps
-            cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[5]))
+            cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[3]))
         if self._map[3] > 0.5:
-            clearance, collided = self._clearance(after, info[8])
+            clearance, collided = self._clearance(after, info[6])
             collided = np.any(collided, axis=1)
             gap = np.where(clearance > 0.0, np.maximum(c.inflation - clearance, 0.0), 0.0)
             cost += w[5] * np.sum(gap * gap, axis=1) / steps
             cost += np.where(collided, c.collision_cost, 0.0)
         v = controls[..., 0]
-        cost += c.prefer_forward * np.sum(np.maximum(-info[6] * v, 0.0), axis=1) * self.dt
+        cost += c.prefer_forward * np.sum(np.maximum(-info[4] * v, 0.0), axis=1) * self.dt
         cost += c.effort * np.sum((controls / scale) ** 2, axis=(1, 2)) / steps
         previous = np.concatenate(
             [np.broadcast_to(last, (self.samples, 1, self.nu)), controls[:, :-1]], 1

@@ -73,7 +73,7 @@ def jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int
             cost = cost + (w[0] * jnp.sum(jnp.sqrt(dmin), 0) + w[1] * jnp.sum(err * err, 0)) / (
                 checked.size
             )
-        goal = w[3] * jnp.sum(jnp.hypot(xs - info[3], ys - info[4]), 0) / steps
+        goal = w[3] * jnp.sum(jnp.hypot(xs - info[1], ys - info[2]), 0) / steps
         cost = cost + jnp.where(goal_mode, goal, 0.0)
         c, s = jnp.cos(ths), jnp.sin(ths)
         collided = jnp.zeros(n, dtype=bool)
@@ -85,13 +85,13 @@ def jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int
             row = jnp.floor((cy - y0) / res).astype(jnp.int32)
             inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
             field = df[jnp.clip(row, 0, rows - 1), jnp.clip(col, 0, cols - 1)]
-            clear = field - circles[k, 2] - math.sqrt(2.0) * res - info[8]
+            clear = field - circles[k, 2] - math.sqrt(2.0) * res - info[6]
             collided = collided | (has_map & jnp.any(~inside | (clear <= 0.0), axis=0))
             clearance = jnp.minimum(clearance, jnp.where(inside, clear, 0.0))
         gap = jnp.where(clearance > 0.0, jnp.maximum(w[10] - clearance, 0.0), 0.0)
         cost = cost + jnp.where(has_map, w[5] * jnp.sum(gap * gap, 0) / steps, 0.0)
         v = controls[..., 0]
-        cost = cost + w[6] * jnp.sum(jnp.maximum(-info[6] * v, 0.0), 1) * dt
+        cost = cost + w[6] * jnp.sum(jnp.maximum(-info[4] * v, 0.0), 1) * dt
         cost = cost + w[7] * jnp.sum((controls / scale) ** 2, axis=(1, 2)) / steps
         previous = jnp.concatenate(
             [jnp.broadcast_to(last, (n, 1, last.shape[0])), controls[:, :-1]], 1
@@ -101,7 +101,7 @@ def jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int
             cost = cost + w[9] * jnp.sum(jnp.abs(controls[..., -1]), 1) / (steps * scale[-1])
         d2_end = (x[:, None] - window[:, 0]) ** 2 + (y[:, None] - window[:, 1]) ** 2
         follow = w[2] * (window[-1, 3] - window[jnp.argmin(d2_end, axis=-1), 3])
-        heading = w[4] * jnp.abs(wrap(th - info[5]))
+        heading = w[4] * jnp.abs(wrap(th - info[3]))
         cost = cost + jnp.where(goal_mode, heading, follow)
         cost = cost + jnp.where(collided, w[11], 0.0)
         return cost, controls

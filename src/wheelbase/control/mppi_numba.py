@@ -74,7 +74,7 @@ def mppi_kernel(
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     inv_res = 1.0 / res
     n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
-    margin = math.sqrt(2.0) * res + info[8]
+    margin = math.sqrt(2.0) * res + info[6]
     w_path, w_align = w[0] / n_checked, w[1] / n_checked
     w_goal, w_obstacle = w[3] / steps, w[5] / steps
     w_forward = w[6] * dt
@@ -83,7 +83,7 @@ def mppi_kernel(
     a2 = 1.0 / scale[2] if holonomic else 0.0
     w_effort, w_rate = w[7] / steps, w[8] / steps
     w_twirl = w[9] / steps * (a2 if holonomic else a1)
-    inflation, direction = w[10], info[6]
+    inflation, direction = w[10], info[4]
     n_circles = circles.shape[0]
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
@@ -150,7 +150,7 @@ def mppi_kernel(
                 err = _wrap_scalar(th - window[bj, 2])
                 cost += w_path * math.sqrt(best) + w_align * err * err
             if goal_mode:
-                cost += w_goal * math.hypot(x - info[3], y - info[4])
+                cost += w_goal * math.hypot(x - info[1], y - info[2])
             if has_map:
                 clearance = np.inf  # the footprint's: the least over its disks
                 for k in range(n_circles):
@@ -180,7 +180,7 @@ def mppi_kernel(
                 cost += w_twirl * abs(u2)
             p0, p1, p2 = u0, u1, u2
         if goal_mode:
-            cost += w[4] * abs(_wrap_scalar(th - info[5]))
+            cost += w[4] * abs(_wrap_scalar(th - info[3]))
         else:
             best, bj = np.inf, 0
             for j in range(m):
