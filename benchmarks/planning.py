@@ -59,23 +59,7 @@ def densify(poses: np.ndarray, spacing: float) -> np.ndarray:
 def independent_collisions(
     grid: OccupancyGrid, footprint: Footprint, poses: np.ndarray, spacing: float = 0.02
 ) -> int:
-    poly = footprint.polygon
-    lo, hi = poly.min(0), poly.max(0)
-    xs = np.linspace(lo[0], hi[0], math.ceil((hi[0] - lo[0]) / spacing) + 1)
-    ys = np.linspace(lo[1], hi[1], math.ceil((hi[1] - lo[1]) / spacing) + 1)
-    pts = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
-    edges = np.roll(poly, -1, 0) - poly
-    cross = edges[:, 0] * (pts[:, None, 1] - poly[:, 1]) - edges[:, 1] * (
-        pts[:, None, 0] - poly[:, 0]
-    )
-    pts = pts[np.all(cross >= -1e-12, axis=1)]
-    hits = 0
-    for chunk in np.array_split(poses, max(1, len(poses) // 200)):
-        c, s = np.cos(chunk[:, 2]), np.sin(chunk[:, 2])
-        wx = chunk[:, None, 0] + c[:, None] * pts[:, 0] - s[:, None] * pts[:, 1]
-        wy = chunk[:, None, 1] + s[:, None] * pts[:, 0] + c[:, None] * pts[:, 1]
-        hits += int(np.any(grid.is_occupied(np.stack([wx, wy], -1)), axis=1).sum())
-    return hits
+    return int(grid.lattice_collisions(footprint, poses, spacing).sum())
 
 
 LENGTH_OBJECTIVE = {"reverse_penalty": 1.0, "non_straight_penalty": 1.0, "switch_penalty": 0.0}

@@ -199,3 +199,25 @@ def test_outline_circles_follow_a_car_closely():
     assert np.all(gaps.min(axis=1) <= 1e-9)
     with pytest.raises(ConfigError, match="spacing"):
         car.outline_circles(0.0)
+
+
+def test_lattice_collisions_is_a_subset_of_the_exact_check():
+    occupied = np.zeros((80, 80), bool)
+    occupied[30:50, 30:50] = True
+    grid = OccupancyGrid.from_array(occupied, 0.05)
+    robot = Footprint.rectangle(0.6, 0.4)
+    poses = np.column_stack(
+        [np.random.default_rng(3).uniform(0.3, 3.7, (300, 2)),
+         np.random.default_rng(4).uniform(-np.pi, np.pi, 300)]
+    )  # fmt: skip
+    lattice = grid.lattice_collisions(robot, poses, 0.02)
+    exact = grid.in_collision(robot, poses)
+    # a lattice point on an occupied cell means the footprint overlaps it: never a false alarm
+    assert not np.any(lattice & ~exact)
+    assert lattice.sum() >= 0.9 * exact.sum() > 0  # and it misses only slivers
+    assert grid.lattice_collisions(robot, [[2.0, 2.0, 0.0], [0.5, 0.5, 0.0]]).tolist() == [
+        True,
+        False,
+    ]
+    with pytest.raises(ConfigError, match="spacing"):
+        grid.lattice_collisions(robot, poses, 0.0)

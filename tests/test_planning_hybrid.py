@@ -25,25 +25,8 @@ def densify(poses, spacing=0.02):
 
 
 def independent_collisions(grid, footprint, poses, spacing=0.02):
-    """Count poses whose footprint, sampled as a point lattice, touches an occupied cell."""
-    poly = footprint.polygon
-    lo, hi = poly.min(0), poly.max(0)
-    xs = np.linspace(lo[0], hi[0], math.ceil((hi[0] - lo[0]) / spacing) + 1)
-    ys = np.linspace(lo[1], hi[1], math.ceil((hi[1] - lo[1]) / spacing) + 1)
-    pts = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
-    # keep lattice points inside the (convex) polygon
-    edges = np.roll(poly, -1, 0) - poly
-    cross = edges[:, 0] * (pts[:, None, 1] - poly[:, 1]) - edges[:, 1] * (
-        pts[:, None, 0] - poly[:, 0]
-    )
-    pts = pts[np.all(cross >= -1e-12, axis=1)]
-    hits = 0
-    for chunk in np.array_split(poses, max(1, len(poses) // 500)):
-        c, s = np.cos(chunk[:, 2]), np.sin(chunk[:, 2])
-        wx = chunk[:, None, 0] + c[:, None] * pts[:, 0] - s[:, None] * pts[:, 1]
-        wy = chunk[:, None, 1] + s[:, None] * pts[:, 0] + c[:, None] * pts[:, 1]
-        hits += int(np.any(grid.is_occupied(np.stack([wx, wy], -1)), axis=1).sum())
-    return hits
+    """Poses whose footprint, sampled as a point lattice, touches an occupied cell."""
+    return int(grid.lattice_collisions(footprint, poses, spacing).sum())
 
 
 def check_path(grid, planner, path, start, goal, spacing=0.05):
