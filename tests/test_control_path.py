@@ -15,6 +15,7 @@ from wheelbase.control.path import (
     SegmentFollower,
     Stanley,
 )
+from wheelbase.geometry import wrap_angle
 from wheelbase.models import RearWheelBicycle
 
 LAWS = (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback)
@@ -178,3 +179,20 @@ def test_planned_path_with_per_sample_directions_is_accepted():
     result = run_closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)
     assert result.reversals[0] == 2
     assert np.hypot(*(result.poses[-1, 0, :2] - [1.0, 0.0])) < 0.03
+
+
+@pytest.mark.parametrize("law", [PurePursuit, Stanley, RearWheelFeedback])
+def test_velocity_followers_turn_in_place_to_a_planned_final_heading(law):
+    # A planned path ending with a turn in place: its polyline cannot show it, its poses do.
+    class Planned:
+        poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, math.pi]])
+
+    follower = law(speed=0.3, limits=VelocityLimits(max_speed=0.5, max_yaw_rate=1.5))
+    result = run_closed_loop(follower, Unicycle(), (0.0, 0.0, 0.0), Planned(), 12.0, 0.02)
+    final = result.poses[-1, 0]
+    assert np.hypot(final[0] - 1.0, final[1]) < 0.02
+    assert abs(wrap_angle(final[2] - math.pi)) < 0.01
+    # without the poses (a bare polyline) it stops facing the way it came
+    plain = law(speed=0.3, limits=VelocityLimits(max_speed=0.5, max_yaw_rate=1.5))
+    result = run_closed_loop(plain, Unicycle(), (0.0, 0.0, 0.0), Planned.poses[:, :2], 12.0, 0.02)
+    assert abs(wrap_angle(result.poses[-1, 0, 2])) < 0.05

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, check_choice, positive
+from wheelbase._validate import as_float_array, check_choice, nonnegative, positive
 from wheelbase.control.base import (
     STEERING_COMMAND,
     VELOCITY_COMMAND,
@@ -50,6 +50,7 @@ from wheelbase.control.base import (
     saturate_velocity,
 )
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
 
 __all__ = [
     "PathFollower",
@@ -247,6 +248,11 @@ class PathFollower:
         Stanley's front axle.
     slow_distance : float
         Length [m] before a cusp or the path end over which the speed ramps down, > 0.
+    align_gain : float
+        k_ψ [1/s], >= 0: at the end of a path that knows its final heading (a planned path's
+        last pose), a velocity-output follower turns in place with ω = k_ψ·wrap(ψ_goal − ψ)
+        (saturated) — a polyline of positions cannot say that the goal faces the other way.
+        0 stops without turning; a steered vehicle always just stops.
     limits : VelocityLimits or SteeringLimits, optional
         Command limits, matching ``output`` (keyword only).
     """
@@ -255,6 +261,7 @@ class PathFollower:
     output: str = "velocity"
     wheel_base: float = 0.5
     slow_distance: float = 0.3
+    align_gain: float = 2.0
     limits: VelocityLimits | SteeringLimits | None = field(default=None, kw_only=True)
     _state: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -262,6 +269,7 @@ class PathFollower:
         check_choice("output", self.output, OUTPUTS)
         for name, unit in (("speed", "m/s"), ("wheel_base", "m"), ("slow_distance", "m")):
             object.__setattr__(self, name, positive(name, getattr(self, name), unit))
+        object.__setattr__(self, "align_gain", nonnegative("align_gain", self.align_gain, "1/s"))
         expected = VelocityLimits if self.output == "velocity" else SteeringLimits
         if self.limits is not None and not isinstance(self.limits, expected):
             raise ConfigError(
@@ -301,8 +309,12 @@ class PathFollower:
         path = self._state.get("path")
         if path is None or (reference is not self._state.get("reference")):
             path = _as_polyline(reference)
+            poses = getattr(reference, "poses", None)
+            final = None if poses is None else float(np.asarray(poses, dtype=np.float64)[-1, 2])
             self._state.clear()
-            self._state.update(path=path, reference=reference, tables=_tables(path))
+            self._state.update(
+                path=path, reference=reference, tables=_tables(path), final_heading=final
+            )
         shape = pose.shape[:-1]
         flat = pose.reshape(-1, 3)
         if self._state.get("shape") != shape:
@@ -343,7 +355,11 @@ class PathFollower:
         if self.output == "velocity":
             if omega is None:
                 omega = speed * np.tan(delta) / self.wheel_base
-            command = np.stack([direction * speed, np.where(done, 0.0, omega)], -1)
+            final = self._state.get("final_heading")
+            turn = np.zeros_like(speed)
+            if final is not None:  # at the end, turn in place to the goal heading
+                turn = self.align_gain * wrap_angle(final - pose[:, 2])
+            command = np.stack([direction * speed, np.where(done, turn, omega)], -1)
             return saturate_velocity(command, self.limits)  # type: ignore[arg-type]
         if delta is None:
             with np.errstate(divide="ignore", invalid="ignore"):
