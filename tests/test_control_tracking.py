@@ -105,3 +105,17 @@ def test_linear_tracker_holds_a_standing_reference():
         LinearTracker(zeta=0.0)
     with pytest.raises(InputError, match="tracking reference"):
         Kanayama()(0.0, [0.0, 0.0, 0.0], 3.0)
+
+
+@pytest.mark.parametrize("law", [Kanayama(), LinearTracker()])
+def test_trackers_converge_on_a_reversing_reference(law):
+    # The reference backs along −x facing +x; the robot starts 10 cm aside, 0.2 rad off.
+    # Kanayama's textbook heading term (v_r·K_θ) is unstable backwards: errors grew to metres.
+    pose, dt = np.array([0.0, 0.1, 0.2]), 0.01
+    for step in range(1500):
+        t = step * dt
+        reference = (np.array([-0.3 * t, 0.0, 0.0]), -0.3, 0.0)
+        v, omega = law(t, pose, reference)
+        pose = pose + dt * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), omega])
+    target = np.array([-0.3 * 1500 * dt, 0.0])
+    assert np.hypot(*(pose[:2] - target)) < 2e-3 and abs(pose[2]) < 2e-3

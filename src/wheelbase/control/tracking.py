@@ -197,6 +197,12 @@ class LinearTracker(_Tracker):
 class Kanayama(_Tracker):
     """Kanayama et al. 1990 tracking law (law 8b).
 
+    v = v_r·cos e_θ + K_x·e_x, ω = ω_r + v_r·K_y·e_y + |v_r|·K_θ·sin e_θ. The paper writes
+    v_r·K_θ, derived for v_r > 0: linearised, the lateral/heading errors obey
+    s² + v_r·K_θ·s + v_r²·K_y = 0, unstable when the reference reverses (a parking manoeuvre
+    drifted 0.5 m off and ended 29° wrong). With |v_r| the damping keeps its sign both ways;
+    forwards the two are the same law.
+
     Parameters
     ----------
     k_x : float
@@ -225,4 +231,4 @@ class Kanayama(_Tracker):
 
     def _law(self, e_x, e_y, e_theta, v_r, omega_r):
         v = v_r * np.cos(e_theta) + self.k_x * e_x
-        return v, omega_r + v_r * (self.k_y * e_y + self.k_theta * np.sin(e_theta))
+        return v, omega_r + v_r * self.k_y * e_y + np.abs(v_r) * self.k_theta * np.sin(e_theta)
