@@ -87,3 +87,19 @@ def test_computed_torque_still_needs_the_dynamic_plant():
     bad = {**SCENARIO, "controller": {"law": "pure_pursuit", "torque_loop": {"bandwidth": -1}}}
     with pytest.raises(ScenarioError, match="bandwidth"):
         run(bad)
+
+
+@pytest.mark.parametrize("plant", ["kinematic", "dynamic"])
+@pytest.mark.parametrize(
+    "law",
+    ["pure_pursuit", "stanley", "rear_wheel_feedback", "segment", "linear", "kanayama", "mppi"],
+)
+def test_every_velocity_law_parks_the_demo_robot(law, plant):
+    # The bundled demo: the RM100 reverse-parks into a bay (a cusp, turns, encoder odometry).
+    from wheelbase.scenario import load_scenario
+
+    controller = {"law": law, "gains": {"samples": 300}} if law == "mppi" else {"law": law}
+    scenario = load_scenario("demo").model_dump() | {"plant": plant, "controller": controller}
+    metrics = run(scenario).metrics
+    assert metrics["status"] == "arrived" and not metrics["collision"]
+    assert metrics["final_position_error_true_m"] < 0.05
