@@ -116,3 +116,15 @@ def test_mppi_scenario_runs_from_plain_gains():
     assert metrics["controller_statuses"].get("ok", 0) > 0
     assert "all_collide" not in metrics["controller_statuses"]
     assert metrics["min_clearance_m"] > 0.05
+
+
+def test_segment_follower_gains_scale_with_the_speed():
+    # At 1.5 m/s the default 0.25 m length scale breaks the heading-before-offset condition
+    # (k_heading 4 < 6 1/s); the scenario default scales it with the speed instead of failing.
+    from wheelbase.scenario import load_scenario
+
+    scenario = load_scenario("parking").model_dump() | {"controller": {"law": "segment"}}
+    assert run(scenario).metrics["status"] == "arrived"
+    bad = scenario | {"controller": {"law": "segment", "gains": {"length_scale": 0.25}}}
+    with pytest.raises(ScenarioError, match="k_heading must be >"):
+        run(bad)

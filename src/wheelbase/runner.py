@@ -182,6 +182,12 @@ def _follower(name: str) -> Callable[..., Any]:
 
         cls = getattr(path, name)
         arguments = {"speed": limits.max_speed, **gains}
+        if cls is path.SegmentFollower and "length_scale" not in gains:
+            # The offset decays at v·K_r/ℓ, which the heading loop K_φ must outpace: scale ℓ
+            # with the speed (0.25 m up to 0.5 m/s with the default gains, 0.75 m at 1.5 m/s).
+            k_r = arguments.get("k_r", path.SegmentFollower.k_r)
+            k_heading = arguments.get("k_heading", path.SegmentFollower.k_heading)
+            arguments["length_scale"] = max(0.25, 2.0 * arguments["speed"] * k_r / k_heading)
         if robot.kind == "car":
             arguments.update(output="steering", wheel_base=robot.wheel_base)
             command_limits = SteeringLimits(max_steering=robot.max_steering)
