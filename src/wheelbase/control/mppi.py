@@ -67,7 +67,7 @@ from wheelbase.control.mppi_numba import (
     NORMAL_TABLE,
     mppi_kernel,
 )
-from wheelbase.control.path import _as_polyline
+from wheelbase.control.path import _as_polyline, _final_heading
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
@@ -436,13 +436,14 @@ class MPPI:
         pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
         tables = self._path_tables(reference)
         window, info = self._window(pose, tables)
-        if self._section == tables.n_sections - 1 and info[0] > 0.5:
+        last_section = self._section == tables.n_sections - 1
+        settling = last_section and info[0] > 0.5  # within goal_distance of the goal
+        if settling:
             gap = math.hypot(pose[0] - info[1], pose[1] - info[2])
             turn = abs(float(wrap_angle(pose[2] - info[3])))
             if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
                 return self._stop(pose, "arrived")
         weights = self.critics.vector()
-        last_section = self._section == tables.n_sections - 1
         if last_section and info[5] <= self.critics.near_goal_distance:
             weights[5] = 0.0  # obstacle repulsion off near the goal (collisions stay lethal)
         blocked = self._path_blocked(window)
@@ -465,7 +466,7 @@ class MPPI:
                     f"noise must have shape ({self.samples}, {self.horizon_steps}, {self.nu}) "
                     f"(got {noise.shape})"
                 )
-        lo, hi = self._call_bounds(info, blocked, tables)
+        lo, hi = self._call_bounds(info, blocked, settling)
         args = (pose, mean, lo, hi, self._hi, window, info, self._last, weights)
         if self.backend == "numpy":
             if noise is None:
@@ -499,7 +500,7 @@ class MPPI:
         return self._update(pose, costs, controls, lo, hi)
 
     def _call_bounds(
-        self, info: np.ndarray, blocked: bool, tables: PathTables
+        self, info: np.ndarray, blocked: bool, settling: bool
     ) -> tuple[np.ndarray, np.ndarray]:
         """Command bounds of this call: the speed keeps the sign of the path section unless
         ``reverse_against_path``, the path ahead is blocked, the last call found every rollout
@@ -512,7 +513,6 @@ class MPPI:
         cap = max(math.sqrt(2.0 * self.approach_deceleration * info[5]), 0.1 * hi[0])
         speeds = self.nu - 1  # v, or v_x and v_y of a holonomic base
         lo[:speeds], hi[:speeds] = np.maximum(lo[:speeds], -cap), np.minimum(hi[:speeds], cap)
-        settling = self._section == tables.n_sections - 1 and info[0] > 0.5
         # After a call where every rollout collided, both signs: backing off may be the way out.
         recovering = self.status == "all_collide"
         free = self.reverse_against_path or self._kind == KIND_HOLONOMIC  # holonomic: any way
@@ -615,10 +615,11 @@ class MPPI:
         if self._tables is not None and self._tables[0] is reference:
             return self._tables[1]
         line = _as_polyline(reference)
-        poses = getattr(reference, "poses", None)  # a planned path also has the goal heading
-        end_heading = None if poses is None else float(np.asarray(poses)[-1, 2])
         tables = PathTables(
-            np.asarray(line.points), np.asarray(line.directions), self.path_spacing, end_heading
+            np.asarray(line.points),
+            np.asarray(line.directions),
+            self.path_spacing,
+            _final_heading(reference),
         )
         self._tables = (reference, tables)
         self._progress, self._section = None, 0

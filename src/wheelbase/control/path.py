@@ -232,6 +232,13 @@ def _as_polyline(reference: object) -> Polyline:
     return Polyline(as_float_array("path", reference, 2, min_ndim=2, max_ndim=2))
 
 
+def _final_heading(reference: object) -> float | None:
+    """The heading [rad] of the last pose of a reference that has poses (a planned path), else
+    ``None``: a polyline of positions cannot say which way the goal faces."""
+    poses = getattr(reference, "poses", None)
+    return None if poses is None else float(np.asarray(poses, dtype=np.float64)[-1, 2])
+
+
 # --------------------------------------------------------------------------- follower base
 @dataclass(frozen=True)
 class PathFollower:
@@ -309,11 +316,12 @@ class PathFollower:
         path = self._state.get("path")
         if path is None or (reference is not self._state.get("reference")):
             path = _as_polyline(reference)
-            poses = getattr(reference, "poses", None)
-            final = None if poses is None else float(np.asarray(poses, dtype=np.float64)[-1, 2])
             self._state.clear()
             self._state.update(
-                path=path, reference=reference, tables=_tables(path), final_heading=final
+                path=path,
+                reference=reference,
+                tables=_tables(path),
+                final_heading=_final_heading(reference),
             )
         shape = pose.shape[:-1]
         flat = pose.reshape(-1, 3)

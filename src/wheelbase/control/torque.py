@@ -43,6 +43,7 @@ from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
+from wheelbase.control.loop import velocity_torques
 from wheelbase.dynamics import DiffDriveDynamics, _step, inverse_dynamics
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -366,14 +367,12 @@ class TwistTorqueLoop:
         if max_torque != math.inf:
             max_torque = positive("max_torque", max_torque, "N·m")
         self.max_torque = float(max_torque)
-        self.last_command = np.zeros(2)
 
     def reset(self) -> None:
         """Reset the law."""
         reset = getattr(self.law, "reset", None)
         if reset is not None:
             reset()
-        self.last_command = np.zeros(2)
 
     @property
     def status(self) -> str | None:
@@ -408,9 +407,6 @@ class TwistTorqueLoop:
         state = as_float_array("state", state, 6, max_ndim=1)
         command = np.asarray(self.law(t, state[:3].copy(), reference), dtype=np.float64)
         command = command.reshape(2)
-        self.last_command = command
-        from wheelbase.control.loop import velocity_torques
-
         gains = (self.bandwidth, self.bandwidth)
         return velocity_torques(self.model, state, command, gains, self.max_torque)
 
