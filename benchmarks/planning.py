@@ -43,7 +43,7 @@ from wheelbase.planning import (
     bundled_scenarios,
     load_map,
 )
-from wheelbase.planning.grid import _collides_one
+from wheelbase.planning.collision import _collides_one
 
 
 def densify(poses: np.ndarray, spacing: float) -> np.ndarray:

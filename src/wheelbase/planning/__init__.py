@@ -6,14 +6,11 @@ document 002 (smooth path planning with Hybrid A*).
 
 from wheelbase.planning.astar import GridPath, astar, dijkstra
 from wheelbase.planning.dubins import dubins_candidates, dubins_length, dubins_path
-from wheelbase.planning.grid import (
-    Footprint,
-    MovingAIScenario,
-    OccupancyGrid,
-    read_movingai_scenarios,
-)
+from wheelbase.planning.footprint import Footprint
 from wheelbase.planning.hybrid_astar import HybridAStar
 from wheelbase.planning.maps import BUNDLED_MAPS, PlanningScenario, bundled_scenarios, load_map
+from wheelbase.planning.movingai import MovingAIScenario, read_movingai_scenarios
+from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import CurvePath, Path, PlanningStats
 from wheelbase.planning.reeds_shepp import (
     reeds_shepp_candidates,

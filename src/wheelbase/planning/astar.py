@@ -1,4 +1,4 @@
-"""Grid search: A* and Dijkstra on an :class:`~wheelbase.planning.grid.OccupancyGrid`.
+"""Grid search: A* and Dijkstra on an :class:`~wheelbase.planning.occupancy.OccupancyGrid`.
 
 Moving AI rules (Sturtevant 2012): 8-connected moves of cost 1 (straight) and √2 (diagonal)
 cells, and **no corner cutting** (a diagonal move needs both cells it passes beside to be free).
@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase.errors import ConfigError, InputError, PlanningError
-from wheelbase.planning.grid import OccupancyGrid
+from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["GridPath", "astar", "dijkstra"]
 

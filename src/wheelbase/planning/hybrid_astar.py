@@ -48,9 +48,11 @@ from wheelbase._validate import as_float_array, nonnegative, positive
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
 from wheelbase.planning.astar import _dijkstra_kernel
+from wheelbase.planning.collision import _collides_one
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
 from wheelbase.planning.dubins import _dubins_all
-from wheelbase.planning.grid import Footprint, OccupancyGrid, _collides_one
+from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import Path, PlanningStats
 from wheelbase.planning.reeds_shepp import _FAMILIES, _best, _min_length, _normalise
 from wheelbase.planning.smoothing import smooth_path

@@ -16,7 +16,7 @@ import numpy as np
 import yaml
 
 from wheelbase._validate import check_choice
-from wheelbase.planning.grid import OccupancyGrid
+from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["BUNDLED_MAPS", "IMAGE_RESOLUTION", "PlanningScenario", "bundled_scenarios", "load_map"]
 

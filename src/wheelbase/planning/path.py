@@ -23,7 +23,8 @@ from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
 
 if TYPE_CHECKING:
-    from wheelbase.planning.grid import Footprint, OccupancyGrid
+    from wheelbase.planning.footprint import Footprint
+    from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["CurvePath", "Path", "PlanningStats"]
 

@@ -13,7 +13,8 @@ from numpy.typing import ArrayLike
 from wheelbase.geometry import transform_points
 
 if TYPE_CHECKING:
-    from wheelbase.planning.grid import Footprint, OccupancyGrid
+    from wheelbase.planning.footprint import Footprint
+    from wheelbase.planning.occupancy import OccupancyGrid
     from wheelbase.planning.path import Path
 
 __all__ = ["plot_grid", "plot_path"]

@@ -31,7 +31,8 @@ from scipy.ndimage import uniform_filter1d
 
 from wheelbase._validate import nonnegative, positive
 from wheelbase.geometry import wrap_angle
-from wheelbase.planning.grid import Footprint, OccupancyGrid
+from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import Path
 
 __all__ = ["smooth_path"]

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelbase.planning.grid import OccupancyGrid
+from wheelbase.planning import OccupancyGrid
 
 __all__: list[str] = []
 

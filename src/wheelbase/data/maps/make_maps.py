@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from wheelbase.planning.grid import OccupancyGrid
+from wheelbase.planning import OccupancyGrid
 
 HERE = Path(__file__).resolve().parent
 

@@ -1,0 +1,133 @@
+"""Read and write occupancy grids: plain images and ROS ``map_server`` YAML + PGM/PNG pairs.
+
+The grid convention (row 0 = lowest y) is described in :mod:`wheelbase.planning.occupancy`;
+image formats store the top row first and are flipped here. Moving AI ``.map`` files are read by
+:mod:`wheelbase.planning.movingai`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path as FilePath
+
+import numpy as np
+import yaml
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import check_choice, finite
+from wheelbase.errors import DataError, MapError
+from wheelbase.planning.occupancy import OccupancyGrid
+
+__all__: list[str] = []
+
+_ROS_MODES = ("trinary", "scale", "raw")
+
+
+def _read_image(
+    path: str | FilePath,
+    resolution: float,
+    origin: ArrayLike = (0.0, 0.0),
+    *,
+    threshold: float = 0.5,
+) -> OccupancyGrid:
+    """The implementation of :meth:`OccupancyGrid.from_image` (documented there)."""
+    gray = _read_gray(FilePath(path))
+    darkness = 1.0 - gray / 255.0
+    return OccupancyGrid(np.flipud(darkness > threshold), resolution, tuple(np.ravel(origin)[:2]))
+
+
+def _read_ros_yaml(path: str | FilePath, *, unknown_as_occupied: bool = True) -> OccupancyGrid:
+    """The implementation of :meth:`OccupancyGrid.from_ros_yaml` (documented there)."""
+    path = FilePath(path)
+    try:
+        meta = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise DataError(f"cannot read map YAML {path}: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise MapError(f"{path}: invalid YAML: {exc}") from None
+    if not isinstance(meta, dict):
+        raise MapError(f"{path}: expected a mapping with image, resolution, origin")
+    for key in ("image", "resolution", "origin"):
+        if key not in meta:
+            raise MapError(f"{path}: missing field {key!r}")
+    image = FilePath(str(meta["image"]))
+    if not image.is_absolute():
+        image = path.parent / image
+    if not image.exists():
+        alternatives = [path.with_suffix(s) for s in (".pgm", ".png")]
+        found = [p for p in alternatives if p.exists()]
+        if not found:
+            raise DataError(f"{path}: image {str(meta['image'])!r} not found")
+        warnings.warn(
+            f"{path}: image {str(meta['image'])!r} not found; using {found[0].name}",
+            stacklevel=2,
+        )
+        image = found[0]
+    mode = check_choice("mode", str(meta.get("mode", "trinary")), _ROS_MODES)
+    occ_t = finite("occupied_thresh", meta.get("occupied_thresh", 0.65), error=MapError)
+    free_t = finite("free_thresh", meta.get("free_thresh", 0.196), error=MapError)
+    negate = bool(int(meta.get("negate", 0)))
+    resolution = finite("resolution", meta["resolution"], "m/cell", error=MapError)
+    if resolution <= 0:
+        raise MapError(f"{path}: resolution must be > 0 m/cell (got {resolution})")
+    origin = meta["origin"]
+    if not isinstance(origin, list | tuple) or len(origin) < 2:
+        raise MapError(f"{path}: origin must be [x, y, yaw] (got {origin!r})")
+    gray = _read_gray(image)
+    if mode == "raw":
+        unknown = gray > 100
+        occ = (gray / 100.0 > occ_t) & ~unknown
+    else:
+        p = gray / 255.0 if negate else (255.0 - gray) / 255.0
+        occ = p > occ_t
+        unknown = ~occ & (p >= free_t) if mode == "trinary" else np.zeros_like(occ)
+    if unknown_as_occupied:
+        occ = occ | unknown
+    origin_xy = (float(origin[0]), float(origin[1]))
+    return OccupancyGrid(np.flipud(occ), resolution, origin_xy, np.flipud(unknown))
+
+
+def _write_ros_yaml(
+    grid: OccupancyGrid, path: str | FilePath, *, image: str | None = None
+) -> FilePath:
+    """The implementation of :meth:`OccupancyGrid.to_ros_yaml` (documented there)."""
+    path = FilePath(path)
+    image_path = path.parent / (image or path.with_suffix(".pgm").name)
+    pixels = np.full(grid.shape, 254, np.uint8)
+    if grid.unknown is not None:
+        pixels[grid.unknown] = 205
+    pixels[grid.occupied & (grid.unknown is None or ~grid.unknown)] = 0
+    pixels = np.ascontiguousarray(np.flipud(pixels))
+    if image_path.suffix.lower() == ".png":
+        from PIL import Image
+
+        Image.fromarray(pixels, mode="L").save(image_path, optimize=True)
+    else:
+        header = f"P5\n{grid.shape[1]} {grid.shape[0]}\n255\n".encode()
+        image_path.write_bytes(header + pixels.tobytes())
+    meta = {
+        "image": image_path.name,
+        "mode": "trinary",
+        "resolution": grid.resolution,
+        "origin": [grid.origin[0], grid.origin[1], 0.0],
+        "negate": 0,
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+    }
+    path.write_text(yaml.safe_dump(meta, sort_keys=False))
+    return image_path
+
+
+def _read_gray(path: FilePath) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as img:
+            if img.mode in ("LA", "RGBA", "PA"):
+                img = img.convert("RGBA").convert("RGB")
+            gray = np.asarray(img.convert("L") if img.mode != "L" else img, dtype=np.float64)
+    except (OSError, UnidentifiedImageError) as exc:
+        raise DataError(f"cannot read map image {path}: {exc}") from None
+    if gray.ndim != 2 or gray.size == 0:
+        raise MapError(f"map image {path} is empty")
+    return gray

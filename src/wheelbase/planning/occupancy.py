@@ -1,0 +1,536 @@
+"""The occupancy grid: world <-> cell geometry, distance field, inflation and footprint checks.
+
+The planning problem of document 000 ("path planning of a wheeled mobile robot in a static
+environment", §1.1) and of document 002 (Hybrid A*) is posed on a 2-D occupancy grid. Here a
+grid is a boolean array ``occupied[row, col]`` with **row 0 at the lowest y and column 0 at the
+lowest x** (so ``occupied[i, j]`` covers the square ``[x0 + j·r, x0 + (j+1)·r) × [y0 + i·r,
+y0 + (i+1)·r)`` for resolution ``r`` and origin ``(x0, y0)``). Image formats (ROS ``map_server``
+PGM/PNG, Moving AI ``.map``) store the top row first and are flipped on load.
+
+Cells outside the map are occupied. Unknown cells are occupied unless a loader is told
+otherwise (``unknown_as_occupied=False``).
+
+Collision semantics ("exact to the cell resolution"): a robot footprint (a convex polygon in the
+body frame) at a pose collides iff the polygon intersects the closed square of an occupied cell,
+or leaves the map. The fast path uses the Euclidean distance field and circles covering the
+footprint; poses that are neither clearly free nor clearly in collision fall back to an exact
+separating-axis test against every occupied cell under the footprint's bounding box (the
+kernels are in :mod:`wheelbase.planning.collision`). The file formats are read and written by
+:mod:`wheelbase.planning.map_io` and :mod:`wheelbase.planning.movingai`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path as FilePath
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import ndimage
+
+from wheelbase._validate import as_float_array, nonnegative, positive
+from wheelbase.errors import InputError, MapError
+from wheelbase.planning.collision import _clearance_batch, _collides_batch
+
+if TYPE_CHECKING:
+    from wheelbase.planning.footprint import Footprint
+
+__all__ = ["OccupancyGrid"]
+
+
+@dataclass(frozen=True, eq=False)
+class OccupancyGrid:
+    """A 2-D occupancy grid in world coordinates.
+
+    Parameters
+    ----------
+    occupied : numpy.ndarray
+        Boolean array of shape ``(rows, cols)``; ``True`` = blocked. Row 0 is the lowest y,
+        column 0 the lowest x.
+    resolution : float
+        Cell side [m/cell], > 0.
+    origin : tuple of float
+        World position ``(x0, y0)`` [m] of the lower-left corner of cell ``(0, 0)``.
+    unknown : numpy.ndarray or None
+        Optional boolean mask of cells whose state was unknown in the source map (already
+        merged into ``occupied`` or not, as the loader was told).
+
+    Examples
+    --------
+    >>> grid = OccupancyGrid.from_array(np.zeros((30, 40), bool), 0.5)
+    >>> grid.width_m, grid.height_m
+    (20.0, 15.0)
+    """
+
+    occupied: np.ndarray
+    resolution: float
+    origin: tuple[float, float] = (0.0, 0.0)
+    unknown: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        occ = np.asarray(self.occupied)
+        if occ.ndim != 2 or occ.size == 0:
+            raise MapError(f"occupied must be a non-empty 2-D array (got shape {occ.shape})")
+        occ = np.ascontiguousarray(occ.astype(bool))
+        occ.setflags(write=False)
+        object.__setattr__(self, "occupied", occ)
+        object.__setattr__(self, "resolution", positive("resolution", self.resolution, "m/cell"))
+        origin = as_float_array("origin", self.origin, max_ndim=1)
+        if origin.shape not in ((2,), (3,)):
+            raise InputError(f"origin must be (x0, y0) [m] (got shape {origin.shape})")
+        object.__setattr__(self, "origin", (float(origin[0]), float(origin[1])))
+        if self.unknown is not None:
+            unknown = np.asarray(self.unknown, dtype=bool)
+            if unknown.shape != occ.shape:
+                raise MapError(f"unknown mask shape {unknown.shape} != map shape {occ.shape}")
+            object.__setattr__(self, "unknown", unknown)
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def from_array(
+        cls,
+        occupied: ArrayLike,
+        resolution: float,
+        origin: ArrayLike = (0.0, 0.0),
+        *,
+        occupied_thresh: float = 0.5,
+    ) -> OccupancyGrid:
+        """Build a grid from an array (row 0 = lowest y, column 0 = lowest x).
+
+        Parameters
+        ----------
+        occupied : array_like
+            Boolean array (``True`` = occupied) or numeric occupancy probabilities in [0, 1];
+            a numeric cell is occupied when its value is >= ``occupied_thresh``, and NaN or
+            negative values (ROS's −1) are unknown, hence occupied.
+        resolution : float
+            Cell side [m/cell].
+        origin : array_like
+            ``(x0, y0)`` [m] of the lower-left corner of cell (0, 0).
+        occupied_thresh : float
+            Threshold for numeric arrays.
+
+        Returns
+        -------
+        OccupancyGrid
+        """
+        array = np.asarray(occupied)
+        if array.dtype == bool:
+            return cls(array, resolution, tuple(np.ravel(origin)[:2]))
+        if not np.issubdtype(array.dtype, np.number):
+            raise MapError(f"occupied must be a bool or numeric array (got dtype {array.dtype})")
+        values = array.astype(np.float64)
+        unknown = ~np.isfinite(values) | (values < 0)
+        with np.errstate(invalid="ignore"):
+            occ = (values >= occupied_thresh) | unknown
+        return cls(occ, resolution, tuple(np.ravel(origin)[:2]), unknown)
+
+    @classmethod
+    def from_image(
+        cls,
+        path: str | FilePath,
+        resolution: float,
+        origin: ArrayLike = (0.0, 0.0),
+        *,
+        threshold: float = 0.5,
+    ) -> OccupancyGrid:
+        """Load a plain image (PNG, PGM, BMP…): dark pixels are occupied.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Image file; its top row is the highest y.
+        resolution : float
+            Cell side [m/pixel].
+        origin : array_like
+            ``(x0, y0)`` [m] of the lower-left corner of the image.
+        threshold : float
+            A pixel is occupied when its darkness ``1 − gray/255`` exceeds this value.
+
+        Returns
+        -------
+        OccupancyGrid
+        """
+        from wheelbase.planning.map_io import _read_image
+
+        return _read_image(path, resolution, origin, threshold=threshold)
+
+    @classmethod
+    def from_ros_yaml(
+        cls, path: str | FilePath, *, unknown_as_occupied: bool = True
+    ) -> OccupancyGrid:
+        """Load a ROS ``map_server`` map: a YAML file naming a PGM/PNG image.
+
+        Follows the ``map_server`` rules: ``p = (255 − v)/255`` (or ``v/255`` when
+        ``negate: 1``); in ``trinary`` and ``scale`` modes a pixel with ``p > occupied_thresh``
+        is occupied, ``p < free_thresh`` free and anything else unknown (trinary) or a partial
+        cost that is treated as free (scale); in ``raw`` mode the value is the occupancy in
+        percent and values above 100 are unknown. The origin yaw is ignored, as Nav2's costmap
+        does.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The YAML file.
+        unknown_as_occupied : bool
+            Treat unknown cells as occupied (default) or as free.
+
+        Returns
+        -------
+        OccupancyGrid
+
+        Raises
+        ------
+        MapError
+            If the YAML is missing a field or has an invalid value.
+        DataError
+            If a file cannot be read.
+        """
+        from wheelbase.planning.map_io import _read_ros_yaml
+
+        return _read_ros_yaml(path, unknown_as_occupied=unknown_as_occupied)
+
+    @classmethod
+    def from_movingai(
+        cls, path: str | FilePath, resolution: float = 1.0, origin: ArrayLike = (0.0, 0.0)
+    ) -> OccupancyGrid:
+        """Load a Moving AI benchmark ``.map`` file (Sturtevant 2012).
+
+        ``.``, ``G`` and ``S`` are passable; every other terrain (``@``, ``O``, ``T``, ``W``) is
+        blocked. The file's first row (Moving AI y = 0) becomes the highest grid row, so Moving
+        AI cell ``(x, y)`` is grid cell ``(height − 1 − y, x)``: see :meth:`movingai_cell`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The ``.map`` file. Text after the ``height`` map rows (e.g. a BibTeX entry) is
+            ignored.
+        resolution : float
+            Cell side [m/cell].
+        origin : array_like
+            ``(x0, y0)`` [m] of the lower-left corner.
+
+        Returns
+        -------
+        OccupancyGrid
+        """
+        from wheelbase.planning.movingai import _read_movingai_map
+
+        return _read_movingai_map(path, resolution, origin)
+
+    # ------------------------------------------------------------------ writer
+    def to_ros_yaml(self, path: str | FilePath, *, image: str | None = None) -> FilePath:
+        """Write the grid as a ROS ``map_server`` YAML + binary PGM pair (trinary mode).
+
+        Occupied cells are written 0, free 254 and unknown free cells 205, as ``map_saver``
+        does, so that :meth:`from_ros_yaml` reads back the same grid.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The YAML file to write; the image goes beside it.
+        image : str or None
+            Image file name (``.pgm`` or ``.png``); default: the YAML's stem + ``.pgm``.
+
+        Returns
+        -------
+        pathlib.Path
+            The image path.
+        """
+        from wheelbase.planning.map_io import _write_ros_yaml
+
+        return _write_ros_yaml(self, path, image=image)
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, cols)`` of the grid."""
+        return self.occupied.shape  # type: ignore[return-value]
+
+    @property
+    def width_m(self) -> float:
+        """Extent along x [m]."""
+        return self.shape[1] * self.resolution
+
+    @property
+    def height_m(self) -> float:
+        """Extent along y [m]."""
+        return self.shape[0] * self.resolution
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(x_min, x_max, y_min, y_max)`` [m], e.g. for ``imshow(..., origin="lower")``."""
+        x0, y0 = self.origin
+        return (x0, x0 + self.width_m, y0, y0 + self.height_m)
+
+    def world_to_cell(self, xy: ArrayLike) -> np.ndarray:
+        """Cells ``(row, col)`` (int64, shape ``(..., 2)``) containing world points ``(x, y)``.
+
+        Parameters
+        ----------
+        xy : array_like
+            Points ``(..., 2)`` or poses ``(..., 3)`` [m]; only x and y are used.
+
+        Returns
+        -------
+        numpy.ndarray
+            Indices; points outside the map give indices outside ``[0, rows) × [0, cols)``.
+        """
+        xy = as_float_array("xy", xy, min_ndim=1)
+        if xy.shape[-1] not in (2, 3):
+            raise InputError(f"xy must have shape (..., 2) or (..., 3) (got {xy.shape})")
+        col = np.floor((xy[..., 0] - self.origin[0]) / self.resolution).astype(np.int64)
+        row = np.floor((xy[..., 1] - self.origin[1]) / self.resolution).astype(np.int64)
+        return np.stack([row, col], -1)
+
+    def cell_to_world(self, cells: ArrayLike) -> np.ndarray:
+        """World coordinates ``(x, y)`` [m] of the centres of cells ``(row, col)``.
+
+        Parameters
+        ----------
+        cells : array_like
+            Integer or fractional cell indices ``(..., 2)`` as ``(row, col)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(..., 2)``.
+        """
+        cells = as_float_array("cells", cells, 2)
+        x = self.origin[0] + (cells[..., 1] + 0.5) * self.resolution
+        y = self.origin[1] + (cells[..., 0] + 0.5) * self.resolution
+        return np.stack([x, y], -1)
+
+    def contains(self, xy: ArrayLike) -> np.ndarray:
+        """Whether world points ``(..., 2)`` lie inside the map rectangle.
+
+        Parameters
+        ----------
+        xy : array_like
+            Points or poses [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean array of shape ``xy.shape[:-1]``.
+        """
+        cells = self.world_to_cell(xy)
+        rows, cols = self.shape
+        return (
+            (cells[..., 0] >= 0)
+            & (cells[..., 0] < rows)
+            & (cells[..., 1] >= 0)
+            & (cells[..., 1] < cols)
+        )
+
+    def is_occupied(self, xy: ArrayLike) -> np.ndarray:
+        """Whether the cells under world points are occupied (outside the map: ``True``).
+
+        Parameters
+        ----------
+        xy : array_like
+            Points or poses [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean array of shape ``xy.shape[:-1]``.
+        """
+        cells = self.world_to_cell(xy)
+        inside = self.contains(xy)
+        rows = np.clip(cells[..., 0], 0, self.shape[0] - 1)
+        cols = np.clip(cells[..., 1], 0, self.shape[1] - 1)
+        return ~inside | self.occupied[rows, cols]
+
+    # ------------------------------------------------------------------ derived maps
+    @cached_property
+    def distance_field(self) -> np.ndarray:
+        """Euclidean distance [m] from each cell centre to the nearest occupied cell centre.
+
+        Computed once with ``scipy.ndimage.distance_transform_edt``; 0 on occupied cells and
+        ``inf`` everywhere when the map has no occupied cell. The map border is not an
+        obstacle here (leaving the map is checked separately).
+        """
+        if not self.occupied.any():
+            out = np.full(self.shape, np.inf)
+        else:
+            out = ndimage.distance_transform_edt(~self.occupied) * self.resolution
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def occupancy_prefix(self) -> np.ndarray:
+        """Per-row prefix counts of occupied cells, shape ``(rows, cols + 1)`` (int32): the
+        number of occupied cells in row ``i`` and columns ``j0..j1`` is
+        ``prefix[i, j1 + 1] − prefix[i, j0]``."""
+        out = np.zeros((self.shape[0], self.shape[1] + 1), np.int32)
+        np.cumsum(self.occupied, axis=1, out=out[:, 1:])
+        out.setflags(write=False)
+        return out
+
+    def clearance(self, xy: ArrayLike) -> np.ndarray:
+        """Distance [m] from world points to the nearest occupied cell (its square).
+
+        A lower bound good to one cell: the distance field at the point's cell minus the
+        largest offset between a point and a cell centre in the two cells involved (√2·r).
+        Outside the map: 0.
+
+        Parameters
+        ----------
+        xy : array_like
+            Points or poses [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``xy.shape[:-1]`` [m], >= 0.
+        """
+        cells = self.world_to_cell(xy)
+        inside = self.contains(xy)
+        rows = np.clip(cells[..., 0], 0, self.shape[0] - 1)
+        cols = np.clip(cells[..., 1], 0, self.shape[1] - 1)
+        d = self.distance_field[rows, cols] - math.sqrt(2.0) * self.resolution
+        return np.where(inside, np.maximum(d, 0.0), 0.0)
+
+    def inflate(self, radius: float) -> OccupancyGrid:
+        """A new grid where every cell whose centre is within ``radius`` of an occupied cell
+        centre is occupied (a disk-shaped robot of that radius reduced to a point).
+
+        Parameters
+        ----------
+        radius : float
+            Inflation radius [m], >= 0.
+
+        Returns
+        -------
+        OccupancyGrid
+        """
+        radius = nonnegative("radius", radius, "m")
+        occ = self.occupied | (self.distance_field <= radius)
+        return OccupancyGrid(occ, self.resolution, self.origin, self.unknown)
+
+    # ------------------------------------------------------------------ collision
+    def in_collision(
+        self, footprint: Footprint, poses: ArrayLike, *, margin: float = 0.0
+    ) -> np.ndarray:
+        """Footprint collision check at one pose ``(3,)`` or a batch ``(N, 3)``.
+
+        A pose collides iff the footprint polygon (grown by ``margin`` along every edge
+        normal) intersects an occupied cell's square or leaves the map. Exact to the cell
+        resolution: the distance field and covering circles decide clear cases, an exact
+        separating-axis test decides the rest.
+
+        Parameters
+        ----------
+        footprint : Footprint
+            Robot outline in the body frame of the reference point.
+        poses : array_like
+            Reference-point poses ``(x, y, θ)`` [m, m, rad], shape ``(3,)`` or ``(N, 3)``.
+        margin : float
+            Extra clearance [m], >= 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean, shape ``poses.shape[:-1]``.
+        """
+        poses = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2)
+        margin = nonnegative("margin", margin, "m")
+        fp = footprint.inflated(margin) if margin > 0 else footprint
+        flat = poses.reshape(-1, 3)
+        out = _collides_batch(
+            self.occupied.view(np.uint8),
+            self.occupancy_prefix,
+            np.asarray(self.distance_field),
+            self.resolution,
+            self.origin[0],
+            self.origin[1],
+            fp.polygon,
+            fp.circles,
+            fp.circle_radius,
+            flat,
+        )
+        return out.reshape(poses.shape[:-1])
+
+    def lattice_collisions(
+        self, footprint: Footprint, poses: ArrayLike, spacing: float = 0.02
+    ) -> np.ndarray:
+        """Brute-force reference check: whether each pose's footprint, sampled as a lattice of
+        points ``spacing`` apart, has a point on an occupied cell (or off the map).
+
+        Slow and independent of :meth:`in_collision` (no distance field, no covering circles,
+        no cell rasterisation): tests and benchmarks use it to verify the fast path and planned
+        paths. A gap narrower than ``spacing`` between lattice points can be missed.
+
+        Parameters
+        ----------
+        footprint : Footprint
+            Robot outline.
+        poses : array_like, shape (N, 3)
+            Poses [m, m, rad].
+        spacing : float
+            Lattice spacing [m], > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean array of shape (N,).
+        """
+        spacing = positive("spacing", spacing, "m")
+        poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
+        poly = footprint.polygon
+        lo, hi = poly.min(0), poly.max(0)
+        xs = np.linspace(lo[0], hi[0], math.ceil((hi[0] - lo[0]) / spacing) + 1)
+        ys = np.linspace(lo[1], hi[1], math.ceil((hi[1] - lo[1]) / spacing) + 1)
+        points = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
+        # keep the lattice points inside the (convex, counter-clockwise) polygon
+        edges = np.roll(poly, -1, 0) - poly
+        cross = edges[:, 0] * (points[:, None, 1] - poly[:, 1]) - edges[:, 1] * (
+            points[:, None, 0] - poly[:, 0]
+        )
+        points = points[np.all(cross >= -1e-12, axis=1)]
+        hits = np.zeros(len(poses), bool)
+        for rows in np.array_split(np.arange(len(poses)), max(1, len(poses) // 500)):
+            chunk = poses[rows]
+            c, s = np.cos(chunk[:, 2]), np.sin(chunk[:, 2])
+            wx = chunk[:, None, 0] + c[:, None] * points[:, 0] - s[:, None] * points[:, 1]
+            wy = chunk[:, None, 1] + s[:, None] * points[:, 0] + c[:, None] * points[:, 1]
+            hits[rows] = np.any(self.is_occupied(np.stack([wx, wy], -1)), axis=1)
+        return hits
+
+    def footprint_clearance(self, footprint: Footprint, poses: ArrayLike) -> np.ndarray:
+        """Distance [m] from the footprint polygon at each pose to the nearest occupied cell.
+
+        Exact polygon-to-square distance over occupied cells near the footprint (searched
+        within the distance-field bound); 0 when in collision.
+
+        Parameters
+        ----------
+        footprint : Footprint
+            Robot outline.
+        poses : array_like
+            Poses ``(N, 3)`` or ``(3,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Clearances [m], shape ``poses.shape[:-1]``.
+        """
+        poses = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2)
+        flat = poses.reshape(-1, 3)
+        out = _clearance_batch(
+            self.occupied.view(np.uint8),
+            self.occupancy_prefix,
+            np.asarray(self.distance_field),
+            self.resolution,
+            self.origin[0],
+            self.origin[1],
+            footprint.polygon,
+            footprint.circles,
+            footprint.circle_radius,
+            flat,
+        )
+        return out.reshape(poses.shape[:-1])
