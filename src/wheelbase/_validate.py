@@ -17,6 +17,8 @@ __all__ = [
     "as_float_array",
     "check_choice",
     "finite",
+    "flag",
+    "integer",
     "nonnegative",
     "parse_angle",
     "positive",
@@ -48,6 +50,45 @@ def nonnegative(name: str, value: float, unit: str = "") -> float:
     if number < 0.0:
         raise ConfigError(f"{name} must be >= 0{_unit(unit)} (got {number:g})")
     return number
+
+
+def integer(
+    name: str,
+    value: object,
+    minimum: int | None = None,
+    maximum: int | None = None,
+    unit: str = "",
+) -> int:
+    """Return ``value`` as an int, or raise ConfigError unless it is a whole number in bounds.
+
+    An integral float (``72.0``, as YAML may give it) is accepted; booleans, strings, NaN, inf
+    and fractions are not. ``int(inf)`` would raise ``OverflowError`` and ``int("x")``
+    ``ValueError``: this says instead what the parameter is and what it allows.
+    """
+    allowed = "an integer"
+    if minimum is not None and maximum is not None:
+        allowed += f" in [{minimum}, {maximum}]"
+    elif minimum is not None:
+        allowed += f" >= {minimum}"
+    elif maximum is not None:
+        allowed += f" <= {maximum}"
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    integral = isinstance(value, (float, np.floating)) and math.isfinite(value)
+    number = int(value) if whole or (integral and value == int(value)) else None
+    if (
+        number is None
+        or (minimum is not None and number < minimum)
+        or (maximum is not None and number > maximum)
+    ):
+        raise ConfigError(f"{name} must be {allowed}{_unit(unit)} (got {value!r})")
+    return number
+
+
+def flag(name: str, value: object) -> bool:
+    """Return ``value`` if it is a boolean, else raise ConfigError (``bool("no")`` is True)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ConfigError(f"{name} must be true or false (got {value!r})")
 
 
 def check_choice(name: str, value: str, allowed: Sequence[str]) -> str:

@@ -10,7 +10,6 @@ field path and what is allowed, e.g. ``demo.yaml: controller.gains.k_beta: must 
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any, Literal
@@ -19,11 +18,15 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from wheelbase.errors import ScenarioError
+from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
 
 __all__ = [
+    "EMPTY_MAP_MARGIN",
+    "EMPTY_MAP_RESOLUTION",
     "ControllerSpec",
     "OdometrySpec",
     "PlannerSpec",
+    "ResourceSpec",
     "RobotSpec",
     "Scenario",
     "TrajectorySpec",
@@ -31,6 +34,21 @@ __all__ = [
     "load_scenario",
     "scenario_json_schema",
 ]
+
+
+EMPTY_MAP_MARGIN = 3.0
+"""Margin [m] of the ``map: empty`` field around the start and the goals."""
+EMPTY_MAP_RESOLUTION = 0.05
+"""Cell size [m] of the ``map: empty`` field."""
+
+# Keywords of HybridAStar that a scenario sets elsewhere, and where.
+_PLANNER_SET_ELSEWHERE = {
+    "grid": "map",
+    "footprint": "robot.footprint (grown by planner.margin)",
+    "turning_radius": "planner.turning_radius",
+    "reverse": "planner.reverse",
+    "rear_axle_to_center": "robot.center_offset",
+}
 
 
 class _Strict(BaseModel):
@@ -96,6 +114,25 @@ class PlannerSpec(_Strict):
         default_factory=dict, description="Further HybridAStar keyword arguments."
     )
 
+    @field_validator("options")
+    @classmethod
+    def _known_options(cls, value: dict[str, Any]) -> dict[str, Any]:
+        if not value:
+            return value
+        import inspect
+
+        from wheelbase.planning.hybrid_astar import HybridAStar
+
+        keywords = set(inspect.signature(HybridAStar).parameters) - set(_PLANNER_SET_ELSEWHERE)
+        for key in value:
+            if key in _PLANNER_SET_ELSEWHERE:
+                raise ValueError(
+                    f"{key!r} is set by the scenario: use {_PLANNER_SET_ELSEWHERE[key]}"
+                )
+            if key not in keywords:
+                raise ValueError(f"unknown option {key!r}; allowed: {', '.join(sorted(keywords))}")
+        return value
+
 
 class TrajectorySpec(_Strict):
     """Limits that time-parametrise the plan (see :class:`wheelbase.timing.SpeedLimits`)."""
@@ -145,6 +182,17 @@ class OdometrySpec(_Strict):
     track_scale: float = Field(1.0, gt=0, description="True track / nominal track.")
 
 
+class ResourceSpec(_Strict):
+    """Resource limits of a run (see :mod:`wheelbase.limits`): raise them on purpose."""
+
+    max_steps: int = Field(
+        MAX_STEPS, ge=1, description="Most simulation steps duration / dt of the run."
+    )
+    max_map_cells: int = Field(
+        MAX_MAP_CELLS, ge=1, description="Most cells of the map (checked here for map: empty)."
+    )
+
+
 class Scenario(_Strict):
     """A validated closed-loop scenario."""
 
@@ -160,7 +208,7 @@ class Scenario(_Strict):
     trajectory: TrajectorySpec = Field(default_factory=TrajectorySpec)
     controller: ControllerSpec = Field(default_factory=ControllerSpec)
     odometry: OdometrySpec = Field(default_factory=OdometrySpec)
-    seed: int = Field(0, ge=0, description="Noise seed.")
+    seed: int = Field(0, ge=0, le=2**64 - 1, description="Noise seed (a 64-bit unsigned integer).")
     start: tuple[float, float, float] = Field(..., description="(x [m], y [m], heading [deg]).")
     goals: tuple[tuple[float, float, float], ...] = Field(
         ..., min_length=1, description="Goals (x [m], y [m], heading [deg]) visited in order."
@@ -170,6 +218,9 @@ class Scenario(_Strict):
     )
     duration: float = Field(120.0, gt=0, description="Longest run [s].")
     dt: float = Field(0.01, gt=0, description="Simulation and control step [s].")
+    resources: ResourceSpec = Field(
+        default_factory=ResourceSpec, description="Resource limits (raise them on purpose)."
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -184,21 +235,87 @@ class Scenario(_Strict):
     @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
     @classmethod
     def _finite(cls, value):
-        flat = json.dumps(value) if not isinstance(value, float) else str(value)
-        if "Infinity" in flat or "NaN" in flat or flat in ("inf", "nan", "-inf"):
+        if not all(math.isfinite(number) for number in _numbers(value)):
             raise ValueError(f"must be finite (got {value})")
         return value
 
+    @field_validator("start", "goals")
+    @classmethod
+    def _poses(cls, value):
+        poses = value if isinstance(value[0], tuple) else (value,)
+        for x, y, _heading in poses:
+            if max(abs(x), abs(y)) > MAX_COORDINATE:
+                raise ValueError(
+                    f"x and y must be within ±{MAX_COORDINATE:g} m, where float64 still "
+                    f"resolves micrometres (got ({x:g}, {y:g}))"
+                )
+        # Headings of any finite value are wrapped to (−180, 180] deg on entry.
+        wrapped = tuple((x, y, _wrap_degrees(heading)) for x, y, heading in poses)
+        return wrapped if isinstance(value[0], tuple) else wrapped[0]
+
+    @field_validator("goal_tolerance")
+    @classmethod
+    def _tolerance(cls, value):
+        position, heading = value
+        if position <= 0.0:
+            raise ValueError(f"position must be > 0 m (got {position:g})")
+        if not 0.0 < heading <= 180.0:
+            raise ValueError(f"heading must be in (0, 180] deg (got {heading:g})")
+        return value
+
     @model_validator(mode="after")
-    def _dt_below_duration(self):
+    def _sizes(self):
         if self.dt > self.duration:
             raise ValueError(f"dt must be <= duration (got dt={self.dt}, duration={self.duration})")
+        steps = self.duration / self.dt
+        limit = self.resources.max_steps
+        if steps > limit:
+            raise ValueError(
+                f"duration / dt = {steps:.3g} steps: more than resources.max_steps = {limit}; "
+                "use a larger dt or a shorter duration, or raise resources.max_steps"
+            )
+        if self.map == "empty":
+            rows, cols = empty_map_shape([self.start, *self.goals])
+            limit = self.resources.max_map_cells
+            if rows * cols > limit:
+                raise ValueError(
+                    f"map: empty around the start and goals would be {rows} × {cols} = "
+                    f"{rows * cols:.3g} cells of {EMPTY_MAP_RESOLUTION} m: more than "
+                    f"resources.max_map_cells = {limit}; bring them closer, use a map file, or "
+                    "raise resources.max_map_cells"
+                )
         return self
 
     def to_yaml(self) -> str:
         """The resolved scenario (all defaults filled) as YAML, loadable again."""
         data = self.model_dump(mode="json")
         return yaml.safe_dump(data, sort_keys=False)
+
+
+def empty_map_shape(points: list[tuple[float, ...]]) -> tuple[int, int]:
+    """(rows, columns) of the ``map: empty`` field around ``points`` (x [m], y [m], ...).
+
+    Parameters
+    ----------
+    points : list of tuple of float
+        The start and the goals.
+    """
+    xs = [point[0] for point in points]
+    ys = [point[1] for point in points]
+    width = math.ceil(max(xs) + EMPTY_MAP_MARGIN) - math.floor(min(xs) - EMPTY_MAP_MARGIN)
+    height = math.ceil(max(ys) + EMPTY_MAP_MARGIN) - math.floor(min(ys) - EMPTY_MAP_MARGIN)
+    return math.ceil(height / EMPTY_MAP_RESOLUTION), math.ceil(width / EMPTY_MAP_RESOLUTION)
+
+
+def _numbers(value: Any) -> list[float]:
+    if isinstance(value, (tuple, list)):
+        return [number for item in value for number in _numbers(item)]
+    return [float(value)]
+
+
+def _wrap_degrees(angle: float) -> float:
+    wrapped = math.remainder(angle, 360.0)
+    return 180.0 if wrapped == -180.0 else wrapped
 
 
 def format_validation_error(error: ValidationError, source: str) -> str:
@@ -213,15 +330,15 @@ def format_validation_error(error: ValidationError, source: str) -> str:
     """
     lines = []
     for item in error.errors():
-        path = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        path = ".".join(str(part) for part in item["loc"])
         message = item["msg"].removeprefix("Value error, ")
         if item["type"] == "extra_forbidden":
             message = "unknown key (check the spelling; `wheelbase schema` lists the keys)"
         elif item["type"] == "missing":
             message = "required field is missing"
-        elif "got" not in message and "input" in item:
+        elif "got" not in message and "input" in item and path:
             message = f"{message} (got {item['input']!r})"
-        lines.append(f"{source}: {path}: {message}")
+        lines.append(f"{source}: {path}: {message}" if path else f"{source}: {message}")
     return "\n".join(lines)
 
 
@@ -246,7 +363,15 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
         path = _resolve(source)
         label = path.name
         try:
-            data = yaml.safe_load(path.read_text())
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as error:
+            raise ScenarioError(
+                f"{label}: not UTF-8 text (byte {error.object[error.start]:#04x} at offset "
+                f"{error.start}); save the file as UTF-8"
+            ) from None
+        except (ValueError, RecursionError) as error:
+            # e.g. an integer of more than 4300 digits, or lists nested thousands deep
+            raise ScenarioError(f"{label}: unreadable YAML: {error}") from None
         except yaml.YAMLError as error:
             mark = getattr(error, "problem_mark", None)
             where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""

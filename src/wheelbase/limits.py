@@ -1,0 +1,39 @@
+"""Resource limits: the largest problems wheelbase takes on before refusing with a clear error.
+
+A typo in a file (``dt: 1e-9``, a goal 1e6 m away, a 1e9 m wheel base) must not become an
+hour-long loop or a request for terabytes of memory. Each limit below is the default of a
+keyword (or scenario key) that raises it, and the error that enforces it names both, e.g.
+``duration / dt = 1.2e+11 steps: more than resources.max_steps = 1000000``.
+
+=====================  ===========================================  ==========================
+limit                  what it bounds (default)                     raised by
+=====================  ===========================================  ==========================
+``MAX_STEPS``          closed-loop steps duration / dt (1e6: 28 h   scenario
+                       at 0.1 s, 17 min at 1 ms)                    ``resources.max_steps``
+``MAX_MAP_CELLS``      cells of an occupancy grid (1e8: 10 km × 10  scenario
+                       km at 1 m, 500 m square at 5 cm; its          ``resources.max_map_cells``
+                       distance field alone is 0.8 GB)
+``MAX_STATE_BINS``     Hybrid A* state bins x × y × heading (5e7:   ``HybridAStar(...,
+                       the search's arrays take ~0.5 GB)            max_state_bins=)``
+``MAX_SAMPLE_STEPS``   MPPI samples × horizon steps per call (1e8:  ``MPPI(...,
+                       the sampled commands take 1.6 GB)            max_sample_steps=)``
+``MAX_COORDINATE``     |x|, |y| of poses in scenario files (1e10 m, fixed: float64 spacing
+                       UTM-like and beyond)                         is 2 µm there
+=====================  ===========================================  ==========================
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "MAX_COORDINATE",
+    "MAX_MAP_CELLS",
+    "MAX_SAMPLE_STEPS",
+    "MAX_STATE_BINS",
+    "MAX_STEPS",
+]
+
+MAX_STEPS = 1_000_000
+MAX_MAP_CELLS = 100_000_000
+MAX_STATE_BINS = 50_000_000
+MAX_SAMPLE_STEPS = 100_000_000
+MAX_COORDINATE = 1.0e10  # m

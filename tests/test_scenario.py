@@ -1,0 +1,90 @@
+"""Scenario validation: every bad field is a ScenarioError naming the field, its unit, what is
+allowed and what was given; extreme but valid values are accepted (and headings wrapped)."""
+
+import math
+
+import pytest
+
+from wheelbase.errors import ScenarioError
+from wheelbase.scenario import load_scenario
+
+BASE = {
+    "map": "empty",
+    "robot": {"model": "diffdrive"},
+    "odometry": {"mode": "perfect"},
+    "start": [0.0, 0.0, 0.0],
+    "goal": [2.0, 0.0, 0.0],
+}
+
+
+def _with(**changes):
+    return {**BASE, **changes}
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        # planner options: only HybridAStar's keywords, and not those the scenario sets
+        ({"planner": {"options": {"bogus": 1}}}, r"planner.options: unknown option 'bogus'.*"),
+        (
+            {"planner": {"options": {"turning_radius": 1.0}}},
+            r"planner.options: 'turning_radius' .*planner.turning_radius",
+        ),
+        # goal tolerance: a negative one can never be met
+        ({"goal_tolerance": [-0.1, 5.0]}, r"goal_tolerance: position must be > 0 m.*-0.1"),
+        ({"goal_tolerance": [0.1, 0.0]}, r"goal_tolerance: heading must be in \(0, 180\] deg"),
+        # steps: duration / dt is bounded (each step is a controller call and a log row)
+        (
+            {"dt": 1e-9},
+            r"duration / dt = 1.2e\+11 steps.*resources.max_steps = 1000000",
+        ),
+        # coordinates: finite is not enough, float64 keeps micrometres only up to 1e10 m
+        ({"goal": [1e300, 0.0, 0.0]}, r"goals: .*within ±1e\+10 m.*1e\+300"),
+        ({"start": [0.0, -2e10, 0.0]}, r"start: .*within ±1e\+10 m"),
+        # the empty map around far-apart points would not fit in memory
+        ({"goal": [1e6, 0.0, 0.0]}, r"map: empty .* 2.4e\+09 cells.*resources.max_map_cells"),
+        # seeds drive 64-bit counters
+        ({"seed": 2**64}, r"seed: .*less than or equal to 18446744073709551615"),
+    ],
+)
+def test_bad_fields_are_scenario_errors(change, match):
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario(_with(**change))
+
+
+def test_known_planner_options_pass_to_the_planner_unchanged():
+    scenario = load_scenario(_with(planner={"options": {"headings": 36, "time_limit": 2.0}}))
+    assert scenario.planner.options == {"headings": 36, "time_limit": 2.0}
+
+
+def test_limits_can_be_raised():
+    far = _with(goal=[1e5, 0.0, 0.0])  # 2.4e8 cells: over the default 1e8
+    with pytest.raises(ScenarioError, match="max_map_cells"):
+        load_scenario(far)
+    assert load_scenario({**far, "resources": {"max_map_cells": 10**9}}).goals[0][0] == 1e5
+    fine = _with(dt=1e-4, duration=200.0, resources={"max_steps": 2_000_000})
+    assert load_scenario(fine).dt == 1e-4
+
+
+def test_extreme_but_valid_coordinates_are_accepted():
+    far = 4.5e9
+    scenario = load_scenario(_with(start=[far, far, 0.0], goal=[far + 2.0, far, 0.0]))
+    assert scenario.start[0] == far
+
+
+@pytest.mark.parametrize(
+    ("given", "wrapped"), [(-350.6, 9.4), (540.0, 180.0), (-180.0, 180.0), (725.0, 5.0)]
+)
+def test_headings_are_wrapped_on_entry(given, wrapped):
+    data = {**_with(start=[0.0, 0.0, given]), "goal": [2.0, 0.0, given]}
+    scenario = load_scenario(data)
+    assert math.isclose(scenario.start[2], wrapped, abs_tol=1e-9)
+    assert all(math.isclose(g[2], wrapped, abs_tol=1e-9) for g in scenario.goals)
+
+
+def test_empty_map_constants_match_the_runner():
+    # The validation sizes the map the runner builds: the same margin and resolution.
+    from wheelbase import runner, scenario
+
+    assert scenario.EMPTY_MAP_MARGIN == runner.EMPTY_MARGIN
+    assert scenario.EMPTY_MAP_RESOLUTION == runner.EMPTY_RESOLUTION
