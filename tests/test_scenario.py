@@ -88,3 +88,22 @@ def test_empty_map_constants_match_the_runner():
 
     assert scenario.EMPTY_MAP_MARGIN == runner.EMPTY_MARGIN
     assert scenario.EMPTY_MAP_RESOLUTION == runner.EMPTY_RESOLUTION
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [
+        (
+            b"name: caf\xe9\nstart: [0, 0, 0]\n",
+            r"bad.yaml: not UTF-8 text \(byte 0xe9 at offset 9\)",
+        ),
+        (b"seed: " + b"9" * 5000 + b"\n", r"bad.yaml: unreadable YAML: .*4300 digits"),
+        (b"start: " + b"[" * 5000 + b"]" * 5000 + b"\n", r"bad.yaml: (unreadable|malformed) YAML"),
+    ],
+    ids=["latin-1", "5000-digit-integer", "nested-5000-deep"],
+)
+def test_unreadable_files_are_scenario_errors(tmp_path, content, match):
+    path = tmp_path / "bad.yaml"
+    path.write_bytes(content)
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario(path)
