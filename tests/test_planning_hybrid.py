@@ -160,6 +160,48 @@ def test_start_goal_and_parameter_errors():
         HybridAStar(grid, (0.6, 0.4), 1.0, reverse_penalty=0.5)
 
 
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"headings": math.inf}, r"headings must be an integer >= 8 \(got inf\)"),
+        ({"headings": math.nan}, r"headings must be an integer >= 8 \(got nan\)"),
+        ({"headings": "abc"}, r"headings must be an integer >= 8 \(got 'abc'\)"),
+        ({"headings": 72.5}, r"headings must be an integer >= 8 \(got 72.5\)"),
+        ({"curvatures": math.inf}, r"curvatures must be an odd integer >= 3 \(got inf\)"),
+        ({"max_iterations": math.inf}, r"max_iterations must be an integer >= 1 \(got inf\)"),
+        ({"max_iterations": "x"}, r"max_iterations must be an integer >= 1 \(got 'x'\)"),
+        ({"reverse": "no"}, r"reverse must be true or false \(got 'no'\)"),
+        ({"smooth": 1}, r"smooth must be true or false \(got 1\)"),
+        ({"time_limit": "abc"}, r"time_limit must be a real number s \(got 'abc'\)"),
+        ({"footprint": "abc"}, r"footprint must be \(length, width\) \[m\] \(got 'abc'\)"),
+        ({"footprint": (1e9, 0.5)}, r"footprint reaches 5e\+08 m from its reference point.*"),
+        ({"xy_resolution": 1e-3}, r"1.8e\+09 state bins.*max_state_bins = 50000000"),
+        ({"max_state_bins": 0}, r"max_state_bins must be an integer >= 1"),
+    ],
+)
+def test_constructor_errors_name_the_option(options, match):
+    grid = OccupancyGrid.from_array(np.zeros((50, 50), bool), 0.1)
+    arguments = {"footprint": (0.6, 0.4), "turning_radius": 1.0, **options}
+    with pytest.raises(ConfigError, match=match):
+        HybridAStar(grid, **arguments)
+
+
+def test_state_bin_limit_can_be_raised():
+    grid = OccupancyGrid.from_array(np.zeros((50, 50), bool), 0.1)
+    planner = HybridAStar(grid, (0.6, 0.4), 1.0, xy_resolution=0.02, max_state_bins=10**7)
+    assert planner._nx * planner._ny * planner.headings == 250 * 250 * 72
+
+
+def test_huge_turning_radius_builds_primitives_no_longer_than_the_map():
+    # R = 1e9 m asked for 1.7e9 collision samples per primitive (a hang, then MemoryError);
+    # a primitive longer than the map's diagonal can never stay in it: they are cut there.
+    grid = OccupancyGrid.from_array(np.zeros((50, 50), bool), 0.1)
+    planner = HybridAStar(grid, (0.6, 0.4), 1e9)
+    assert planner.primitive_length == pytest.approx(math.hypot(5.0, 5.0))
+    path = planner.plan((1.0, 2.5, 0.0), (4.0, 2.5, 0.0))  # a straight line still works
+    assert path.success and path.poses[-1, 0] == pytest.approx(4.0)
+
+
 def _roughness(path):
     k = path.curvatures[np.isfinite(path.curvatures)]
     return float(np.sum(np.diff(k) ** 2))
@@ -228,3 +270,17 @@ def test_load_map_by_name_and_path(tmp_path):
         load_map("atlantis")
     names = {s.map_name for s in bundled_scenarios()}
     assert names == set(BUNDLED_MAPS)
+
+
+def test_search_kernel_takes_no_int_of_infinity(monkeypatch):
+    # Compiled, int(inf) is undefined behaviour (LLVM's fptosi of inf is poison); run the
+    # kernel's Python code, where it raises OverflowError, on a start boxed in away from the
+    # goal: its heuristic is inf, and the search must still end cleanly.
+    from wheelbase.planning import hybrid_astar
+
+    monkeypatch.setattr(hybrid_astar, "_search", hybrid_astar._search.py_func)
+    occ = np.zeros((40, 40), bool)
+    occ[5:15, 5] = occ[5:15, 15] = occ[5, 5:16] = occ[15, 5:16] = True  # a closed box
+    planner = HybridAStar(OccupancyGrid.from_array(occ, 0.1), (0.3, 0.2), 0.0)
+    path = planner.plan((1.0, 1.0, 0.0), (3.0, 3.0, 0.0))
+    assert not path.success and path.stats.message == "search space exhausted"

@@ -44,9 +44,10 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, nonnegative, positive
+from wheelbase._validate import as_float_array, flag, integer, nonnegative, positive
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
+from wheelbase.limits import MAX_STATE_BINS
 from wheelbase.planning.astar import _dijkstra_kernel
 from wheelbase.planning.collision import _collides_one
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
@@ -59,6 +60,7 @@ from wheelbase.planning.smoothing import smooth_path
 
 __all__ = ["HybridAStar"]
 
+_FINITE = 1.0e300  # below this a cost is finite: the kernels compare with it, never with inf
 _ROTATE = 2  # segment type code for a turn in place (length = signed angle [rad])
 _MODE_RS, _MODE_DUBINS, _MODE_POINT = 0, 1, 2
 _STATUS = {
@@ -134,6 +136,15 @@ class HybridAStar:
     smooth : bool
         Smooth the found path with :func:`~wheelbase.planning.smoothing.smooth_path`
         (curvature profile low-pass; keeps cusps, clearance and the curvature limit).
+    max_state_bins : int
+        Most state bins (x × y × heading) the search may allocate (default
+        :data:`wheelbase.limits.MAX_STATE_BINS` = 5e7, about 0.5 GB); raise it on purpose.
+
+    Notes
+    -----
+    A motion primitive is never longer than the map's diagonal (no longer one could stay in
+    the map): with a huge turning radius (1e9 m) the primitives are cut there instead of
+    asking for billions of collision samples each.
 
     Examples
     --------
@@ -169,26 +180,37 @@ class HybridAStar:
         max_iterations: int = 1_000_000,
         time_limit: float = 5.0,
         smooth: bool = True,
+        max_state_bins: int = MAX_STATE_BINS,
     ) -> None:
         if not isinstance(grid, OccupancyGrid):
             raise ConfigError(f"grid must be an OccupancyGrid (got {type(grid).__name__})")
         if isinstance(footprint, Footprint):
             fp = footprint
         else:
-            dims = np.asarray(footprint, dtype=float).ravel()
+            try:
+                dims = np.asarray(footprint, dtype=float).ravel()
+            except (TypeError, ValueError):
+                dims = np.zeros(0)
             if dims.shape != (2,):
                 raise ConfigError(f"footprint must be (length, width) [m] (got {footprint!r})")
             fp = Footprint.rectangle(dims[0], dims[1], rear_axle_to_center)
+        diagonal = math.hypot(grid.width_m, grid.height_m)
+        if fp.max_radius > diagonal:
+            raise ConfigError(
+                f"footprint reaches {fp.max_radius:.3g} m from its reference point, farther "
+                f"than the map's diagonal ({diagonal:.3g} m): it fits nowhere in the map"
+            )
         self.grid = grid
         self.footprint = fp
         self.turning_radius = nonnegative("turning_radius", turning_radius, "m")
-        self.reverse = bool(reverse)
-        if int(headings) != headings or headings < 8:
-            raise ConfigError(f"headings must be an integer >= 8 (got {headings!r})")
-        self.headings = int(headings)
-        if int(curvatures) != curvatures or curvatures < 3 or curvatures % 2 == 0:
+        self.reverse = flag("reverse", reverse)
+        self.headings = integer("headings", headings, minimum=8)
+        try:
+            self.curvatures = integer("curvatures", curvatures, minimum=3)
+        except ConfigError:
+            self.curvatures = 0
+        if self.curvatures % 2 == 0:
             raise ConfigError(f"curvatures must be an odd integer >= 3 (got {curvatures!r})")
-        self.curvatures = int(curvatures)
         poly = fp.polygon
         short = float(min(np.ptp(poly[:, 0]), np.ptp(poly[:, 1])))
         if xy_resolution is None:
@@ -217,23 +239,27 @@ class HybridAStar:
         )
         self.xy_goal_tolerance = nonnegative("xy_goal_tolerance", xy_goal_tolerance, "m")
         self.yaw_goal_tolerance = nonnegative("yaw_goal_tolerance", yaw_goal_tolerance, "rad")
-        if int(max_iterations) != max_iterations or max_iterations < 1:
-            raise ConfigError(f"max_iterations must be a positive integer (got {max_iterations!r})")
-        self.max_iterations = int(max_iterations)
+        self.max_iterations = integer("max_iterations", max_iterations, minimum=1)
         self.time_limit = positive("time_limit", time_limit, "s")
-        self.smooth = bool(smooth)
+        self.smooth = flag("smooth", smooth)
+        self.max_state_bins = integer("max_state_bins", max_state_bins, minimum=1)
 
-        self._nx = math.ceil(grid.width_m / self.xy_resolution)
-        self._ny = math.ceil(grid.height_m / self.xy_resolution)
-        bins = self._nx * self._ny * self.headings
-        if bins > 50_000_000:
+        nx = math.ceil(grid.width_m / self.xy_resolution)
+        ny = math.ceil(grid.height_m / self.xy_resolution)
+        bins = nx * ny * self.headings
+        if bins > self.max_state_bins:
             raise ConfigError(
-                f"xy_resolution {self.xy_resolution:g} m gives {bins} state bins (> 5e7); "
-                "use a coarser xy_resolution or fewer headings"
+                f"xy_resolution {self.xy_resolution:g} m and {self.headings} headings give "
+                f"{bins:.3g} state bins: more than max_state_bins = {self.max_state_bins}; use "
+                "a coarser xy_resolution or fewer headings, or raise max_state_bins"
             )
-        self.primitive_length = max(
-            self.turning_radius * 2.0 * math.pi / self.headings,
-            math.sqrt(2.0) * self.xy_resolution,
+        self._nx, self._ny = nx, ny
+        self.primitive_length = min(
+            max(
+                self.turning_radius * 2.0 * math.pi / self.headings,
+                math.sqrt(2.0) * self.xy_resolution,
+            ),
+            diagonal,
         )
         # the footprint grown by the largest motion of any of its points between samples
         rho = fp.max_radius
@@ -797,9 +823,12 @@ def _search(
             break
         # analytic expansion
         h = (f - g) / hweight
-        interval = int(max(h, 0.0) / (ratio * xy_res))
         since_shot += 1
-        if since_shot >= interval:
+        # An infinite heuristic (no free way to the goal even for a point) means no shot can
+        # succeed either: none is tried, and int() never sees inf (undefined when compiled).
+        shots = h < _FINITE
+        interval = int(min(max(h, 0.0) / (ratio * xy_res), 1.0e18)) if shots else 0
+        if shots and since_shot >= interval:
             since_shot = 0
             ok, types, lengths = _shot_word(
                 x, y, th, gx, gy, gth, mode, radius, families, reverse_ok
