@@ -15,6 +15,7 @@ from wheelbase.errors import ConfigError, InputError
 
 __all__ = [
     "as_float_array",
+    "as_rng",
     "check_choice",
     "finite",
     "flag",
@@ -125,6 +126,25 @@ def as_float_array(
     if not np.all(np.isfinite(array)):
         raise InputError(f"{name} must be finite (got NaN or inf)")
     return array
+
+
+def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
+    """A NumPy generator from a generator (returned as is), a seed, or None (fresh entropy).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, int or None
+        The source of randomness or its seed.
+
+    Returns
+    -------
+    numpy.random.Generator
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is not None and (isinstance(rng, bool) or not isinstance(rng, int | np.integer)):
+        raise ConfigError(f"rng must be a numpy Generator, an integer seed or None (got {rng!r})")
+    return np.random.default_rng(rng)
 
 
 def parse_angle(text: str | float, name: str = "angle", default_unit: str = "rad") -> float:

@@ -1,0 +1,127 @@
+"""Sensing and localisation speed (issue 14): lidar rays per second, AMCL updates per second.
+
+Run ``python benchmarks/sensors.py`` (``--quick`` for a smoke run); prints one JSON object.
+
+``lidar_rays_per_s``
+    :meth:`wheelbase.sensors.Lidar.scan` (ray marching on the gap field, Numba, all cores) for
+    2,000 random free poses × 360 beams, 8 m range, on the bundled ``warehouse`` map and on the
+    turtlebot3 map of ``../shared/data/maps`` (skipped, with the reason, when absent). Target
+    >= 20 M rays/s.
+``lidar_rays_per_s_one_thread``
+    The same on one Numba thread: the figure per core, steadier on a shared machine.
+``numpy_rays_per_s`` / ``exact_rays_per_s``
+    The same scans with the vectorised NumPy march and with the exact Amanatides–Woo traversal,
+    in the same run; ``fast_vs_exact_max_m`` is the largest difference to the exact ranges.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+import warnings
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from wheelbase.planning import OccupancyGrid, load_map
+from wheelbase.sensors import Lidar
+
+MAPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "maps"
+
+
+def best_of(function, repeats: int) -> float:
+    """Shortest wall time [s] of ``repeats`` calls after one warm-up call."""
+    function()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def free_poses(grid: OccupancyGrid, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` poses uniformly over the free cells, random headings."""
+    free = np.argwhere(~grid.occupied)
+    cells = free[rng.integers(len(free), size=n)]
+    xy = grid.cell_to_world(cells) + rng.uniform(-0.5, 0.5, (n, 2)) * grid.resolution
+    return np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
+
+
+def lidar_maps() -> tuple[dict[str, OccupancyGrid], dict[str, str]]:
+    maps = {"warehouse": load_map("warehouse")}
+    skipped = {}
+    path = MAPS / "turtlebot3_world.yaml"
+    if path.is_file():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the YAML names map.pgm; the loader finds the .pgm
+            maps["turtlebot3_world"] = load_map(path)
+    else:
+        skipped["turtlebot3_world"] = f"not found: {path}"
+    return maps, skipped
+
+
+def lidar(quick: bool) -> dict:
+    poses_n = 200 if quick else 2000
+    repeats = 1 if quick else 5
+    lidar = Lidar(beams=360, max_range=8.0)
+    maps, skipped = lidar_maps()
+    out: dict = {
+        "config": {"poses": poses_n, "beams": 360, "max_range_m": 8.0, "repeats": repeats},
+        "lidar_rays_per_s": {},
+        "lidar_rays_per_s_one_thread": {},
+        "numpy_rays_per_s": {},
+        "exact_rays_per_s": {},
+        "fast_vs_exact_max_m": {},
+        "skipped": skipped,
+    }
+    rays = poses_n * lidar.beams
+    for name, grid in maps.items():
+        poses = free_poses(grid, poses_n, np.random.default_rng(0))
+        results = {}
+        for method, key in (
+            ("fast", "lidar_rays_per_s"),
+            ("numpy", "numpy_rays_per_s"),
+            ("exact", "exact_rays_per_s"),
+        ):
+
+            def call(method=method, grid=grid, poses=poses, results=results):
+                results[method] = lidar.scan(grid, poses, noise=False, method=method)
+
+            out[key][name] = rays / best_of(call, repeats)
+            if method == "fast":
+                threads = numba.get_num_threads()
+                numba.set_num_threads(1)
+                out["lidar_rays_per_s_one_thread"][name] = rays / best_of(call, repeats)
+                numba.set_num_threads(threads)
+        out["fast_vs_exact_max_m"][name] = float(np.max(np.abs(results["fast"] - results["exact"])))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smoke run: small sizes, one repeat")
+    args = parser.parse_args()
+    report = {
+        "machine": {
+            "platform": platform.platform(),
+            "python": platform.python_version(),
+            "cpus": os.cpu_count(),
+            "numba_threads": numba.get_num_threads(),
+            "load_average_1min": os.getloadavg()[0],
+        },
+        "lidar": lidar(args.quick),
+    }
+    rays = report["lidar"]["lidar_rays_per_s"]
+    report["targets"] = {
+        "lidar_rays_per_s >= 20e6": {name: value >= 20e6 for name, value in rays.items()},
+    }
+    print(json.dumps(report, indent=2))
+
+
+if __name__ == "__main__":
+    main()
