@@ -1,6 +1,7 @@
 import json
 from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
 import pytest
 
 from wheelbase.batch import run_batch
@@ -59,3 +60,34 @@ def test_dask_local_cluster_runs_a_batch():
         result = run_batch([SCENARIO], seeds=2, executor=client.get_executor())
     assert [row["status"] for row in result.rows].count("arrived") >= 1
     assert len(result.rows) == 2
+
+
+def test_vectorised_seeds_equal_single_runs():
+    """One batch of 5 seeds in lockstep: every run equals its single run (poses to 1e-9 m)."""
+    from wheelbase.runner import prepare, run, run_seeds
+
+    seeds = [3, 4, 5, 6, 7]
+    rows = run_seeds(SCENARIO, seeds)
+    prepared = prepare(SCENARIO)
+    batch = prepared.engine.run(np.tile(prepared.start, (5, 1)), seeds=np.array(seeds))
+    for i, seed in enumerate(seeds):
+        single = run({**SCENARIO, "seed": seed})
+        np.testing.assert_allclose(batch.robot(i).true_pose, single.log.true_pose, atol=1e-9)
+        for key in ("status", "duration_s", "odometry_drift_m", "final_position_error_true_m"):
+            assert rows[i][key] == single.metrics[key], key
+        assert rows[i]["seed"] == seed
+
+
+def test_chunks_on_an_executor_equal_one_vectorised_batch():
+    here = run_batch([SCENARIO], seeds=5)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        chunked = run_batch([SCENARIO], seeds=5, executor=pool, chunk_size=2)
+    assert [row["seed"] for row in chunked.rows] == [0, 1, 2, 3, 4]
+    timing = ("planning_time_s", "compile_time_s")
+
+    def untimed(rows):
+        return [{k: v for k, v in row.items() if k not in timing} for row in rows]
+
+    assert untimed(here.rows) == untimed(chunked.rows)
+    with pytest.raises(ConfigError, match="chunk_size"):
+        run_batch([SCENARIO], seeds=2, chunk_size=0)

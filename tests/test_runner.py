@@ -33,10 +33,10 @@ def test_closed_loop_arrives_with_encoder_odometry(result):
     # Odometry (2048-tick encoders, exact-arc update) stays within a few mm on 5 m.
     assert m["odometry_drift_m"] < 0.005
     log = result.log
-    assert log.true_pose.shape == log.estimated_pose.shape == (len(log.t), 3)
+    assert log.true_pose.shape == log.estimated_pose.shape == (1, len(log.t), 3)
     # The encoders count the wheel rotation that the commands asked for.
-    rotation = np.sum(log.wheel_rates[:-1, 0]) * 0.02
-    assert abs(log.ticks[-1, 0] - rotation * 2048 / (2 * math.pi)) <= 2
+    rotation = np.sum(log.wheel_rates[0, :-1, 0]) * 0.02
+    assert abs(log.ticks[0, -1, 0] - rotation * 2048 / (2 * math.pi)) <= 2
 
 
 def test_report_files_and_no_overwrite(result, tmp_path):
@@ -46,7 +46,7 @@ def test_report_files_and_no_overwrite(result, tmp_path):
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["status"] == "arrived"
     header = (tmp_path / "log.csv").read_text().splitlines()[0].split(",")
-    assert header[:4] == ["t", "true_x", "true_y", "true_theta"]
+    assert header[:5] == ["robot", "t", "true_x", "true_y", "true_theta"]
     assert "ticks_left" in header and "cmd_omega" in header
     with pytest.raises(FileExistsError, match="--force"):
         write_report(result, tmp_path, gif=False)
@@ -108,9 +108,10 @@ def test_mppi_scenario_runs_from_plain_gains():
     # Fans of sampled rollouts are kept once a second for the animation.
     fans = result.log.rollout_fans
     assert len(fans) >= int(metrics["duration_s"]) - 1
-    first = fans[min(fans)]
-    assert first.shape[0] == 20 and first.shape[2] == 2
-    start = np.broadcast_to(result.log.true_pose[min(fans), :2], first[:, 0].shape)
+    robot, row = min(fans)
+    first = fans[(robot, row)]
+    assert robot == 0 and first.shape[0] == 20 and first.shape[2] == 2
+    start = np.broadcast_to(result.log.true_pose[0, row, :2], first[:, 0].shape)
     np.testing.assert_allclose(first[:, 0], start, atol=1e-9)  # rollouts start at the robot
     # The loop records what MPPI reported at each step; no step saw every rollout collide.
     assert metrics["controller_statuses"].get("ok", 0) > 0

@@ -1,11 +1,13 @@
-"""Batch runs: many scenarios, or one scenario over many noise seeds, on any executor.
+"""Batch runs: many scenarios, or one scenario over many noise seeds, vectorised and in chunks.
 
-:func:`run_batch` submits one closed-loop run per (scenario, seed) to a
-:class:`concurrent.futures.Executor` — a local process pool by default, or a Dask distributed
-client's executor (``Client(address).get_executor()``) so that a sweep scales out to a cluster
-without code changes — and gathers the metrics of every run into a :class:`BatchResult` table.
-Each task receives the scenario as plain data (a dict) and returns plain data (a dict), so any
-executor that can pickle functions and dicts can run it.
+The seeds of one scenario run as one vectorised batch: the plan is made once and the engine
+steps one robot per seed in lockstep (:func:`wheelbase.runner.run_seeds`). Large batches are
+split into chunks of seeds, each chunk one task on any :class:`concurrent.futures.Executor` —
+a local process pool, or a Dask distributed client's executor
+(``Client(address).get_executor()``) so that a sweep scales out to a cluster without code
+changes. A task receives the scenario as plain data (a dict) and a list of seeds and returns
+plain data (a list of dicts), so any executor that can pickle functions and dicts can run it.
+Without an executor the chunks run in this process.
 """
 
 from __future__ import annotations
@@ -14,40 +16,45 @@ import csv
 import json
 import math
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from wheelbase.errors import ConfigError, WheelbaseError
+from wheelbase.errors import ConfigError
 
-__all__ = ["BatchResult", "run_batch", "run_metrics"]
+__all__ = ["BatchResult", "run_batch", "run_chunk"]
 
 
-def run_metrics(scenario: dict[str, Any]) -> dict[str, Any]:
-    """Run one scenario (given as a dict) and return its metrics; never raises.
+def run_chunk(scenario: dict[str, Any], seeds: Sequence[int]) -> list[dict[str, Any]]:
+    """Run one scenario (given as a dict) over ``seeds`` as one vectorised batch; never raises.
 
     Parameters
     ----------
     scenario : dict
         A scenario mapping as accepted by :func:`wheelbase.scenario.load_scenario`.
+    seeds : sequence of int
+        Noise seeds, one run each.
 
     Returns
     -------
-    dict
-        The run's metrics with ``name`` and ``seed``; a failed run has ``status`` ``"error"``
-        and the message in ``error``.
+    list of dict
+        The metrics of each run with ``name`` and ``seed``, in the order of ``seeds``. When the
+        chunk cannot run (an invalid scenario, a start in collision, or any other exception),
+        every row has ``status`` ``"error"`` and the exception's type and message in
+        ``error``.
     """
-    from wheelbase.runner import run
+    from wheelbase.runner import run_seeds
 
-    label = {"name": scenario.get("name", "scenario"), "seed": scenario.get("seed", 0)}
     try:
-        result = run(scenario)
-    except WheelbaseError as error:
-        return {**label, "status": "error", "error": str(error)}
-    return {**label, **result.metrics}
+        return run_seeds(scenario, seeds)
+    except Exception as error:  # a batch records every failure and goes on
+        name = scenario.get("name", "scenario")
+        message = f"{type(error).__name__}: {error}"
+        return [{"name": name, "seed": int(seed), "status": "error", "error": message}
+                for seed in seeds]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -136,10 +143,10 @@ def run_batch(
     *,
     seeds: int | None = None,
     executor: Executor | None = None,
-    workers: int = 2,
+    chunk_size: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> BatchResult:
-    """Run every scenario (× every seed) on an executor and collect the metrics.
+    """Run every scenario (× every seed) as vectorised chunks and collect the metrics.
 
     Parameters
     ----------
@@ -148,12 +155,14 @@ def run_batch(
     seeds : int, optional
         Run each scenario with noise seeds 0 … seeds − 1 (default: each scenario's own seed).
     executor : concurrent.futures.Executor, optional
-        Where to run (default: a ``ProcessPoolExecutor`` with ``workers`` processes, shut down at
-        the end; an executor you pass stays open).
-    workers : int
-        Processes of the default pool, >= 1.
+        Where to run the chunks (a ``ProcessPoolExecutor``, a Dask client's
+        ``get_executor()``, …; it stays open). Default: in this process, one chunk per
+        scenario.
+    chunk_size : int, optional
+        Seeds per chunk, >= 1 (default: all seeds of a scenario without an executor; with one,
+        about four chunks per scenario and at most 256 seeds each).
     progress : callable, optional
-        ``progress(done, total)`` after each completed run.
+        ``progress(done, total)`` (runs) after each completed chunk.
 
     Returns
     -------
@@ -164,32 +173,44 @@ def run_batch(
 
     from wheelbase.scenario import Scenario, load_scenario
 
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ConfigError(f"workers must be an integer >= 1 (got {workers!r})")
     if seeds is not None and (isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1):
         raise ConfigError(f"seeds must be an integer >= 1 (got {seeds!r})")
+    if chunk_size is not None and (
+        isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1
+    ):
+        raise ConfigError(f"chunk_size must be an integer >= 1 (got {chunk_size!r})")
     if not scenarios:
         raise ConfigError("give at least one scenario")
     resolved = [s if isinstance(s, Scenario) else load_scenario(s) for s in scenarios]
-    tasks = []
+    tasks: list[tuple[dict[str, Any], list[int]]] = []
     for scenario in resolved:
         data = scenario.model_dump(mode="json")
-        for seed in range(seeds) if seeds is not None else [scenario.seed]:
-            tasks.append({**data, "seed": seed})
+        own = list(range(seeds)) if seeds is not None else [scenario.seed]
+        size = chunk_size
+        if size is None:
+            size = len(own) if executor is None else min(256, max(1, math.ceil(len(own) / 4)))
+        tasks.extend((data, own[i : i + size]) for i in range(0, len(own), size))
 
-    own = executor is None
-    pool = ProcessPoolExecutor(max_workers=workers) if own else executor
+    total = sum(len(chunk) for _, chunk in tasks)
     start = time.perf_counter()
-    rows: list[dict[str, Any] | None] = [None] * len(tasks)
-    try:
-        futures = {pool.submit(run_metrics, task): index for index, task in enumerate(tasks)}
-        for done, future in enumerate(as_completed(futures), start=1):
-            rows[futures[future]] = future.result()
+    results: list[list[dict[str, Any]] | None] = [None] * len(tasks)
+    done = 0
+    if executor is None:
+        for index, (data, chunk) in enumerate(tasks):
+            results[index] = run_chunk(data, chunk)
+            done += len(chunk)
             if progress is not None:
-                progress(done, len(tasks))
-    finally:
-        if own:
-            pool.shutdown()
-    return BatchResult(
-        rows=[row for row in rows if row is not None], wall_time_s=time.perf_counter() - start
-    )
+                progress(done, total)
+    else:
+        futures = {
+            executor.submit(run_chunk, data, chunk): index
+            for index, (data, chunk) in enumerate(tasks)
+        }
+        for future in as_completed(futures):
+            index = futures[future]
+            results[index] = future.result()
+            done += len(tasks[index][1])
+            if progress is not None:
+                progress(done, total)
+    rows = [row for chunk in results if chunk is not None for row in chunk]
+    return BatchResult(rows=rows, wall_time_s=time.perf_counter() - start)

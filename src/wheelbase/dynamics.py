@@ -314,6 +314,16 @@ def _step(s, tau_l, tau_r, p, h, method, k1, k2, k3, k4, tmp):
     return fy
 
 
+@numba.njit(cache=True)
+def _step_many(states, torques, p, h):
+    """RK4-advance every state row (N, 6) in place by h under its torques (N, 2); wrap ψ."""
+    k1, k2, k3, k4, tmp = np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6)
+    for i in range(states.shape[0]):
+        s = states[i]
+        _step(s, torques[i, 0], torques[i, 1], p, h, 1, k1, k2, k3, k4, tmp)
+        s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
+
+
 @numba.njit(cache=True, parallel=True)
 def _roll(states, torques, times, p, method, out, fy_out):
     """Integrate N robots (N, 6) under torques (S, N, 2) (zero-order hold), recording all steps."""
@@ -511,25 +521,26 @@ class DiffDriveDynamics:
         return np.concatenate([rate, acc], -1)
 
     def step(self, state: ArrayLike, torques: ArrayLike, h: float) -> np.ndarray:
-        """One RK4 step of length ``h`` [s] from a state (6,) under torques held constant.
+        """One RK4 step of length ``h`` [s] from states ``(..., 6)`` under torques held constant.
 
-        The compiled single-robot step of :func:`simulate_dynamics`, for closed loops that
-        step the plant themselves (:func:`wheelbase.sim.run_loop`).
+        The compiled step of :func:`simulate_dynamics`, for closed loops that step the plant
+        themselves (:class:`wheelbase.sim.DynamicPlant`); the heading is wrapped to (−π, π].
 
         Parameters
         ----------
-        state : array_like, shape (6,)
-            (x [m], y [m], ψ [rad], u [m/s], v [m/s], r [rad/s]).
-        torques : array_like, shape (2,)
-            Wheel torques (left, right) [N·m].
+        state : array_like, shape (..., 6)
+            (x [m], y [m], ψ [rad], u [m/s], v [m/s], r [rad/s]), one robot or a batch.
+        torques : array_like, shape (..., 2)
+            Wheel torques (left, right) [N·m], one row per robot.
         h : float
             Step [s], > 0.
         """
-        s = np.array(as_float_array("state", state, 6, max_ndim=1))
-        tau = as_float_array("torques", torques, 2, max_ndim=1)
-        work = np.empty((5, 6))
-        _step(s, tau[0], tau[1], self._params, positive("h", h, "s"), 1, *work)
-        return s
+        s = np.array(as_float_array("state", state, 6), dtype=np.float64)
+        tau = np.broadcast_to(as_float_array("torques", torques, 2), (*s.shape[:-1], 2))
+        flat = np.ascontiguousarray(s.reshape(-1, 6))
+        _step_many(flat, np.ascontiguousarray(tau.reshape(-1, 2)), self._params,
+                   positive("h", h, "s"))  # fmt: skip
+        return flat.reshape(s.shape)
 
     def inverse(self, velocity: ArrayLike, acceleration: ArrayLike) -> tuple[np.ndarray, Any]:
         """Inverse dynamics: body force (F_x, F_y, M_z) and wheel torques (τ_L, τ_R).

@@ -1,12 +1,11 @@
 """Metrics and figures of a closed-loop run (what ``wheelbase run`` writes into its report).
 
-Algorithms return data; this module turns a :class:`~wheelbase.sim.Log` (and the map and plan it
-ran on) into numbers and pictures. Nothing here changes a result.
+Algorithms return data; this module turns a :class:`~wheelbase.sim.Log` of one robot (and the
+map and plan it ran on) into figures and an animation; the numbers come from
+:meth:`wheelbase.sim.Log.metrics`. Nothing here changes a result.
 """
 
 from __future__ import annotations
-
-from typing import Any
 
 import numpy as np
 
@@ -15,77 +14,11 @@ from wheelbase.sim import Log
 
 __all__ = [
     "animate_run",
-    "distance_to_polyline",
     "figure_commands",
     "figure_errors",
     "figure_map",
-    "tracking_metrics",
     "write_report",
 ]
-
-
-def tracking_metrics(log: Log, goal: np.ndarray) -> dict[str, Any]:
-    """Numbers that summarise a run.
-
-    Parameters
-    ----------
-    log : Log
-        The recorded run.
-    goal : numpy.ndarray, shape (3,)
-        Final goal pose [m, m, rad].
-
-    Returns
-    -------
-    dict
-        ``status``, ``duration_s``, ``distance_travelled_m``, tracking errors (RMS and max of
-        the distance between the true pose and the reference, RMS heading error in degrees),
-        final pose errors of the true and the estimated pose against the goal, the odometry
-        drift at the end (|true − estimated|) and per metre travelled, and the collision flag.
-    """
-    true, est, ref = log.true_pose, log.estimated_pose, log.reference_pose
-    position_error = np.hypot(*(true[:, :2] - ref[:, :2]).T)
-    heading_error = np.degrees(wrap_angle(true[:, 2] - ref[:, 2]))
-    travelled = float(np.sum(np.hypot(*np.diff(true[:, :2], axis=0).T)))
-    drift = float(np.hypot(*(true[-1, :2] - est[-1, :2])))
-    return {
-        "status": log.status,
-        "collision": log.status == "collision",
-        "duration_s": float(log.t[-1]),
-        "distance_travelled_m": travelled,
-        "tracking_rms_position_error_m": float(np.sqrt(np.mean(position_error**2))),
-        "tracking_max_position_error_m": float(np.max(position_error)),
-        "tracking_rms_heading_error_deg": float(np.sqrt(np.mean(heading_error**2))),
-        "final_position_error_true_m": float(np.hypot(*(true[-1, :2] - goal[:2]))),
-        "final_heading_error_true_deg": float(np.degrees(abs(wrap_angle(true[-1, 2] - goal[2])))),
-        "final_position_error_estimated_m": float(np.hypot(*(est[-1, :2] - goal[:2]))),
-        "odometry_drift_m": drift,
-        "odometry_drift_heading_deg": float(np.degrees(abs(wrap_angle(true[-1, 2] - est[-1, 2])))),
-        "odometry_drift_per_metre": drift / travelled if travelled > 0 else 0.0,
-    }
-
-
-def distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
-    """Distance [m] from each point ``(T, 2)`` to a polyline ``(N, 2)`` (nearest segment).
-
-    Parameters
-    ----------
-    points : numpy.ndarray, shape (T, 2)
-        Query points [m].
-    polyline : numpy.ndarray, shape (N, 2)
-        Vertices [m], N >= 1.
-    """
-    a, b = polyline[:-1], polyline[1:]
-    if len(a) == 0:
-        return np.hypot(*(points - polyline[0]).T)
-    ab = b - a
-    length2 = np.maximum(np.sum(ab * ab, axis=1), 1e-300)
-    out = np.empty(len(points))
-    for start in range(0, len(points), 512):  # chunks keep the (T, N) table small
-        p = points[start : start + 512, None, :]
-        u = np.clip(np.sum((p - a) * ab, axis=2) / length2, 0.0, 1.0)
-        nearest = a + u[..., None] * ab
-        out[start : start + 512] = np.min(np.hypot(*(p - nearest).transpose(2, 0, 1)), axis=1)
-    return out
 
 
 def _draw_map(ax, grid) -> None:
@@ -127,18 +60,25 @@ def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
     _draw_map(ax, grid)
     if plan_poses is not None:
         ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.5, label="plan")
-    ax.plot(log.true_pose[:, 0], log.true_pose[:, 1], "-", color="tab:blue", lw=1.5, label="driven")
     ax.plot(
-        log.estimated_pose[:, 0], log.estimated_pose[:, 1], ":", color="tab:green", lw=1.2,
+        log.true_pose[0][:, 0],
+        log.true_pose[0][:, 1],
+        "-",
+        color="tab:blue",
+        lw=1.5,
+        label="driven",
+    )
+    ax.plot(
+        log.estimated_pose[0][:, 0], log.estimated_pose[0][:, 1], ":", color="tab:green", lw=1.2,
         label="odometry estimate",
     )  # fmt: skip
     if polygon is not None:
         indices = np.unique(np.linspace(0, len(log.t) - 1, 12).astype(int))
         for index in indices:
-            outline = _outline(log.true_pose[index], polygon)
+            outline = _outline(log.true_pose[0][index], polygon)
             ax.plot(outline[:, 0], outline[:, 1], "-", color="tab:blue", lw=0.6, alpha=0.6)
-    ax.plot(*log.true_pose[0, :2], "o", color="tab:green", label="start")
-    ax.plot(*log.true_pose[-1, :2], "s", color="tab:red", label=f"end ({log.status})")
+    ax.plot(*log.true_pose[0][0, :2], "o", color="tab:green", label="start")
+    ax.plot(*log.true_pose[0][-1, :2], "s", color="tab:red", label=f"end ({log.statuses[0]})")
     _zoom(ax, grid, plan_poses, log)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
@@ -150,7 +90,7 @@ def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
 
 
 def _zoom(ax, grid, plan_poses, log: Log, margin: float = 2.0) -> None:
-    points = [log.true_pose[:, :2]]
+    points = [log.true_pose[0][:, :2]]
     if plan_poses is not None:
         points.append(plan_poses[:, :2])
     xy = np.vstack(points)
@@ -170,9 +110,9 @@ def figure_errors(log: Log):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
-    error = np.hypot(*(log.true_pose[:, :2] - log.reference_pose[:, :2]).T)
-    heading = np.degrees(wrap_angle(log.true_pose[:, 2] - log.reference_pose[:, 2]))
-    drift = np.hypot(*(log.true_pose[:, :2] - log.estimated_pose[:, :2]).T)
+    error = np.hypot(*(log.true_pose[0][:, :2] - log.reference_pose[0][:, :2]).T)
+    heading = np.degrees(wrap_angle(log.true_pose[0][:, 2] - log.reference_pose[0][:, 2]))
+    drift = np.hypot(*(log.true_pose[0][:, :2] - log.estimated_pose[0][:, :2]).T)
     axes[0].plot(log.t, 100 * error)
     axes[0].set_ylabel("position error [cm]")
     axes[1].plot(log.t, heading)
@@ -198,20 +138,20 @@ def figure_commands(log: Log):
     import matplotlib.pyplot as plt
 
     # On a dynamic plant the command is the wheel torques: one panel shows them.
-    rows = 3 if log.torques is not None and log.command is not log.torques else 2
+    rows = 3 if log.torques is not None and not log.command_names[0].startswith("tau") else 2
     fig, axes = plt.subplots(rows, 1, figsize=(8, 2.4 * rows + 1), sharex=True)
     for index, name in enumerate(log.command_names):
-        axes[0].plot(log.t, log.command[:, index], label=name)
+        axes[0].plot(log.t, log.command[0][:, index], label=name)
     torque_command = log.torques is not None and rows == 2
     axes[0].set_ylabel("wheel torque command [N·m]" if torque_command else "command")
     axes[0].legend(fontsize=8)
-    axes[1].plot(log.t, log.wheel_rates[:, 0], label="left")
-    axes[1].plot(log.t, log.wheel_rates[:, 1], label="right")
+    axes[1].plot(log.t, log.wheel_rates[0][:, 0], label="left")
+    axes[1].plot(log.t, log.wheel_rates[0][:, 1], label="right")
     axes[1].set_ylabel("wheel rate [rad/s]")
     axes[1].legend(fontsize=8)
     if rows == 3:
-        axes[2].plot(log.t, log.torques[:, 0], label="left")
-        axes[2].plot(log.t, log.torques[:, 1], label="right")
+        axes[2].plot(log.t, log.torques[0][:, 0], label="left")
+        axes[2].plot(log.t, log.torques[0][:, 1], label="right")
         axes[2].set_ylabel("wheel torque [N·m]")
         axes[2].legend(fontsize=8)
     axes[-1].set_xlabel("t [s]")
@@ -255,19 +195,20 @@ def animate_run(
             ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.2)
         _zoom(ax, grid, plan_poses, log)
 
-    fan_rows = np.array(sorted(log.rollout_fans))
+    fans = {row: fan for (robot, row), fan in log.rollout_fans.items() if robot == 0}
+    fan_rows = np.array(sorted(fans))
 
     def overlay(k: int) -> list[np.ndarray]:
         # The latest fan at or before this frame, shown while it is younger than 1.5 s.
         if fan_rows.size == 0 or k < fan_rows[0]:
             return []
         row = int(fan_rows[np.searchsorted(fan_rows, k, side="right") - 1])
-        return list(log.rollout_fans[row]) if log.t[k] - log.t[row] < 1.5 else []
+        return list(fans[row]) if log.t[k] - log.t[row] < 1.5 else []
 
-    run = SimpleNamespace(t=log.t, poses=log.true_pose)
+    run = SimpleNamespace(t=log.t, poses=log.true_pose[0])
     return animate(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
-        overwrite=True, background=background, title=log.status, overlay=overlay,
+        overwrite=True, background=background, title=log.statuses[0], overlay=overlay,
     )  # fmt: skip
 
 

@@ -34,12 +34,31 @@ from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, Sc
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
 from wheelbase.models.path import PathReference
-from wheelbase.report import distance_to_polyline, tracking_metrics
+from wheelbase.polyline import distance_to_polyline
 from wheelbase.scenario import Scenario, load_scenario
-from wheelbase.sim import Log, OdometrySetup, run_loop
+from wheelbase.sim import (
+    Arrival,
+    DynamicPlant,
+    EncoderOdometry,
+    Engine,
+    KinematicPlant,
+    Log,
+    PerfectState,
+    WheelAxle,
+)
 from wheelbase.timing import SpeedLimits, time_parametrize
 
-__all__ = ["LAWS", "Robot", "RunResult", "build_robot", "run"]
+__all__ = [
+    "LAWS",
+    "Prepared",
+    "Robot",
+    "RunResult",
+    "build_robot",
+    "prepare",
+    "run",
+    "run_metrics",
+    "run_seeds",
+]
 
 SETTLE_TIME = 15.0  # s after the end of the trajectory
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
@@ -401,12 +420,49 @@ class RunResult:
 
 
 # --------------------------------------------------------------------------- run
-def run(
+@dataclass(frozen=True)
+class Prepared:
+    """A scenario resolved up to the engine: map, robot, plan, reference and the engine.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The validated scenario.
+    robot : Robot
+        The resolved robot.
+    grid : OccupancyGrid
+        The map.
+    start : numpy.ndarray, shape (3,)
+        Start pose [m, m, rad].
+    goals : list of numpy.ndarray
+        Goal poses [m, m, rad].
+    plan : Path or None
+        The concatenated plan (None when planning failed).
+    reference : PathReference or None
+        The time-parametrised plan.
+    planning : dict
+        Planning figures (time, nodes, length, cusps, success, message).
+    engine : Engine or None
+        The closed loop, ready to run (None when planning failed).
+    """
+
+    scenario: Scenario
+    robot: Robot
+    grid: Any
+    start: np.ndarray
+    goals: list[np.ndarray]
+    plan: Any
+    reference: PathReference | None
+    planning: dict[str, Any]
+    engine: Engine | None
+
+
+def prepare(
     scenario: Scenario | str | Path | dict[str, Any],
     *,
     progress: Callable[[float, float], None] | None = None,
-) -> RunResult:
-    """Run a closed-loop scenario: plan, time-parametrise, track with odometry in the loop.
+) -> Prepared:
+    """Resolve a scenario, plan it and build its closed-loop :class:`~wheelbase.sim.Engine`.
 
     Parameters
     ----------
@@ -414,12 +470,6 @@ def run(
         A validated scenario, a YAML path, a bundled scenario name, or a mapping.
     progress : callable, optional
         ``progress(simulated_time, expected_end_time)`` now and then during the run.
-
-    Returns
-    -------
-    RunResult
-        With the plan, the trajectory, the log and the metrics; a plan that cannot be found
-        gives a result with ``metrics["status"] == "planning_failed"`` and no log.
 
     Raises
     ------
@@ -474,17 +524,21 @@ def run(
                 controller, robot.dynamics, bandwidth=loop.bandwidth, max_torque=loop.max_torque
             ),
         )
+    if (
+        not dynamic
+        and robot.kind == "diff"
+        and tuple(controller.command_names)
+        == (
+            "speed",
+            "steering",
+        )
+    ):
+        raise ScenarioError("controller: a steering law cannot drive a differential drive")
     plan, planning = _plan(grid, robot, scenario, start, goals)
-    base_metrics = {"name": scenario.name, "seed": scenario.seed, **planning}
     if plan is None:
-        return RunResult(scenario, robot, grid, None, None, None,
-                         {**base_metrics, "status": "planning_failed"})  # fmt: skip
+        return Prepared(scenario, robot, grid, start, goals, None, None, planning, None)
     reference = _timed_reference(plan, limits, scenario.dt)
-    odometry = _odometry(scenario, robot)
-    command_to_inputs = _command_to_inputs(robot, controller)
-    footprint = _footprint(robot)
     end_time = float(reference.t[-1])
-
     ref_table = np.column_stack([reference.poses[:, :2], np.unwrap(reference.poses[:, 2])])
 
     def reference_pose(t: float) -> np.ndarray:
@@ -492,44 +546,172 @@ def run(
         row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
         return row
 
-    log = run_loop(
-        robot.model,
-        controller,
-        reference if reference_kind == "trajectory" else plan,
-        start,
+    footprint = _footprint(robot)
+    axle = WheelAxle(
+        robot.wheel_radius,
+        robot.half_track,
+        radius_scale=tuple(scenario.odometry.wheel_radius_scale),
+        track_scale=scenario.odometry.track_scale,
+    )
+    plant = DynamicPlant(robot.dynamics, axle) if dynamic else KinematicPlant(robot.model, axle)
+    engine = Engine(
+        plant=plant,
+        controller=controller,
+        reference=reference if reference_kind == "trajectory" else plan,
         dt=scenario.dt,
         duration=scenario.duration,
-        command_to_inputs=command_to_inputs,
-        odometry=odometry,
+        estimator=_estimator(scenario, robot),
+        arrival=Arrival(
+            goals[-1],
+            (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
+            end_time=end_time,
+            settle_time=SETTLE_TIME,
+        ),
+        collides=lambda poses: grid.in_collision(footprint, poses),
         reference_pose=reference_pose,
-        goal=goals[-1],
-        tolerance=(scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
-        in_collision=lambda pose: bool(grid.in_collision(footprint, pose)),
-        command_names=tuple(controller.command_names),
-        end_time=end_time,
-        settle_time=SETTLE_TIME,
         progress=None if progress is None else lambda t: progress(t, end_time),
-        dynamics=robot.dynamics if dynamic else None,
         fan_every=max(1, round(FAN_PERIOD / scenario.dt)),
     )
-    metrics = {**base_metrics, **tracking_metrics(log, goals[-1])}
-    metrics["trajectory_duration_s"] = end_time
-    if log.controller_statuses:
-        metrics["controller_statuses"] = dict(log.controller_statuses)
-    deviation = distance_to_polyline(log.true_pose[:, :2], plan.poses[:, :2])
+    return Prepared(scenario, robot, grid, start, goals, plan, reference, planning, engine)
+
+
+def run(
+    scenario: Scenario | str | Path | dict[str, Any],
+    *,
+    progress: Callable[[float, float], None] | None = None,
+) -> RunResult:
+    """Run a closed-loop scenario: plan, time-parametrise, track with odometry in the loop.
+
+    The run ends as the engine's one arrival rule says (:class:`wheelbase.sim.Arrival`): the
+    robot stops when its *estimate* is within the goal tolerance, at rest, after the
+    trajectory has ended; the *true* pose then decides ``arrived`` or ``missed_goal``. A
+    collision, ``settle_time`` = 15 s after the trajectory's end, or ``duration`` end it
+    earlier (``collision``, ``timeout``).
+
+    Parameters
+    ----------
+    scenario : Scenario, str, Path or dict
+        A validated scenario, a YAML path, a bundled scenario name, or a mapping.
+    progress : callable, optional
+        ``progress(simulated_time, expected_end_time)`` now and then during the run.
+
+    Returns
+    -------
+    RunResult
+        With the plan, the trajectory, the log (one robot) and the metrics; a plan that
+        cannot be found gives a result with ``metrics["status"] == "planning_failed"`` and no
+        log.
+
+    Raises
+    ------
+    ScenarioError
+        Invalid scenario or gains.
+    MapError
+        A map that cannot be read.
+    PlanningError
+        Start or goal in collision or outside the map.
+    """
+    prepared = prepare(scenario, progress=progress)
+    if prepared.engine is None:
+        metrics = {**_base_metrics(prepared, prepared.scenario.seed), "status": "planning_failed"}
+        return RunResult(
+            prepared.scenario, prepared.robot, prepared.grid, None, None, None, metrics
+        )
+    log = prepared.engine.run(prepared.start, seeds=[prepared.scenario.seed])
+    return RunResult(
+        prepared.scenario,
+        prepared.robot,
+        prepared.grid,
+        prepared.plan,
+        prepared.reference,
+        log,
+        run_metrics(prepared, log, 0),
+    )
+
+
+def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> list[dict[str, Any]]:
+    """Run one scenario over many noise seeds as one vectorised batch; metrics per seed.
+
+    The plan is made once (it does not depend on the seed); the engine then steps one robot
+    per seed in lockstep. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
+
+    Parameters
+    ----------
+    scenario : Scenario, str, Path or dict
+        The scenario (its own ``seed`` is ignored).
+    seeds : sequence of int
+        Noise seeds, one run each.
+
+    Returns
+    -------
+    list of dict
+        The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
+    """
+    prepared = prepare(scenario)
+    seeds = [int(seed) for seed in seeds]
+    if prepared.engine is None:
+        return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
+    starts = np.tile(prepared.start, (len(seeds), 1))
+    log = prepared.engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
+    return [run_metrics(prepared, log, i) for i in range(len(seeds))]
+
+
+def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
+    return {"name": prepared.scenario.name, "seed": seed, **prepared.planning}
+
+
+def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
+    """The metrics of robot ``index`` of a run of a prepared scenario (``metrics.json``).
+
+    Parameters
+    ----------
+    prepared : Prepared
+        The scenario as :func:`prepare` resolved it.
+    log : Log
+        The engine's record.
+    index : int
+        Which robot.
+    """
+    seed = int(log.seeds[index])
+    one = log.robot(index)
+    metrics = {**_base_metrics(prepared, seed), **one.metrics()[0]}
+    metrics.pop("controller_statuses", None)
+    metrics["trajectory_duration_s"] = float(prepared.reference.t[-1])
+    counts = one.controller_status_counts(0)
+    if counts:
+        metrics["controller_statuses"] = counts
+    true_pose = one.true_pose[0]
+    deviation = distance_to_polyline(true_pose[:, :2], prepared.plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))
-    if log.torques is not None:
+    if one.torques is not None:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
-        power = np.sum(log.torques * log.wheel_rates, axis=1)
-        metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(log.t)))
-        metrics["max_wheel_torque_nm"] = float(np.max(np.abs(log.torques)))
-        metrics["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(log.torques**2)))
-    clearance = float(
-        np.min(grid.footprint_clearance(footprint, log.true_pose[:: max(1, len(log.t) // 400)]))
-    )
+        power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
+        metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
+        metrics["max_wheel_torque_nm"] = float(np.max(np.abs(one.torques[0])))
+        metrics["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(one.torques[0] ** 2)))
+    every = max(1, len(one.t) // 400)
+    clearance = _min_clearance(prepared.grid, _footprint(prepared.robot), true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
-    return RunResult(scenario, robot, grid, plan, reference, log, metrics)
+    return metrics
+
+
+def _min_clearance(grid, footprint, poses: np.ndarray) -> float:
+    """The least footprint clearance [m] over ``poses``, exact, evaluating few poses.
+
+    The footprint lies within ``max_radius`` of the reference point, so the map's clearance
+    at that point minus ``max_radius`` bounds a pose's clearance from below: poses are
+    evaluated exactly in the order of that bound until the bound passes the best found.
+    """
+    bound = grid.clearance(poses[:, :2]) - footprint.max_radius
+    best = math.inf
+    order = np.argsort(bound)
+    for start in range(0, len(poses), 8):
+        batch = order[start : start + 8]
+        if bound[batch[0]] >= best:
+            break
+        best = min(best, float(np.min(grid.footprint_clearance(footprint, poses[batch]))))
+    return best
 
 
 def _interpolate_rows(times: np.ndarray, table: np.ndarray, t: float) -> np.ndarray:
@@ -652,37 +834,15 @@ def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PathReference:
     return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
 
 
-def _odometry(scenario: Scenario, robot: Robot) -> OdometrySetup:
+def _estimator(scenario: Scenario, robot: Robot) -> Any:
     spec = scenario.odometry
     if spec.mode == "perfect":
-        return OdometrySetup(robot.wheel_radius, robot.half_track, seed=scenario.seed)
+        return PerfectState()
     from wheelbase.odometry import Encoder, WheelOdometry
 
-    encoder = Encoder(spec.pulses_per_revolution, noise_std=spec.tick_noise_std, seed=scenario.seed)
-    odometry = WheelOdometry(
-        robot.wheel_radius, robot.half_track, spec.pulses_per_revolution, method=spec.method
+    return EncoderOdometry(
+        Encoder(spec.pulses_per_revolution, noise_std=spec.tick_noise_std),
+        WheelOdometry(
+            robot.wheel_radius, robot.half_track, spec.pulses_per_revolution, method=spec.method
+        ),
     )
-    return OdometrySetup(
-        robot.wheel_radius,
-        robot.half_track,
-        encoder=encoder,
-        odometry=odometry,
-        radius_scale=tuple(spec.wheel_radius_scale),
-        track_scale=spec.track_scale,
-        seed=scenario.seed,
-    )
-
-
-def _command_to_inputs(robot: Robot, controller) -> Callable[[np.ndarray], np.ndarray]:
-    from wheelbase.control.base import velocity_to_steering, velocity_to_wheel_speeds
-
-    steering_command = tuple(controller.command_names) == ("speed", "steering")
-    if robot.kind == "car":
-        if steering_command:
-            return lambda command: command
-        return lambda command: velocity_to_steering(command, robot.wheel_base)
-    if steering_command:
-        raise ScenarioError("controller: a steering law cannot drive a differential drive")
-    if isinstance(robot.model, DiffDrive):
-        return lambda command: velocity_to_wheel_speeds(command, robot.model)
-    return lambda command: command

@@ -161,16 +161,29 @@ def register(app: typer.Typer) -> None:
     def batch_command(
         scenarios: list[str] = typer.Argument(..., help="Scenario files or bundled names."),
         seeds: int = typer.Option(None, help="Run each scenario with noise seeds 0..N-1."),
-        workers: int = typer.Option(2, help="Local worker processes."),
+        workers: int = typer.Option(
+            1, help="Local worker processes; 1 runs the seeds as one vectorised batch here."
+        ),
+        chunk_size: int = typer.Option(
+            None, help="Seeds per task on a process pool or Dask (default: about 4 per scenario)."
+        ),
         scheduler: str = typer.Option(
             None, help="Dask scheduler address (needs the 'dask' extra): run on that cluster."
         ),
         out: Path = typer.Option(Path("wheelbase-batch"), help="Folder for batch.csv/json."),
         force: bool = typer.Option(False, help="Overwrite an existing batch table."),
     ) -> None:
-        """Run many scenarios (or one over many seeds) in parallel; write one table."""
+        """Run many scenarios (or one over many seeds) as vectorised batches; write one table.
+
+        The seeds of a scenario run in lockstep in one process; --workers N splits them into
+        chunks over N local processes, --scheduler over a Dask cluster.
+        """
+        from concurrent.futures import ProcessPoolExecutor
+
         from wheelbase.batch import run_batch
 
+        if workers < 1:
+            raise WheelbaseError(f"--workers must be >= 1 (got {workers})")
         for name in ("batch.csv", "batch.json"):
             if (out / name).exists() and not force:
                 raise FileExistsError(f"{out / name} exists; use --force to overwrite")
@@ -186,6 +199,8 @@ def register(app: typer.Typer) -> None:
                 ) from None
             client = Client(scheduler)
             executor = client.get_executor()
+        elif workers > 1:
+            executor = ProcessPoolExecutor(max_workers=workers)
         try:
             with Progress(console=console, transient=True) as bar:
                 task = bar.add_task("runs", total=None)
@@ -193,12 +208,14 @@ def register(app: typer.Typer) -> None:
                     scenarios,
                     seeds=seeds,
                     executor=executor,
-                    workers=workers,
+                    chunk_size=chunk_size,
                     progress=lambda done, total: bar.update(task, completed=done, total=total),
                 )
         finally:
             if client is not None:
                 client.close()
+            elif executor is not None:
+                executor.shutdown()
         result.write(out, force=force)
         summary = result.summary()
         table = Table(title=f"{len(result.rows)} runs in {result.wall_time_s:.1f} s "

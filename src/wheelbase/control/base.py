@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite, positive
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.models.base import KinematicModel
 
 __all__ = [
     "HOLONOMIC_COMMAND",
@@ -53,6 +54,7 @@ __all__ = [
     "GoalController",
     "SteeringLimits",
     "VelocityLimits",
+    "command_to_inputs",
     "saturate_steering",
     "saturate_velocity",
     "steering_to_velocity",
@@ -416,3 +418,52 @@ def _is_inf(value: object) -> bool:
         return float(value) == math.inf  # type: ignore[arg-type]
     except (TypeError, ValueError):
         return False
+
+
+def command_to_inputs(
+    command: np.ndarray, command_names: tuple[str, ...], model: KinematicModel
+) -> np.ndarray:
+    """Model inputs ``(..., k)`` for controller commands ``(..., 2)`` (or ``(..., 3)``).
+
+    ``(v, ω)`` drives a :class:`~wheelbase.models.Unicycle` directly, a
+    :class:`~wheelbase.models.DiffDrive` through its wheel speeds and a steered model
+    (inputs ``(speed, steering)``) through δ = atan(L·ω/v) clipped to its steering stop;
+    ``(v, δ)`` drives a steered model directly; ``(v_x, v_y, ω)`` drives
+    :class:`~wheelbase.models.BodyTwist` directly and a holonomic wheeled base through its
+    inverse kinematics. Any other model gets ``model.inverse`` of the twist (v, 0, ω).
+
+    Parameters
+    ----------
+    command : numpy.ndarray, shape (..., 2)
+        Controller commands.
+    command_names : tuple of str
+        Their meaning (``VELOCITY_COMMAND`` or ``STEERING_COMMAND``).
+    model : KinematicModel
+        The plant.
+    """
+    names = tuple(model.input_names)
+    if tuple(command_names) == HOLONOMIC_COMMAND:
+        if names == ("u", "v", "r"):
+            return command
+        if not getattr(model, "is_holonomic", False):
+            raise ConfigError(
+                f"a (vx, vy, omega) controller needs a holonomic base (got {type(model).__name__})"
+            )
+        return model.inverse(command)  # type: ignore[attr-defined]
+    if tuple(command_names) == STEERING_COMMAND:
+        if names != STEERING_COMMAND:
+            raise ConfigError(
+                f"a (speed, steering) controller needs a steered model (got {type(model).__name__})"
+            )
+        return command
+    if names == VELOCITY_COMMAND:
+        return command
+    if names == ("omega_left", "omega_right"):
+        return velocity_to_wheel_speeds(command, model)
+    if names == STEERING_COMMAND:
+        steering = velocity_to_steering(command, model.wheel_base)  # type: ignore[attr-defined]
+        limit = model.max_steering  # type: ignore[attr-defined]
+        steering[..., 1] = np.clip(steering[..., 1], -limit, limit)
+        return steering
+    twist = np.stack([command[..., 0], np.zeros_like(command[..., 0]), command[..., 1]], -1)
+    return model.inverse(twist)  # type: ignore[attr-defined]

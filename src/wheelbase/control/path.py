@@ -201,19 +201,16 @@ class Polyline:
         return Polyline(np.concatenate(points), np.asarray(directions))
 
     def distance(self, xy: ArrayLike) -> np.ndarray:
-        """Distance [m] from points ``(..., 2)`` to the nearest point of the path."""
-        xy = as_float_array("xy", xy, 2)
-        flat = xy.reshape(-1, 2)
-        a = self.points[:-1]
-        seg = self.segments
-        best = np.full(flat.shape[0], np.inf)
-        for start in range(0, a.shape[0], 512):  # bounded memory on long paths
-            aa, ss = a[start : start + 512], seg[start : start + 512]
-            rel = flat[:, None, :] - aa[None]
-            u = np.clip(np.sum(rel * ss, -1) / np.sum(ss * ss, -1), 0.0, 1.0)
-            gap = rel - u[..., None] * ss
-            best = np.minimum(best, np.min(np.hypot(gap[..., 0], gap[..., 1]), axis=1))
-        return best.reshape(xy.shape[:-1])
+        """Distance [m] from points ``(..., 2)`` to the nearest point of the path.
+
+        Parameters
+        ----------
+        xy : array_like, shape (..., 2)
+            Points [m].
+        """
+        from wheelbase.polyline import distance_to_polyline
+
+        return distance_to_polyline(xy, self.points)
 
 
 def _as_polyline(reference: object) -> Polyline:

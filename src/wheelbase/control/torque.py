@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numba
 import numpy as np
@@ -43,7 +43,6 @@ from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
-from wheelbase.control.loop import velocity_torques
 from wheelbase.dynamics import DiffDriveDynamics, _step, inverse_dynamics
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -57,6 +56,7 @@ __all__ = [
     "TwistTorqueLoop",
     "track_trajectory",
     "tune_computed_torque",
+    "velocity_torques",
 ]
 
 
@@ -250,7 +250,7 @@ class ComputedTorquePID:
 
     def reset(self) -> None:
         """Forget the integrals, the filtered error rates and the last call time."""
-        self._state = np.zeros(7)
+        self._state = np.zeros((0, 7))
         self._last_t: float | None = None
 
     def _kernel_args(self) -> tuple:
@@ -271,45 +271,106 @@ class ComputedTorquePID:
         twist: ArrayLike | None = None,
         dt: float | None = None,
     ) -> np.ndarray:
-        """Wheel torques (τ_L, τ_R) [N·m] for one robot at time ``t``.
+        """Wheel torques (τ_L, τ_R) [N·m] for one robot or a batch at time ``t``.
 
         Parameters
         ----------
         t : float
             Time [s].
-        pose : array_like, shape (3,) or (6,)
-            Measured pose (x, y, ψ), or the full state (x, y, ψ, u, v, r).
-        reference : PoseTrajectory or array_like, shape (9,)
-            The trajectory, or its row (x, y, ψ, u, v, r, u̇, v̇, ṙ) at ``t``.
-        twist : array_like, shape (3,), optional
-            Measured body twist (u, v, r) when ``pose`` has 3 entries.
+        pose : array_like, shape (..., 3) or (..., 6)
+            Measured poses (x, y, ψ), or full states (x, y, ψ, u, v, r).
+        reference : PoseTrajectory or array_like, shape (9,) or (..., 9)
+            The trajectory, or its row (x, y, ψ, u, v, r, u̇, v̇, ṙ) at ``t`` (one for all
+            robots, or one per robot).
+        twist : array_like, shape (..., 3), optional
+            Measured body twists (u, v, r) when ``pose`` has 3 columns.
         dt : float, optional
             Control period [s]; default the time since the previous call (first call: none
             integrated).
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 2)
+            Wheel torques; the integrators are kept per robot (a new batch size restarts them).
         """
         t = finite("t", t, "s")
-        state = as_float_array("pose", pose, min_ndim=1, max_ndim=1)
-        if state.size == 3:
+        state = as_float_array("pose", pose, min_ndim=1)
+        if state.shape[-1] == 3:
             if twist is None:
                 raise InputError("ComputedTorquePID needs the measured twist (u, v, r)")
-            state = np.concatenate([state, as_float_array("twist", twist, 3, max_ndim=1)])
-        elif state.size != 6:
-            raise InputError(f"pose must have 3 or 6 entries (got {state.size})")
+            measured = as_float_array("twist", twist, 3)
+            state = np.concatenate(np.broadcast_arrays(state, measured), axis=-1)
+        elif state.shape[-1] != 6:
+            raise InputError(f"pose must have 3 or 6 columns (got shape {state.shape})")
+        flat = np.ascontiguousarray(state.reshape(-1, 6))
         if isinstance(reference, PoseTrajectory):
             row = reference.at([t]).reference()[0]
         else:
-            row = as_float_array("reference", reference, 9, max_ndim=1)
+            row = as_float_array("reference", reference, 9)
+        rows = np.ascontiguousarray(np.broadcast_to(row.reshape(-1, 9), (flat.shape[0], 9)))
         if dt is None:
             dt = 0.0 if self._last_t is None else t - self._last_t
         else:
             dt = positive("dt", dt, "s")
         self._last_t = t
-        tl, tr = _control(row, state, *self._kernel_args()[:5], self._kernel_args()[5],
-                          self._state, max(dt, 0.0))  # fmt: skip
-        return np.array([tl, tr])
+        if self._state.shape[0] != flat.shape[0]:
+            self._state = np.zeros((flat.shape[0], 7))
+        out = np.empty((flat.shape[0], 2))
+        _control_many(rows, flat, *self._kernel_args(), self._state, max(dt, 0.0), out)
+        return out.reshape((*state.shape[:-1], 2))
+
+
+@numba.njit(cache=True)
+def _control_many(refs, states, mp, g, tf, max_torque, ff, clamp, cst, dt, out):
+    """:func:`_control` for every robot (rows of ``states``), torques into ``out`` (N, 2)."""
+    for i in range(states.shape[0]):
+        out[i, 0], out[i, 1] = _control(
+            refs[i], states[i], mp, g, tf, max_torque, ff, clamp, cst[i], dt
+        )
 
 
 # --------------------------------------------------------------------------- closed loop
+def velocity_torques(
+    dynamics: Any,
+    state: np.ndarray,
+    command: np.ndarray,
+    gains: tuple[float, float] = (30.0, 30.0),
+    max_torque: float = math.inf,
+) -> np.ndarray:
+    """Wheel torques ``(..., 2)`` that make a dynamic robot follow ``(v, ω)`` commands.
+
+    The torque layer between a kinematic controller and the dynamics: a computed-torque velocity
+    loop. The desired body acceleration is a = (k_u·(v − u), 0, k_r·(ω − r)) and the torques are
+    the inverse dynamics of :class:`wheelbase.dynamics.DiffDriveDynamics`, τ = M·a + C(V)·V
+    mapped to the wheels by Wᵀ (document 000 §5.2), clipped to ``max_torque`` [N·m]. With an
+    exact model each velocity error decays as e^(−k t).
+
+    Parameters
+    ----------
+    dynamics : DiffDriveDynamics
+        The robot's model.
+    state : numpy.ndarray, shape (..., 6)
+        (x, y, ψ, u, v, r).
+    command : numpy.ndarray, shape (..., 2)
+        (v [m/s], ω [rad/s]).
+    gains : (float, float)
+        k_u, k_r [1/s].
+    max_torque : float
+        Wheel torque limit [N·m].
+    """
+    velocity = state[..., 3:]
+    accel = np.stack(
+        [
+            gains[0] * (command[..., 0] - velocity[..., 0]),
+            np.zeros_like(command[..., 0]),
+            gains[1] * (command[..., 1] - velocity[..., 2]),
+        ],
+        -1,
+    )
+    _force, torques = dynamics.inverse(velocity, accel)
+    return np.clip(torques, -max_torque, max_torque)
+
+
 class TwistTorqueLoop:
     """A kinematic control law on the dynamic plant: its (v, ω) tracked by computed torque.
 
@@ -388,25 +449,30 @@ class TwistTorqueLoop:
         """The law's rollouts (MPPI's :meth:`~wheelbase.control.MPPI.predict`)."""
         return self.law.predict(*args, **kwargs)  # type: ignore[attr-defined]
 
+    @property
+    def per_robot(self) -> bool:
+        """Whether the law needs one copy per robot (MPPI), as the engine asks."""
+        return bool(getattr(self.law, "per_robot", False))
+
     def __call__(self, t: float, state: ArrayLike, reference: object) -> np.ndarray:
-        """Wheel torques (left, right) [N·m].
+        """Wheel torques (left, right) [N·m] for one robot or a batch.
 
         Parameters
         ----------
         t : float
             Time [s].
-        state : array_like, shape (6,)
+        state : array_like, shape (..., 6)
             Estimated (x [m], y [m], θ [rad], u [m/s], v [m/s], r [rad/s]).
         reference : object
             Passed to the law unchanged.
 
         Returns
         -------
-        numpy.ndarray, shape (2,)
+        numpy.ndarray, shape (..., 2)
         """
-        state = as_float_array("state", state, 6, max_ndim=1)
-        command = np.asarray(self.law(t, state[:3].copy(), reference), dtype=np.float64)
-        command = command.reshape(2)
+        state = as_float_array("state", state, 6)
+        command = np.asarray(self.law(t, state[..., :3].copy(), reference), dtype=np.float64)
+        command = command.reshape((*state.shape[:-1], 2))
         gains = (self.bandwidth, self.bandwidth)
         return velocity_torques(self.model, state, command, gains, self.max_torque)
 

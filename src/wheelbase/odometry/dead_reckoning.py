@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.errors import InputError
-from wheelbase.geometry import se2_exp, wrap_angle
+from wheelbase.geometry import wrap_angle
 from wheelbase.odometry.encoder import ticks_to_distance, ticks_to_rpm
 
 __all__ = [
@@ -80,10 +80,10 @@ def pose_increment(
     if method == "midpoint":
         mid = theta + 0.5 * rotation
         return np.stack([distance * np.cos(mid), distance * np.sin(mid)], -1)
-    zero = np.zeros_like(theta)
-    start = np.stack([zero, zero, theta], -1)
-    twist = np.stack([distance, zero, rotation], -1)
-    return se2_exp(start, twist, 1.0)[..., :2]  # the arc traversed in one unit of "time"
+    # The arc: chord D·sinc(φ/2) along the mid heading θ + φ/2 (exact for any φ, no 0/0).
+    mid = theta + 0.5 * rotation
+    chord = distance * np.sinc(rotation / (2.0 * np.pi))
+    return np.stack([chord * np.cos(mid), chord * np.sin(mid)], -1)
 
 
 def integrate_increments(

@@ -1,0 +1,569 @@
+"""The one closed-loop engine: N robots stepped in lockstep, one batched :class:`Log` out.
+
+Constant parameters (the plant, the controller and its reference, the estimator, the arrival
+rule, the collision check, ``dt``) live in an :class:`Engine`; what evolves lives in an
+:class:`EngineState` with a leading batch axis ``(N, …)``. One robot is N = 1 through the same
+code. Each :meth:`Engine.step`, for every robot still running:
+
+1. *estimator*: the estimate the controller will see (odometry from the last step's encoder
+   ticks, or the true state);
+2. *controller*: ``controller(t, estimate, reference)`` → command ``(N, k)`` (a learning agent
+   may pass the command instead: the hook before the plant);
+3. *command limits*: the plant turns the command into its inputs (steering stops); a
+   non-finite command ends that robot ``diverged`` and the others run on;
+4. *the rules* (on the state at time t): collision of the footprint → ``collision``; after
+   the reference has ended, at rest and with the *estimate* within tolerance of the goal, the
+   robot stops → ``arrived`` if the *true* pose is within tolerance too, else ``missed_goal``;
+   the time limit → ``timeout``;
+5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
+6. *encoders*: the wheel angles' change becomes tick differences for the estimator.
+
+Finished robots are frozen (masks, not branches); a controller's own per-step status (MPPI's
+``ok``/``all_collide``/``arrived``) is recorded beside the engine's status. Nothing a robot does
+raises: a collision or a NaN is a status. Bad *set-up* (shapes, a command of the wrong width
+for the plant) raises a :class:`~wheelbase.errors.WheelbaseError` before the first step.
+
+Controllers that keep per-robot memory and do not batch (MPPI: its warm-started control
+sequence) declare ``per_robot = True``; the engine then runs one copy per robot.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import as_float_array, nonnegative, positive
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
+from wheelbase.sim.log import STATUSES, Log
+from wheelbase.sim.sensing import EncoderReadings, PerfectState
+
+__all__ = ["Arrival", "Engine", "EngineState"]
+
+RUNNING, ARRIVED, MISSED_GOAL, COLLISION, TIMEOUT, DIVERGED = range(len(STATUSES))
+
+
+@dataclass(frozen=True)
+class Arrival:
+    """The one arrival rule: where the robots should stop and how closely.
+
+    Parameters
+    ----------
+    goal : array_like, shape (3,) or (N, 3)
+        Goal pose(s) [m, m, rad].
+    tolerance : tuple of float
+        (position [m], heading [rad]) tolerance, both > 0 (heading ``math.pi``: any heading).
+    end_time : float
+        When the reference ends [s]: arrival is judged from then on (0 for a goal pose).
+    settle_time : float
+        Time after ``end_time`` [s] the robot may still take; then ``timeout`` (default: the
+        engine's duration only).
+    rest_speed : float
+        Planar speed [m/s] below which a robot is at rest.
+    rest_yaw_rate : float
+        Yaw rate [rad/s] below which a robot is at rest (turning on the spot is moving).
+    """
+
+    goal: Any
+    tolerance: tuple[float, float] = (0.05, math.radians(5.0))
+    end_time: float = 0.0
+    settle_time: float = math.inf
+    rest_speed: float = 0.01
+    rest_yaw_rate: float = 0.1
+
+    def __post_init__(self) -> None:
+        goal = as_float_array("goal", self.goal, 3, min_ndim=1, max_ndim=2)
+        object.__setattr__(self, "goal", goal)
+        if len(self.tolerance) != 2:
+            raise ConfigError(
+                f"tolerance must be (position [m], heading [rad]) (got {self.tolerance!r})"
+            )
+        tolerance = (
+            positive("position tolerance", self.tolerance[0], "m"),
+            positive("heading tolerance", self.tolerance[1], "rad"),
+        )
+        object.__setattr__(self, "tolerance", tolerance)
+        object.__setattr__(self, "end_time", nonnegative("end_time", self.end_time, "s"))
+        if self.settle_time != math.inf:
+            object.__setattr__(
+                self, "settle_time", nonnegative("settle_time", self.settle_time, "s")
+            )
+        object.__setattr__(self, "rest_speed", positive("rest_speed", self.rest_speed, "m/s"))
+        object.__setattr__(
+            self, "rest_yaw_rate", positive("rest_yaw_rate", self.rest_yaw_rate, "rad/s")
+        )
+
+    def within(self, poses: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """Which poses ``(N, 3)`` are within tolerance of their goals ``(N, 3)``.
+
+        Parameters
+        ----------
+        poses, goal : numpy.ndarray, shape (N, 3)
+            Poses and goals.
+        """
+        distance = np.hypot(poses[:, 0] - goal[:, 0], poses[:, 1] - goal[:, 1])
+        heading = np.abs(wrap_angle(poses[:, 2] - goal[:, 2]))
+        return (distance <= self.tolerance[0]) & (heading <= self.tolerance[1])
+
+    def at_rest(self, twist: np.ndarray) -> np.ndarray:
+        """Which robots are at rest, by their body twists ``(N, 3)``.
+
+        Parameters
+        ----------
+        twist : numpy.ndarray, shape (N, 3)
+            Body twists [m/s, m/s, rad/s].
+        """
+        speed = np.hypot(twist[:, 0], twist[:, 1])
+        return (speed <= self.rest_speed) & (np.abs(twist[:, 2]) <= self.rest_yaw_rate)
+
+
+@dataclass
+class EngineState:
+    """What evolves during a run, batch axis first.
+
+    Attributes
+    ----------
+    step : int
+        Index of the step about to run (time ``step·dt``).
+    pose, twist : numpy.ndarray, shape (N, 3)
+        True pose [m, m, rad] and body twist [m/s, m/s, rad/s].
+    estimate, estimated_twist : numpy.ndarray, shape (N, 3)
+        What the controller sees.
+    wheel_angle : numpy.ndarray, shape (N, 2)
+        Cumulative wheel angles (left, right) of the encoder axle [rad].
+    ticks : numpy.ndarray of int64, shape (N, 2)
+        Cumulative encoder counts.
+    status : numpy.ndarray of int8, shape (N,)
+        Codes of :data:`~wheelbase.sim.STATUSES` (0: running).
+    goal : numpy.ndarray, shape (N, 3) or None
+        Each robot's goal.
+    seeds : numpy.ndarray of int64, shape (N,)
+        Each robot's seed.
+    controllers : list
+        One controller copy per robot for a ``per_robot`` controller, else one shared.
+    encoders : EncoderReadings or None
+        The per-robot random streams of the encoders.
+    """
+
+    step: int
+    pose: np.ndarray
+    twist: np.ndarray
+    estimate: np.ndarray
+    estimated_twist: np.ndarray
+    wheel_angle: np.ndarray
+    ticks: np.ndarray
+    status: np.ndarray
+    goal: np.ndarray | None
+    seeds: np.ndarray
+    controllers: list = field(default_factory=list)
+    encoders: EncoderReadings | None = None
+
+    @property
+    def running(self) -> np.ndarray:
+        """Which robots are still running, shape (N,)."""
+        return self.status == RUNNING
+
+
+@dataclass(frozen=True)
+class _Row:
+    """What one step records (before the plant moves)."""
+
+    t: float
+    pose: np.ndarray
+    estimate: np.ndarray
+    reference: np.ndarray
+    twist: np.ndarray
+    command: np.ndarray
+    rates: np.ndarray
+    ticks: np.ndarray
+    controller_status: list[str | None]
+
+
+@dataclass(frozen=True)
+class Engine:
+    """Parameters of a closed loop; :meth:`run` steps N robots from their start poses.
+
+    Parameters
+    ----------
+    plant : KinematicPlant or DynamicPlant
+        The true robot.
+    controller : callable
+        ``controller(t, measured (N, 3) or (N, 6), reference) -> (N, k)`` with
+        ``command_names`` and ``reset()`` (every law of :mod:`wheelbase.control`). On a dynamic
+        plant it is called with the estimated state (x, y, θ, u, v, r) and returns wheel
+        torques. ``per_robot = True`` on the controller: one copy per robot, called with (3,).
+    reference : object
+        Passed to the controller unchanged (a goal pose, a path, a trajectory).
+    dt : float
+        Control and integration step [s], > 0.
+    duration : float
+        Time limit [s], > 0.
+    estimator : PerfectState or EncoderOdometry
+        How the controller learns the state (default: perfectly).
+    arrival : Arrival or None
+        The arrival rule (None: run to the time limit; the status is then ``timeout``).
+    collides : callable, optional
+        ``collides(poses (M, 3)) -> (M,) bool``: the footprint touches an obstacle.
+    reference_pose : callable, optional
+        ``reference_pose(t) -> (3,) or (N, 3)``: where the robot should be (for the log;
+        default: the goal, or NaN).
+    progress : callable, optional
+        Called with the simulated time now and then.
+    fan_every : int
+        Every this many steps (0: never) keep ``fan_size`` sampled rollouts of a controller
+        that has them (``last_plan.samples`` and ``predict``, as MPPI).
+    fan_size : int
+        Rollouts kept per fan.
+    """
+
+    plant: Any
+    controller: Any
+    reference: Any
+    dt: float
+    duration: float
+    estimator: Any = field(default_factory=PerfectState)
+    arrival: Arrival | None = None
+    collides: Callable[[np.ndarray], np.ndarray] | None = None
+    reference_pose: Callable[[float], np.ndarray] | None = None
+    progress: Callable[[float], None] | None = None
+    fan_every: int = 0
+    fan_size: int = 20
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
+        object.__setattr__(self, "duration", positive("duration", self.duration, "s"))
+        if not callable(self.controller):
+            raise ConfigError(f"controller must be callable (got {type(self.controller).__name__})")
+        names = tuple(getattr(self.controller, "command_names", ("v", "omega")))
+        object.__setattr__(self, "_names", self.plant.command_names(names))
+        if self.estimator.encoder is not None and getattr(self.plant, "axle", None) is None:
+            raise ConfigError(
+                "wheel-encoder odometry needs the plant's encoder axle (WheelAxle); "
+                "run this plant with perfect state"
+            )
+
+    # ------------------------------------------------------------------ public
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        """Names of the command columns."""
+        return self._names  # type: ignore[attr-defined]
+
+    @property
+    def steps(self) -> int:
+        """Largest number of steps of a run."""
+        return math.ceil(self.duration / self.dt - 1e-9)
+
+    def reset(self, poses: ArrayLike, seeds: ArrayLike | int | None = None) -> EngineState:
+        """The state at t = 0: robots at ``poses``, at rest, estimates exact.
+
+        Parameters
+        ----------
+        poses : array_like, shape (3,) or (N, 3)
+            Start poses [m, m, rad].
+        seeds : int or array_like of int, shape (N,), optional
+            Seeds of each robot's random encoder errors (default 0, 1, …, N − 1; an int s
+            gives s, s + 1, …).
+        """
+        start = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2).reshape(-1, 3)
+        n = start.shape[0]
+        if n == 0:
+            raise InputError("give at least one robot (poses has shape (0, 3))")
+        seeds = _seeds(seeds, n)
+        start = start.copy()
+        start[:, 2] = wrap_angle(start[:, 2])
+        goal = None
+        if self.arrival is not None:
+            goal = self.arrival.goal
+            if goal.ndim == 2 and goal.shape[0] not in (1, n):
+                raise InputError(
+                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,) or ({n}, 3)"
+                )
+            goal = np.broadcast_to(goal.reshape(-1, 3), (n, 3)).copy()
+        reset = getattr(self.controller, "reset", None)
+        if reset is not None:
+            reset()
+        if getattr(self.controller, "per_robot", False):
+            controllers = [copy.deepcopy(self.controller) for _ in range(n)]
+        else:
+            controllers = [self.controller]
+        encoder = self.estimator.encoder
+        return EngineState(
+            step=0,
+            pose=start,
+            twist=np.zeros((n, 3)),
+            estimate=start.copy(),
+            estimated_twist=np.zeros((n, 3)),
+            wheel_angle=np.zeros((n, 2)),
+            ticks=np.zeros((n, 2), dtype=np.int64),
+            status=np.zeros(n, dtype=np.int8),
+            goal=goal,
+            seeds=seeds,
+            controllers=controllers,
+            encoders=None if encoder is None else EncoderReadings(encoder, seeds),
+        )
+
+    def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
+        """The controllers' commands ``(N, k)`` for the current estimates, and their own
+        per-robot statuses (None where a controller reports none).
+
+        Parameters
+        ----------
+        state : EngineState
+            The current state.
+        """
+        t = state.step * self.dt
+        measured = state.estimate
+        if self.plant.dynamic:
+            measured = np.concatenate([state.estimate, state.estimated_twist], axis=-1)
+        n, width = measured.shape[0], len(self.command_names)
+        controllers = state.controllers
+        if len(controllers) == 1 and not getattr(controllers[0], "per_robot", False):
+            raw = np.asarray(controllers[0](t, measured.copy(), self.reference), dtype=np.float64)
+            command = _shaped(raw, n, width, self.command_names)
+            reported = getattr(controllers[0], "status", None)
+            return command, [reported if isinstance(reported, str) else None] * n
+        command = np.zeros((n, width))
+        statuses: list[str | None] = [None] * n
+        for i in np.flatnonzero(state.running):
+            law = controllers[i]
+            raw = np.asarray(law(t, measured[i].copy(), self.reference), dtype=np.float64)
+            command[i] = _shaped(raw, 1, width, self.command_names)[0]
+            reported = getattr(law, "status", None)
+            statuses[i] = reported if isinstance(reported, str) else None
+        return command, statuses
+
+    def step(
+        self, state: EngineState, command: ArrayLike | None = None
+    ) -> tuple[EngineState, _Row]:
+        """One control step of every running robot (module docstring).
+
+        Parameters
+        ----------
+        state : EngineState
+            The state at time ``state.step·dt``; it is not changed.
+        command : array_like, shape (N, k), optional
+            Commands to apply instead of asking the controller (a learning agent's action).
+
+        Returns
+        -------
+        state : EngineState
+            The state one step later (finished robots frozen).
+        row : object
+            What the step recorded (time, poses, command, …) before the plant moved.
+        """
+        t = state.step * self.dt
+        running = state.running
+        n = running.size
+        if command is None:
+            command, controller_status = self.command(state)
+        else:
+            command = _shaped(
+                np.asarray(command, dtype=np.float64), n, len(self.command_names),
+                self.command_names,
+            )  # fmt: skip
+            controller_status = [None] * n
+        status = state.status.copy()
+        finite = np.all(np.isfinite(command), axis=-1)
+        status[running & ~finite] = DIVERGED
+        command = np.where(finite[:, None], command, 0.0)
+        command[~running] = 0.0
+        moved, rates = self.plant.motion(state.twist, command, self.command_names)
+        reference = self._reference_pose(t, n, state.goal)
+        row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
+                   state.ticks, controller_status)  # fmt: skip
+
+        active = status == RUNNING
+        if self.collides is not None and active.any():
+            hit = np.zeros(n, dtype=bool)
+            hit[active] = np.asarray(self.collides(state.pose[active]), dtype=bool)
+            status[hit] = COLLISION
+            active &= ~hit
+        limit = self.duration
+        if self.arrival is not None:
+            arrival = self.arrival
+            if arrival.settle_time != math.inf:
+                limit = min(limit, arrival.end_time + arrival.settle_time)
+            if t >= arrival.end_time - 1e-12:
+                stopped = (
+                    active & arrival.at_rest(moved) & arrival.within(state.estimate, state.goal)
+                )
+                if stopped.any():
+                    truly = arrival.within(state.pose, state.goal)
+                    status[stopped & truly] = ARRIVED
+                    status[stopped & ~truly] = MISSED_GOAL
+                    active &= ~stopped
+        if state.step >= self.steps or t >= limit - 1e-12:
+            status[active] = TIMEOUT
+            active[:] = False
+
+        pose, twist = state.pose.copy(), state.twist.copy()
+        wheel_angle, ticks = state.wheel_angle.copy(), state.ticks.copy()
+        estimate, estimated_twist = state.estimate.copy(), state.estimated_twist.copy()
+        if active.any():
+            new_pose, new_twist, end_rates = self.plant.step(
+                state.pose[active], state.twist[active], command[active], moved[active], self.dt
+            )
+            ok = np.all(np.isfinite(new_pose), axis=-1) & np.all(np.isfinite(new_twist), axis=-1)
+            moving = np.flatnonzero(active)
+            status[moving[~ok]] = DIVERGED
+            moving, new_pose, new_twist = moving[ok], new_pose[ok], new_twist[ok]
+            # The wheels turn by the integral of their rate: trapezoid of the step's two ends.
+            new_angle = state.wheel_angle[moving] + 0.5 * (rates[moving] + end_rates[ok]) * self.dt
+            if state.encoders is not None:
+                before = state.wheel_angle.copy()
+                after = before.copy()
+                after[moving] = new_angle
+                delta = state.encoders.tick_deltas(before, after)[moving]
+                ticks[moving] = state.ticks[moving] + delta
+            else:
+                delta = None
+            pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
+            est, est_twist = self.estimator.update(
+                state.estimate[moving], delta, self.dt, new_pose, new_twist
+            )
+            estimate[moving], estimated_twist[moving] = est, est_twist
+        new_state = EngineState(
+            step=state.step + 1,
+            pose=pose,
+            twist=twist,
+            estimate=estimate,
+            estimated_twist=estimated_twist,
+            wheel_angle=wheel_angle,
+            ticks=ticks,
+            status=status,
+            goal=state.goal,
+            seeds=state.seeds,
+            controllers=state.controllers,
+            encoders=state.encoders,
+        )
+        return new_state, row
+
+    def run(self, poses: ArrayLike, seeds: ArrayLike | int | None = None) -> Log:
+        """Run every robot from its start pose until it finishes; record everything.
+
+        Parameters
+        ----------
+        poses : array_like, shape (3,) or (N, 3)
+            Start poses [m, m, rad].
+        seeds : int or array_like of int, optional
+            Seeds of each robot's random encoder errors (see :meth:`reset`).
+
+        Returns
+        -------
+        Log
+            The batch's record, one row per step until the last robot finished.
+        """
+        state = self.reset(poses, seeds)
+        n = state.pose.shape[0]
+        rows: list[_Row] = []
+        last_row = np.zeros(n, dtype=np.int64)
+        fans: dict[tuple[int, int], np.ndarray] = {}
+        status_names: list[str] = []
+        while True:
+            was_running = state.running
+            fan_now = self.fan_every > 0 and state.step % self.fan_every == 0
+            state, row = self.step(state)
+            rows.append(row)
+            if fan_now:  # the plans the controllers just made for this row's poses
+                self._keep_fans(state.controllers, was_running, len(rows) - 1, fans)
+            last_row[was_running] = len(rows) - 1
+            if self.progress is not None and state.step % 200 == 0:
+                self.progress(row.t)
+            for name in row.controller_status:
+                if name is not None and name not in status_names:
+                    status_names.append(name)
+            if not state.running.any():
+                break
+        if self.progress is not None:
+            self.progress(rows[-1].t)
+        return self._log(rows, last_row, state, fans, tuple(status_names))
+
+    # ------------------------------------------------------------------ helpers
+    def _reference_pose(self, t: float, n: int, goal: np.ndarray | None) -> np.ndarray:
+        if self.reference_pose is not None:
+            value = np.asarray(self.reference_pose(t), dtype=np.float64)
+            return np.broadcast_to(value.reshape(-1, 3), (n, 3))
+        if goal is not None:
+            return goal
+        return np.full((n, 3), np.nan)
+
+    def _keep_fans(self, controllers: list, running: np.ndarray, row: int, fans: dict) -> None:
+        for i, law in enumerate(controllers):
+            if len(controllers) > 1 and not running[i]:
+                continue
+            plan = getattr(law, "last_plan", None)
+            if plan is None or getattr(plan, "samples", None) is None:
+                continue
+            rollouts = law.predict(plan, plan.samples[: self.fan_size])
+            fans[(i, row)] = np.asarray(rollouts)[..., :2]
+
+    def _log(self, rows, last_row, state, fans, status_names) -> Log:
+        n = state.pose.shape[0]
+        t = np.array([row.t for row in rows])
+        index = np.minimum(np.arange(len(rows))[None, :], last_row[:, None])  # frozen after end
+
+        def stack(name: str) -> np.ndarray:
+            values = np.stack([getattr(row, name) for row in rows], axis=1)  # (N, T, …)
+            return np.take_along_axis(
+                values, index.reshape(index.shape + (1,) * (values.ndim - 2)), axis=1
+            )
+
+        command = stack("command")
+        codes = {name: k for k, name in enumerate(status_names)}
+        controller_status = np.array(
+            [[codes.get(name, -1) if name is not None else -1 for name in row.controller_status]
+             for row in rows],
+            dtype=np.int16,
+        ).T.reshape(n, len(rows))  # fmt: skip
+        controller_status = np.where(np.arange(len(rows))[None, :] <= last_row[:, None],
+                                     controller_status, -1)  # fmt: skip
+        return Log(
+            t=t,
+            true_pose=stack("pose"),
+            estimated_pose=stack("estimate"),
+            reference_pose=stack("reference"),
+            twist=stack("twist"),
+            command=command,
+            wheel_rates=stack("rates"),
+            ticks=stack("ticks"),
+            torques=command if self.plant.dynamic else None,
+            status=state.status.copy(),
+            length=last_row + 1,
+            goal=state.goal,
+            seeds=state.seeds,
+            command_names=self.command_names,
+            controller_status=controller_status if status_names else None,
+            controller_status_names=status_names,
+            rollout_fans=fans,
+        )
+
+
+def _seeds(seeds: ArrayLike | int | None, n: int) -> np.ndarray:
+    if seeds is None:
+        return np.arange(n, dtype=np.int64)
+    if isinstance(seeds, (int, np.integer)) and not isinstance(seeds, bool):
+        if seeds < 0:
+            raise InputError(f"seeds must be >= 0 (got {seeds})")
+        return seeds + np.arange(n, dtype=np.int64)
+    array = np.asarray(seeds)
+    if array.ndim != 1 or array.shape[0] != n or not np.issubdtype(array.dtype, np.integer):
+        raise InputError(f"seeds must be an int or {n} integers, one per robot (got {seeds!r})")
+    if np.any(array < 0):
+        raise InputError("seeds must be >= 0")
+    return array.astype(np.int64)
+
+
+def _shaped(raw: np.ndarray, n: int, width: int, names: tuple[str, ...]) -> np.ndarray:
+    """Commands as (n, width), or a clear error naming the expected shape."""
+    if raw.size == n * width and raw.shape[-1:] == (width,):
+        return raw.reshape(n, width)
+    raise ConfigError(
+        f"the controller returned commands of shape {raw.shape}; the plant expects ({n}, {width}) "
+        f"= {names} per robot"
+    )

@@ -1,0 +1,148 @@
+"""What the controller knows: encoders on the wheels and the estimator that reads them.
+
+The engine reads the encoders after each plant step (the wheel angles went from ``before`` to
+``after``) and hands the tick differences to the estimator, whose estimate the controller sees
+at the next step. :class:`PerfectState` hands the controller the true state instead.
+
+Random encoder errors are drawn from one generator per robot, seeded by that robot's seed, so
+a robot's run does not depend on which batch it ran in: robot ``i`` of a batch equals the
+single run with seed ``seeds[i]``. Gaussian tick noise is drawn in blocks of steps (one call
+per robot every :data:`NOISE_BLOCK` steps, the same numbers as one draw per step).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from wheelbase.errors import ConfigError
+from wheelbase.geometry import wrap_angle
+
+__all__ = ["NOISE_BLOCK", "EncoderOdometry", "EncoderReadings", "PerfectState"]
+
+NOISE_BLOCK = 512
+"""Steps of Gaussian tick noise drawn per call of a robot's generator."""
+
+
+class EncoderReadings:
+    """Per-robot random streams of an encoder (the evolving part of the encoders).
+
+    Parameters
+    ----------
+    encoder : Encoder
+        The encoder model (:class:`wheelbase.odometry.Encoder`).
+    seeds : numpy.ndarray of int, shape (N,)
+        One seed per robot.
+    """
+
+    def __init__(self, encoder: Any, seeds: np.ndarray) -> None:
+        self.encoder = encoder
+        self.generators = [np.random.default_rng(int(seed)) for seed in seeds]
+        self._noise = np.zeros((len(self.generators), 0, 2))
+        self._row = 0
+        self._gaussian_only = encoder.miss_probability == 0 and encoder.extra_probability == 0
+
+    def tick_deltas(self, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+        """Tick differences ``(N, 2)`` counted while the wheels turn from ``before`` to
+        ``after`` [rad], with each robot's random errors.
+
+        Parameters
+        ----------
+        before, after : numpy.ndarray, shape (N, 2)
+            Cumulative wheel angles [rad].
+        """
+        encoder = self.encoder
+        if encoder.is_ideal:
+            return encoder.count(after) - encoder.count(before)
+        if self._gaussian_only:
+            true = encoder.count(after) - encoder.count(before)
+            if self._row >= self._noise.shape[1]:
+                self._noise = np.stack(
+                    [
+                        g.normal(0.0, encoder.noise_std, size=(NOISE_BLOCK, 2))
+                        for g in self.generators
+                    ]
+                )
+                self._row = 0
+            noise = self._noise[:, self._row]
+            self._row += 1
+            return true + np.round(noise).astype(np.int64)
+        return np.stack(
+            [
+                encoder.tick_deltas(before[i], after[i], generator)
+                for i, generator in enumerate(self.generators)
+            ]
+        )
+
+
+@dataclass(frozen=True)
+class PerfectState:
+    """The controller sees the true pose and twist; wheel angles are still logged."""
+
+    encoder: ClassVar[None] = None
+
+    def update(self, estimate: np.ndarray, ticks: np.ndarray, dt: float, pose, twist):
+        """The true pose and twist.
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (N, 3)
+            The previous estimate (unused).
+        ticks : numpy.ndarray or None
+            Tick differences (unused).
+        dt : float
+            Step [s] (unused).
+        pose, twist : numpy.ndarray, shape (N, 3)
+            The true pose and body twist.
+        """
+        return pose.copy(), twist.copy()
+
+
+@dataclass(frozen=True)
+class EncoderOdometry:
+    """Wheel encoders and the dead reckoning that reads them (document 003 §III).
+
+    Parameters
+    ----------
+    encoder : Encoder
+        The encoders of both wheels of the encoder axle.
+    odometry : WheelOdometry
+        The dead reckoning with the *nominal* geometry.
+    """
+
+    encoder: Any
+    odometry: Any
+
+    def __post_init__(self) -> None:
+        from wheelbase.odometry import Encoder, WheelOdometry
+
+        if not isinstance(self.encoder, Encoder):
+            raise ConfigError(f"encoder must be an Encoder (got {type(self.encoder).__name__})")
+        if not isinstance(self.odometry, WheelOdometry):
+            raise ConfigError(
+                f"odometry must be a WheelOdometry (got {type(self.odometry).__name__})"
+            )
+
+    def update(self, estimate: np.ndarray, ticks: np.ndarray, dt: float, pose, twist):
+        """Dead-reckon the estimate over one step, and the twist it implies.
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (N, 3)
+            The estimate at the start of the step.
+        ticks : numpy.ndarray, shape (N, 2)
+            Tick differences counted during the step.
+        dt : float
+            Step [s].
+        pose, twist : numpy.ndarray, shape (N, 3)
+            The truth (unused: odometry only sees ticks).
+        """
+        from wheelbase.odometry.dead_reckoning import pose_increment
+
+        distance, rotation = self.odometry.increments(ticks)
+        new = estimate.copy()
+        new[:, :2] += pose_increment(estimate[:, 2], distance, rotation, self.odometry.method)
+        new[:, 2] = wrap_angle(estimate[:, 2] + rotation)
+        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
