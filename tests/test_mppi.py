@@ -250,6 +250,24 @@ def test_batch_shape_and_one_robot_only():
         ({"limits": VelocityLimits(max_speed=0.5)}, "finite"),
         ({"savgol_window": 4}, "savgol_window"),
         ({"approach_deceleration": 0.0}, "approach_deceleration"),
+        # what a scenario file can put in the gains: strings, huge integers, inf
+        ({"noise_std": "abc"}, r"noise_std must be 2 values > 0.*\(got 'abc'\)"),
+        ({"seed": 2**70}, r"seed must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 1.5}, r"seed must be an integer"),
+        ({"samples": 2.5}, r"samples must be an integer >= 1 \(got 2.5\)"),
+        ({"savgol_window": math.inf}, r"savgol_window must be 0 or an odd integer >= 3"),
+        ({"savgol_window": "x"}, r"savgol_window must be 0 or an odd integer >= 3"),
+        ({"goal_tolerance": 0.1}, r"goal_tolerance must be \(position \[m\], heading \[rad\]\)"),
+        ({"allow_reverse": "no"}, r"allow_reverse must be true or false \(got 'no'\)"),
+        ({"jax_float64": "yes"}, r"jax_float64 must be true or false"),
+        (
+            {"samples": 10**6, "horizon_steps": 200},
+            r"samples × horizon_steps = 2e\+08: more than max_sample_steps = 100000000",
+        ),
+        (
+            {"footprint": Footprint.rectangle(1e9, 1.0)},
+            r"footprint .* needs 1.2e\+10 outline disks .* more than 100000",
+        ),
     ],
 )
 def test_bad_parameters(change, match):
@@ -258,6 +276,39 @@ def test_bad_parameters(change, match):
     args.update(change)
     with pytest.raises(ConfigError, match=match):
         MPPI(**args)
+
+
+def test_sample_step_limit_can_be_raised():
+    mppi = MPPI(Unicycle(), 10, 0.05, 100, 0.2, 0.1, None, LIMITS, max_sample_steps=1000)
+    assert mppi.samples * mppi.horizon_steps == 1000
+    with pytest.raises(ConfigError, match="max_sample_steps = 999"):
+        MPPI(Unicycle(), 10, 0.05, 100, 0.2, 0.1, None, LIMITS, max_sample_steps=999)
+
+
+@pytest.mark.parametrize(
+    ("gains", "match"),
+    [
+        ({"max_steering": "abc"}, "max_steering"),
+        ({"max_speed": "abc"}, "max_speed"),
+        ({"critics": [1, 2]}, "critics must be a mapping"),
+    ],
+)
+def test_from_gains_bad_values(gains, match):
+    with pytest.raises(ConfigError, match=match):
+        MPPI.from_gains(RearWheelBicycle(wheel_base=0.3, max_steering=0.6), **gains)
+
+
+def test_numba_kernel_has_no_infinity_sentinels():
+    # fastmath lets LLVM assume no value is ever inf or NaN: a comparison with an inf sentinel
+    # (`best = np.inf; if d2 < best`) is then undefined. The kernel starts from finite ones.
+    import inspect
+    import re
+
+    from wheelbase.control import mppi_numba
+
+    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest):
+        source = inspect.getsource(kernel.py_func)
+        assert not re.search(r"\b(np|math|numpy)\.inf\b|float\(.-?inf", source)
 
 
 def test_unsupported_model():
@@ -587,3 +638,47 @@ def test_after_all_rollouts_collided_both_signs_are_sampled():
     assert np.any(mppi.last_plan.samples[..., 0] < 0.0)  # backing off is allowed once
     mppi(0.2, (5.0, 5.0, 0.0), path)
     assert np.all(mppi.last_plan.samples[..., 0] >= 0.0)  # then forward only again
+
+
+# --------------------------------------------------------------------------- extreme values
+FAR = 4.5e9  # m: UTM-like and beyond; a multiple of float64's spacing there (2^-20 m)
+
+
+def _shifted(grid, offset):
+    return OccupancyGrid.from_array(grid.occupied, grid.resolution, np.add(grid.origin, offset))
+
+
+@pytest.mark.parametrize("backend", [*backends(), "jax32"])
+def test_same_commands_at_a_4_5e9_m_offset(cluttered, backend):
+    # Every backend works relative to the robot: at 4.5e9 m the JAX float32 backend used to
+    # cast absolute poses, path and map origin to float32 (512 m apart there), and float64 lost
+    # the micrometres the costs compare. Inputs here are exact in float64 at both places.
+    if backend.startswith("jax"):
+        pytest.importorskip("jax")
+    options = {"backend": backend[:3] if backend == "jax32" else backend,
+               "jax_float64": backend == "jax"}  # fmt: skip
+    far_path = Polyline(np.asarray(STRAIGHT.points) + FAR)
+    near = make(samples=128, grid=cluttered, footprint=ROBOT, **options)
+    far = make(samples=128, grid=_shifted(cluttered, FAR), footprint=ROBOT, **options)
+    noise = np.random.default_rng(5).standard_normal((128, 20, 2)) * (0.2, 0.5)
+    pose = np.array([2.5, 3.875, 0.25])
+    for _ in range(3):
+        a = near.plan(pose, STRAIGHT, noise)
+        b = far.plan(pose + np.array([FAR, FAR, 0.0]), far_path, noise)
+        np.testing.assert_allclose(b.costs, a.costs, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(b.command, a.command, rtol=1e-6, atol=1e-9)
+        pose = pose + np.array([0.25, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("backend", backends())
+def test_headings_are_wrapped_on_entry(cluttered, backend):
+    # -6.12 rad is 0.163 rad: the same robot, the same command (the numba kernel's one-step
+    # wrap assumed (-π, π] on entry).
+    noise = np.random.default_rng(6).standard_normal((64, 20, 2)) * (0.2, 0.5)
+    a = make(backend, grid=cluttered, footprint=ROBOT, jax_float64=True)
+    b = make(backend, grid=cluttered, footprint=ROBOT, jax_float64=True)
+    wrapped = -6.12 + 2 * math.pi
+    first = a.plan((2.5, 3.9, wrapped), STRAIGHT, noise)
+    second = b.plan((2.5, 3.9, -6.12), STRAIGHT, noise)
+    np.testing.assert_allclose(second.costs, first.costs, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(second.command, first.command, atol=1e-9)

@@ -49,7 +49,7 @@ from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
 
 from wheelbase._jax import X64, import_jax
-from wheelbase._validate import as_float_array, check_choice, positive
+from wheelbase._validate import as_float_array, check_choice, flag, integer, positive
 from wheelbase.control.base import (
     HOLONOMIC_COMMAND,
     STEERING_COMMAND,
@@ -71,6 +71,7 @@ from wheelbase.control.path import _as_polyline, _final_heading
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
+from wheelbase.limits import MAX_SAMPLE_STEPS
 
 __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
@@ -166,6 +167,9 @@ class MPPI:
         Distance [m] to a cusp at which the next path section becomes active.
     jax_float64 : bool
         Run the ``jax`` backend in float64 (default float32).
+    max_sample_steps : int
+        Most samples × horizon_steps per call (default :data:`wheelbase.limits.MAX_SAMPLE_STEPS`
+        = 1e8: the sampled commands alone take 1.6 GB); raise it on purpose.
 
     Examples
     --------
@@ -201,15 +205,26 @@ class MPPI:
         goal_tolerance: tuple[float, float] = (0.05, 0.25),
         cusp_tolerance: float = 0.05,
         jax_float64: bool = False,
+        max_sample_steps: int = MAX_SAMPLE_STEPS,
     ) -> None:
         self.model = model
-        self.horizon_steps = _count("horizon_steps", horizon_steps)
-        self.samples = _count("samples", samples)
+        self.horizon_steps = integer("horizon_steps", horizon_steps, minimum=1)
+        self.samples = integer("samples", samples, minimum=1)
+        limit = integer("max_sample_steps", max_sample_steps, minimum=1)
+        if self.samples * self.horizon_steps > limit:
+            raise ConfigError(
+                f"samples × horizon_steps = {self.samples * self.horizon_steps:.3g}: more than "
+                f"max_sample_steps = {limit}; use fewer samples or a shorter horizon, or raise "
+                "max_sample_steps"
+            )
         self.dt = positive("dt", dt, "s")
         self.temperature = positive("temperature", temperature)
         self._kind, self._wheel_base = _model_kind(model)
         self.nu = 3 if self._kind == KIND_HOLONOMIC else 2
-        sigma = np.asarray(noise_std, dtype=np.float64).reshape(-1)
+        try:
+            sigma = np.asarray(noise_std, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            sigma = np.zeros(0)
         if sigma.size == 1:
             sigma = np.repeat(sigma, self.nu)
         if sigma.size != self.nu or not np.all(np.isfinite(sigma)) or np.any(sigma <= 0.0):
@@ -219,29 +234,36 @@ class MPPI:
         self.noise_std = sigma
         self.critics = MPPICritics.from_mapping(critics)
         self.backend = check_choice("backend", backend, MPPI_BACKENDS)
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ConfigError(f"seed must be an integer >= 0 (got {seed!r})")
-        self.seed = int(seed)
+        self.seed = integer("seed", seed, 0, 2**64 - 1)  # the numba noise counters are 64-bit
         self.path_spacing = positive("path_spacing", path_spacing, "m")
         self.cusp_tolerance = positive("cusp_tolerance", cusp_tolerance, "m")
+        if np.ndim(goal_tolerance) != 1 or np.size(goal_tolerance) != 2:
+            raise ConfigError(
+                f"goal_tolerance must be (position [m], heading [rad]) (got {goal_tolerance!r})"
+            )
         self.goal_tolerance = (
             positive("goal position tolerance", goal_tolerance[0], "m"),
             positive("goal heading tolerance", goal_tolerance[1], "rad"),
         )
-        self.allow_reverse = bool(allow_reverse)
-        self.reverse_against_path = bool(reverse_against_path)
+        self.allow_reverse = flag("allow_reverse", allow_reverse)
+        self.reverse_against_path = flag("reverse_against_path", reverse_against_path)
         self.approach_deceleration = positive(
             "approach_deceleration", approach_deceleration, "m/s²"
         )
-        self.jax_float64 = bool(jax_float64)
+        self.jax_float64 = flag("jax_float64", jax_float64)
         self.command_names = {
             KIND_VELOCITY: VELOCITY_COMMAND, KIND_HOLONOMIC: HOLONOMIC_COMMAND,
         }.get(self._kind, STEERING_COMMAND)  # fmt: skip
         self._lo, self._hi = self._bounds(limits)
         self.limits = limits
-        window = int(savgol_window)
+        try:
+            window = integer("savgol_window", savgol_window, minimum=0)
+        except ConfigError:
+            window = 2
         if window != 0 and (window < 3 or window % 2 == 0):
-            raise ConfigError(f"savgol_window must be 0 or an odd integer >= 3 (got {window})")
+            raise ConfigError(
+                f"savgol_window must be 0 or an odd integer >= 3 (got {savgol_window!r})"
+            )
         self.savgol_window = window
         # Savitzky–Golay as a matrix along the horizon: the filter is linear in the sequence.
         steps = self.horizon_steps
@@ -298,7 +320,10 @@ class MPPI:
         """
         options = dict(gains)
         critic_names = {f.name for f in dataclass_fields(MPPICritics)}
-        critics = dict(options.pop("critics", None) or {})
+        critics = options.pop("critics", None) or {}
+        if not isinstance(critics, dict):
+            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
+        critics = dict(critics)
         for name in list(options):
             if name in critic_names:
                 critics[name] = options.pop(name)
@@ -309,12 +334,12 @@ class MPPI:
             limits: Any = VelocityLimits(max_speed=max_speed, max_yaw_rate=max_yaw_rate)
             options.pop("max_steering", None)
         else:
-            steering = options.pop("max_steering", float(model.max_steering))
+            steering = positive("max_steering", options.pop("max_steering", model.max_steering))
             limits = SteeringLimits(min(steering, 1.5), max_speed=max_speed)
         allowed = {
             "horizon_steps", "dt", "samples", "noise_std", "temperature", "seed", "backend",
             "allow_reverse", "reverse_against_path", "approach_deceleration", "savgol_window",
-            "path_spacing", "goal_tolerance", "cusp_tolerance", "jax_float64",
+            "path_spacing", "goal_tolerance", "cusp_tolerance", "jax_float64", "max_sample_steps",
         }  # fmt: skip
         unknown = sorted(set(options) - allowed)
         if unknown:
@@ -369,6 +394,8 @@ class MPPI:
             self._df = np.ascontiguousarray(np.minimum(grid.distance_field, 1.0e3))
             self._map = np.array([grid.origin[0], grid.origin[1], grid.resolution, 1.0])
         # Disks (x, y, radius) in the body frame whose clearance is the footprint's.
+        if footprint is not None:
+            _check_disk_count(footprint)
         if footprint is None:
             self._circles = np.zeros((1, 3))
         elif footprint.circle_overshoot > 0.25:
@@ -433,27 +460,34 @@ class MPPI:
         -------
         MPPIPlan
         """
-        pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1)
+        pose = as_float_array("pose", pose, 3, min_ndim=1, max_ndim=1).copy()
+        pose[2] = float(wrap_angle(pose[2]))  # any finite heading, wrapped on entry
         tables = self._path_tables(reference)
+        # The costs are computed relative to the robot: the window, the goal and the map origin
+        # are shifted by its position, so the backends see the same numbers anywhere (float32
+        # keeps 0.5 km at 4.5e9 m absolute, and float64 only micrometres).
         window, info = self._window(pose, tables)
+        local = np.array([0.0, 0.0, pose[2]])
+        local_map = self._map.copy()
+        local_map[:2] -= pose[:2]
         last_section = self._section == tables.n_sections - 1
         settling = last_section and info[0] > 0.5  # within goal_distance of the goal
         if settling:
-            gap = math.hypot(pose[0] - info[1], pose[1] - info[2])
+            gap = math.hypot(info[1], info[2])
             turn = abs(float(wrap_angle(pose[2] - info[3])))
             if gap <= self.goal_tolerance[0] and turn <= self.goal_tolerance[1]:
                 return self._stop(pose, "arrived")
         weights = self.critics.vector()
         if last_section and info[5] <= self.critics.near_goal_distance:
             weights[5] = 0.0  # obstacle repulsion off near the goal (collisions stay lethal)
-        blocked = self._path_blocked(window)
+        blocked = self._path_blocked(window, local_map)
         if self._map[3] > 0.5:
             # Where the critics already see the footprint in collision (their clearance is
             # conservative by a cell diagonal and the disks' overshoot; a planned path may pass
             # closer), every rollout would be lethal and the robot frozen for good: then only
             # rollouts that get deeper than now (by 1 cm) count as collisions. A footprint that
             # truly overlaps an obstacle keeps every rollout lethal: a safe stop.
-            now, _ = self._clearance(pose)
+            now, _ = self._clearance(local, mp=local_map)
             if now <= 0.0 and not self._truly_colliding(pose):
                 info[6] = float(now) - 0.01
         if blocked:
@@ -467,25 +501,25 @@ class MPPI:
                     f"(got {noise.shape})"
                 )
         lo, hi = self._call_bounds(info, blocked, settling)
-        args = (pose, mean, lo, hi, self._hi, window, info, self._last, weights)
+        args = (local, mean, lo, hi, self._hi, window, info, self._last, weights)
         if self.backend == "numpy":
             if noise is None:
                 noise = self._rng.standard_normal((self.samples, self.horizon_steps, self.nu))
                 noise *= self.noise_std
-            costs, controls = self._costs_numpy(*args, noise)
+            costs, controls = self._costs_numpy(*args, noise, local_map)
         elif self.backend == "numba":
             has_noise = noise is not None
             buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, self.nu))
             costs = np.empty(self.samples)
             controls = np.empty((self.samples, self.horizon_steps, self.nu))
             mppi_kernel(
-                pose, mean, lo, hi, self._hi, window, info, self._last, buffer, has_noise,
+                local, mean, lo, hi, self._hi, window, info, self._last, buffer, has_noise,
                 self.noise_std, np.uint64(self.seed), np.uint64(self._calls), self._kind,
-                self._wheel_base, self.dt, weights, self._df, self._map, self._circles,
+                self._wheel_base, self.dt, weights, self._df, local_map, self._circles,
                 int(self.critics.path_stride), NORMAL_TABLE, costs, controls,
             )  # fmt: skip
         else:
-            costs, controls = self._costs_jax(*args, noise)
+            costs, controls = self._costs_jax(*args, noise, local_map)
         self._calls += 1
         if self.critics.extra is not None:
             controls = np.asarray(controls, np.float64)  # the user's critic is NumPy code
@@ -615,8 +649,10 @@ class MPPI:
         if self._tables is not None and self._tables[0] is reference:
             return self._tables[1]
         line = _as_polyline(reference)
+        points = np.asarray(line.points)
+        self._anchor = points[0].copy()  # the tables' origin: their numbers stay small
         tables = PathTables(
-            np.asarray(line.points),
+            points - self._anchor,
             np.asarray(line.directions),
             self.path_spacing,
             _final_heading(reference),
@@ -628,7 +664,8 @@ class MPPI:
     def _window(self, pose: np.ndarray, tab: PathTables) -> tuple[np.ndarray, np.ndarray]:
         """The local path window (M, 4) = (x, y, heading, arc length from its first point) and the
         scalars the critics need: (goal mode 0/1, section end x, y, heading, direction ±1,
-        distance left to it [m], collision relief [m])."""
+        distance left to it [m], collision relief [m]); positions relative to the robot."""
+        rel = pose[:2] - self._anchor  # the robot in the tables' frame
         end = int(tab.section_end[self._section])
         start = 0 if self._section == 0 else int(tab.section_end[self._section - 1])
         if self._progress is None:
@@ -636,7 +673,7 @@ class MPPI:
         else:
             lo = max(start, self._progress - 10)
             hi = min(end + 1, self._progress + 4 * self._window_points)
-        d2 = np.sum((tab.xy[lo:hi] - pose[:2]) ** 2, axis=1)
+        d2 = np.sum((tab.xy[lo:hi] - rel) ** 2, axis=1)
         index = lo + int(np.argmin(d2))
         if self._progress is None:
             # First call: the earliest point about as near as the nearest one (a closed path
@@ -653,18 +690,20 @@ class MPPI:
         idx = np.arange(self._progress, self._progress + self._window_points)
         idx = np.minimum(idx, stop - 1)
         along = tab.arc[idx] - tab.arc[self._progress]
-        window = np.stack([tab.xy[idx, 0], tab.xy[idx, 1], tab.heading[idx], along], -1)
+        window = np.stack(
+            [tab.xy[idx, 0] - rel[0], tab.xy[idx, 1] - rel[1], tab.heading[idx], along], -1
+        )
         remaining = tab.arc[end] - tab.arc[self._progress]
         goal_mode = 1.0 if remaining <= self.critics.goal_distance else 0.0
         info = np.array(
             [
                 goal_mode,
-                tab.xy[end, 0],
-                tab.xy[end, 1],
+                tab.xy[end, 0] - rel[0],
+                tab.xy[end, 1] - rel[1],
                 tab.heading[end],
                 tab.direction[end],
                 # distance left to the section's end: along the path, or straight if farther
-                max(remaining, float(np.hypot(*(tab.xy[end] - pose[:2])))),
+                max(remaining, float(np.hypot(*(tab.xy[end] - rel)))),
                 0.0,  # collision relief, set by ``plan``
             ]
         )
@@ -674,7 +713,7 @@ class MPPI:
         """Within ``cusp_tolerance`` of the cusp, or past the line through it square to the path
         while within ``goal_distance`` of it (as the path followers switch): a car that cannot
         close the last few centimetres sideways must not stall before the cusp."""
-        offset = pose[:2] - tab.xy[end]
+        offset = pose[:2] - self._anchor - tab.xy[end]
         distance = float(np.hypot(*offset))
         if distance <= self.cusp_tolerance:
             return True
@@ -683,12 +722,12 @@ class MPPI:
         incoming = tab.xy[end] - tab.xy[end - 1]
         return float(offset @ incoming) >= 0.0
 
-    def _path_blocked(self, window: np.ndarray) -> bool:
+    def _path_blocked(self, window: np.ndarray, mp: np.ndarray) -> bool:
         """Whether more than 7 % of the window's poses put the footprint in collision (Nav2's
         ``max_path_occupancy_ratio``): the path critics are then switched off for this call."""
         if self._map[3] < 0.5:
             return False
-        _clearance, collided = self._clearance(window[:, :3])
+        _clearance, collided = self._clearance(window[:, :3], mp=mp)
         return bool(np.mean(collided) > 0.07)
 
     def _truly_colliding(self, pose: np.ndarray) -> bool:
@@ -698,11 +737,13 @@ class MPPI:
             return not inside or bool(self.grid.is_occupied(pose[None, :2])[0])
         return bool(np.asarray(self.grid.in_collision(self.footprint, pose[None])).reshape(-1)[0])
 
-    def _clearance(self, poses: np.ndarray, relief: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    def _clearance(
+        self, poses: np.ndarray, relief: float = 0.0, mp: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The critics' footprint clearance [m] of poses ``(..., 3)`` (the least over the disks
         of distance field − disk radius − √2·cell − ``relief``; 0 off the map) and whether each
         is in collision (<= 0 or off the map)."""
-        x0, y0, res = self._map[:3]
+        x0, y0, res = (self._map if mp is None else mp)[:3]
         cos, sin = np.cos(poses[..., 2]), np.sin(poses[..., 2])
         rows, cols = self._df.shape
         collided = np.zeros(poses.shape[:-1], bool)
@@ -735,7 +776,7 @@ class MPPI:
             poses[:, t + 1] = integrate_step(poses[:, t], z, z, z, self.dt, "euler")
         return poses
 
-    def _costs_numpy(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
+    def _costs_numpy(self, pose, mean, lo, hi, scale, window, info, last, w, noise, mp):
         c = self.critics
         controls = self._clip(mean[None] + noise, lo, hi)
         poses = self._rollout_many(pose, controls)
@@ -761,7 +802,7 @@ class MPPI:
             cost += c.goal * np.sum(dist, axis=1) / steps
             cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[3]))
         if self._map[3] > 0.5:
-            clearance, collided = self._clearance(after, info[6])
+            clearance, collided = self._clearance(after, info[6], mp)
             collided = np.any(collided, axis=1)
             gap = np.where(clearance > 0.0, np.maximum(c.inflation - clearance, 0.0), 0.0)
             cost += w[5] * np.sum(gap * gap, axis=1) / steps
@@ -778,7 +819,7 @@ class MPPI:
         return cost, controls
 
     # ------------------------------------------------------------------ JAX
-    def _costs_jax(self, pose, mean, lo, hi, scale, window, info, last, w, noise):
+    def _costs_jax(self, pose, mean, lo, hi, scale, window, info, last, w, noise, mp):
         """Costs and sampled commands from the JAX backend; with ``noise=None`` the noise is
         drawn on the device from a key folded from (seed, call)."""
         jax, jnp = import_jax()
@@ -795,17 +836,19 @@ class MPPI:
         dtype = np.float64 if self.jax_float64 else np.float32
         with X64(jax, self.jax_float64):
             if self._jax_map is None or self._jax_map[0] != dtype:
-                # The map goes to the device once, not at every call.
-                arrays = (self._df, self._map, self._circles)
+                # The map goes to the device once, not at every call (its origin relative to
+                # the robot, four numbers, at every call).
+                arrays = (self._df, self._circles)
                 self._jax_map = (dtype, *(jnp.asarray(a, dtype=dtype) for a in arrays))
-            _, df, mp, circles = self._jax_map
+            _, df, circles = self._jax_map
             if draw:
                 noise = jax.random.fold_in(jax.random.PRNGKey(self.seed), self._calls)
             else:
                 noise = np.asarray(noise, dtype)
             extra = np.array([0.0, self.dt, self._wheel_base, *self.noise_std])
             small = (np.asarray(v, dtype) for v in (pose, mean, lo, hi, scale, window, info, last))
-            costs, controls = function(*small, noise, np.asarray(w, dtype), df, mp, circles,
+            costs, controls = function(*small, noise, np.asarray(w, dtype), df,
+                                       np.asarray(mp, dtype), circles,
                                        np.asarray(extra, dtype))  # fmt: skip
             if jax.default_backend() == "cpu":  # host and device are one: NumPy is quicker
                 return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
@@ -831,10 +874,26 @@ def _weighted_mean(weights: np.ndarray, controls: Any, float64: bool) -> np.ndar
         return np.asarray(jnp.tensordot(device_weights, controls, axes=1), np.float64)
 
 
-def _count(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ConfigError(f"{name} must be an integer >= 1 (got {value!r})")
-    return int(value)
+MAX_FOOTPRINT_DISKS = 100_000
+"""Most disks (outline or covering) a footprint may need: each is checked at every step of every
+rollout (a 4.5 × 1.8 m car needs 67; 100,000 is a 10 km outline)."""
+
+
+def _check_disk_count(footprint: Any) -> None:
+    """Refuse a footprint whose disks would not fit in memory or time (a 1e9 m car asked for
+    2.2 TiB), before any of them is made."""
+    poly = np.asarray(footprint.polygon, dtype=np.float64)
+    extent = np.ptp(poly, axis=0)
+    long_side, short_side = float(np.max(extent)), float(np.min(extent))
+    perimeter = float(np.sum(np.hypot(*(np.roll(poly, -1, axis=0) - poly).T)))
+    covering = 2.0 * long_side / short_side if short_side > 0 else math.inf
+    count = max(covering, perimeter / OUTLINE_SPACING + covering)
+    if not count <= MAX_FOOTPRINT_DISKS:
+        raise ConfigError(
+            f"footprint ({long_side:.3g} × {short_side:.3g} m) needs {count:.3g} outline disks "
+            f"of {OUTLINE_SPACING} m or covering circles: more than {MAX_FOOTPRINT_DISKS}, each "
+            "checked at every step of every rollout"
+        )
 
 
 def _model_kind(model: Any) -> tuple[int, float]:

@@ -58,6 +58,24 @@ def _wrap_scalar(a):
     return math.pi if w <= -math.pi else w
 
 
+FAR = 1.0e300
+"""A finite 'nothing yet' for the kernel's running minima: with ``fastmath`` the compiler may
+assume no value is ever inf, so a comparison with an inf sentinel would be undefined."""
+
+
+@numba.njit(cache=True, inline="always", fastmath=True)
+def _nearest(x, y, window):
+    """Squared distance [m²] from (x, y) to the nearest window point and its index."""
+    dx, dy = x - window[0, 0], y - window[0, 1]
+    best, index = dx * dx + dy * dy, 0
+    for j in range(1, window.shape[0]):
+        dx, dy = x - window[j, 0], y - window[j, 1]
+        d2 = dx * dx + dy * dy
+        if d2 < best:
+            best, index = d2, j
+    return best, index
+
+
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def mppi_kernel(
     pose, mean, lo, hi, scale, window, info, last, noise, has_noise, sigma, seed, call, kind,
@@ -141,18 +159,13 @@ def mppi_kernel(
             c, s = math.cos(th), math.sin(th)
             if t == next_check:
                 next_check += stride
-                best, bj = np.inf, 0
-                for j in range(m):
-                    dx, dy = x - window[j, 0], y - window[j, 1]
-                    d2 = dx * dx + dy * dy
-                    if d2 < best:
-                        best, bj = d2, j
+                best, bj = _nearest(x, y, window)
                 err = _wrap_scalar(th - window[bj, 2])
                 cost += w_path * math.sqrt(best) + w_align * err * err
             if goal_mode:
                 cost += w_goal * math.hypot(x - info[1], y - info[2])
             if has_map:
-                clearance = np.inf  # the footprint's: the least over its disks
+                clearance = FAR  # the footprint's: the least over its disks
                 for k in range(n_circles):
                     px = x + c * circles[k, 0] - s * circles[k, 1]
                     py = y + s * circles[k, 0] + c * circles[k, 1]
@@ -182,12 +195,7 @@ def mppi_kernel(
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[3]))
         else:
-            best, bj = np.inf, 0
-            for j in range(m):
-                dx, dy = x - window[j, 0], y - window[j, 1]
-                d2 = dx * dx + dy * dy
-                if d2 < best:
-                    best, bj = d2, j
+            best, bj = _nearest(x, y, window)
             cost += w[2] * (window[m - 1, 3] - window[bj, 3])
         if collided:
             cost += w[11]
