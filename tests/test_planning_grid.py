@@ -221,3 +221,16 @@ def test_lattice_collisions_is_a_subset_of_the_exact_check():
     ]
     with pytest.raises(ConfigError, match="spacing"):
         grid.lattice_collisions(robot, poses, 0.0)
+
+
+def test_with_origin_moves_the_cells_and_shares_the_derived_maps():
+    occ = np.zeros((20, 30), bool)
+    occ[5:8, 10:12] = True
+    grid = OccupancyGrid.from_array(occ, 0.1, origin=(4.5e9, -2.0))
+    field = grid.distance_field
+    moved = grid.with_origin((0.0, 0.0))
+    assert moved.distance_field is field and moved.origin == (0.0, 0.0)
+    np.testing.assert_array_equal(moved.occupied, grid.occupied)
+    local = np.array([[1.05, 0.65], [0.25, 0.25]])
+    shifted = local + np.array([4.5e9, -2.0])
+    np.testing.assert_array_equal(moved.is_occupied(local), grid.is_occupied(shifted))

@@ -284,3 +284,53 @@ def test_search_kernel_takes_no_int_of_infinity(monkeypatch):
     planner = HybridAStar(OccupancyGrid.from_array(occ, 0.1), (0.3, 0.2), 0.0)
     path = planner.plan((1.0, 1.0, 0.0), (3.0, 3.0, 0.0))
     assert not path.success and path.stats.message == "search space exhausted"
+
+
+FAR = 4.5e9  # m; start and goal below are exact in float64 there (multiples of 2^-20 m)
+
+
+@pytest.mark.parametrize(("radius", "reverse"), [(1.0, True), (1.0, False), (0.0, True)])
+def test_same_path_at_a_4_5e9_m_offset(radius, reverse):
+    # Coordinates up to 1e10 m (UTM-like and beyond): the plan, smoothing included, at 4.5e9 m
+    # is the plan at the origin moved there (to 1e-6 of its length).
+    occ = np.zeros((60, 80), bool)
+    occ[20:45, 35:40] = True
+    near_grid = OccupancyGrid.from_array(occ, 0.1)
+    far_grid = OccupancyGrid.from_array(occ, 0.1, origin=(FAR, FAR))
+    start, goal = np.array([1.5, 1.5, 0.0]), np.array([6.5, 4.5, math.pi / 2])
+    shift = np.array([FAR, FAR, 0.0])
+    paths = []
+    for grid, offset in ((near_grid, 0.0), (far_grid, 1.0)):
+        planner = HybridAStar(grid, (0.6, 0.4), radius, reverse=reverse)
+        path = planner.plan(start + offset * shift, goal + offset * shift)
+        assert path.success
+        paths.append(path)
+    near, far = paths
+    assert far.poses.shape == near.poses.shape
+    tolerance = 1e-6 * near.length
+    np.testing.assert_allclose(far.poses[:, :2] - FAR, near.poses[:, :2], atol=tolerance)
+    np.testing.assert_allclose(wrap_angle(far.poses[:, 2] - near.poses[:, 2]), 0.0, atol=1e-6)
+    np.testing.assert_allclose(far.arc_length, near.arc_length, atol=tolerance)
+    np.testing.assert_array_equal(far.directions, near.directions)
+    # smoothing happened far away too (it needed a 1e-9 m end match, and skipped at 4.5e9 m)
+    raw = HybridAStar(near_grid, (0.6, 0.4), radius, reverse=reverse, smooth=False)
+    if radius > 0:
+        assert not np.allclose(raw.plan(start, goal).poses, near.poses)
+
+
+def test_smoothing_is_the_same_at_a_4_5e9_m_offset():
+    # smooth_path on its own (a user's raw path far from the origin): its end match works in
+    # the segment's frame with a tolerance relative to the segment's length.
+    occ = np.zeros((60, 80), bool)
+    occ[20:45, 35:40] = True
+    near_grid = OccupancyGrid.from_array(occ, 0.1)
+    far_grid = OccupancyGrid.from_array(occ, 0.1, origin=(FAR, FAR))
+    planner = HybridAStar(near_grid, (0.6, 0.4), 1.0, smooth=False)
+    raw = planner.plan((1.5, 1.5, 0.0), (6.5, 4.5, math.pi / 2))
+    shift = np.array([FAR, FAR, 0.0])
+    moved = Path(raw.poses + shift, raw.directions, raw.curvatures, raw.arc_length, True)
+    near = smooth_path(raw, near_grid, planner.footprint, 1.0)
+    far = smooth_path(moved, far_grid, planner.footprint, 1.0)
+    assert not np.allclose(near.poses, raw.poses)  # smoothing did something
+    np.testing.assert_allclose(far.poses - shift, near.poses, atol=1e-6 * raw.length)
+    np.testing.assert_allclose(far.curvatures, near.curvatures, atol=1e-6)

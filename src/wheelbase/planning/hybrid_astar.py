@@ -269,7 +269,10 @@ class HybridAStar:
             self.collision_margin = 0.5 * self.collision_step * 1.0
         self._checked = fp.inflated(self.collision_margin)
         self._prims = self._build_primitives()
-        self._heuristic_grid = grid.inflate(max(0.0, fp.inscribed_radius - grid.resolution))
+        # The search works in the grid's own frame (origin (0, 0)): 4.5e9 m from the world
+        # origin, absolute float64 keeps only micrometres (see ``plan``).
+        self._local = grid.with_origin((0.0, 0.0))
+        self._heuristic_grid = self._local.inflate(max(0.0, fp.inscribed_radius - grid.resolution))
 
     # ------------------------------------------------------------------ setup
     def _build_primitives(self) -> _Primitives:
@@ -357,13 +360,18 @@ class HybridAStar:
         """
         start = self._check_pose("start", start)
         goal = self._check_pose("goal", goal)
+        # Plan in the grid's frame and move the result back: the same path, to rounding, at
+        # any distance from the world origin (coordinates up to 1e10 m).
+        origin = np.array([*self.grid.origin, 0.0])
+        ends = (start, goal)
+        start, goal = start - origin, goal - origin
         t_compile = time.perf_counter()
         _ensure_compiled()
         compile_time = time.perf_counter() - t_compile
 
         t0 = time.perf_counter()
         hgrid, hres = self._holonomic_heuristic(goal)
-        grid = self.grid
+        grid = self._local
         mode = (
             _MODE_POINT
             if self.turning_radius == 0
@@ -420,13 +428,15 @@ class HybridAStar:
         if self.smooth:
             path = smooth_path(
                 path,
-                self.grid,
+                self._local,
                 self.footprint,
                 self.turning_radius,
                 collision_margin=self.collision_margin,
             )
         stats = PlanningStats(int(expanded), time.perf_counter() - t0, compile_time, _STATUS[0])
-        return Path(path.poses, path.directions, path.curvatures, path.arc_length, True, stats)
+        poses = path.poses + origin
+        poses[0], poses[-1] = ends  # exactly as given (headings wrapped)
+        return Path(poses, path.directions, path.curvatures, path.arc_length, True, stats)
 
     def _holonomic_heuristic(self, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Dijkstra cost-to-go [m] on a grid of ``xy_resolution`` cells (a coarse cell is free

@@ -395,6 +395,28 @@ class OccupancyGrid:
         d = self.distance_field[rows, cols] - math.sqrt(2.0) * self.resolution
         return np.where(inside, np.maximum(d, 0.0), 0.0)
 
+    def with_origin(self, origin: ArrayLike) -> OccupancyGrid:
+        """The same cells placed at another origin; the derived maps (distance field, prefix
+        counts) are shared, not recomputed.
+
+        Planners work in the grid's own frame (``grid.with_origin((0, 0))``): far from the
+        world origin (UTM-like coordinates, 4.5e9 m) absolute float64 keeps only micrometres.
+
+        Parameters
+        ----------
+        origin : array_like
+            ``(x0, y0)`` [m] of the lower-left corner of cell (0, 0).
+
+        Returns
+        -------
+        OccupancyGrid
+        """
+        moved = OccupancyGrid(self.occupied, self.resolution, origin, self.unknown)
+        for name in ("distance_field", "occupancy_prefix"):
+            if name in self.__dict__:  # computed already (cached_property)
+                moved.__dict__[name] = self.__dict__[name]
+        return moved
+
     def inflate(self, radius: float) -> OccupancyGrid:
         """A new grid where every cell whose centre is within ``radius`` of an occupied cell
         centre is occupied (a disk-shaped robot of that radius reduced to a point).

@@ -11,7 +11,9 @@ segment between cusps (and between turns in place):
 2. integrate the poses again from the segment's first pose (exact arcs per sample interval);
 3. restore the segment's end pose exactly by Gauss–Newton on a small correction
    δκ(s) = (1 − |κ(s)|R) Σ aⱼ sin(jπ s/L) (minimum-norm steps; zero where the curvature is at
-   its limit), then re-check |κ| ≤ 1/R;
+   its limit), then re-check |κ| ≤ 1/R; the end must match to 1e-9 of the segment's length
+   (at least 1e-9 m), computed in the segment's own frame, so a path 4.5e9 m from the origin
+   is smoothed as it would be at the origin;
 4. accept the segment only if the footprint, grown by the planner's continuous-motion margin
    plus the clearance the original segment had (up to ``safe_distance``), is collision-free;
    otherwise try half the window, and finally keep the original segment.
@@ -160,7 +162,13 @@ def _integrate(start: np.ndarray, ds: np.ndarray, kappa: np.ndarray, direction: 
 
 
 def _close_end(start, end, ds, kappa, direction, basis, kmax):
-    """Correct κ so that integration from ``start`` ends exactly at ``end`` (Gauss–Newton)."""
+    """Correct κ so that integration from ``start`` ends exactly at ``end`` (Gauss–Newton).
+
+    Works in the frame of ``start``'s position: far from the origin, absolute coordinates keep
+    only micrometres, which the end match needs to the nanometre."""
+    origin, goal = start[:2].copy(), end
+    start = np.array([0.0, 0.0, start[2]])
+    end = np.array([end[0] - origin[0], end[1] - origin[1], end[2]])
     s = np.concatenate([[0.0], np.cumsum(ds)])
     mid_s = (s[:-1] + s[1:]) / 2
     length = s[-1]
@@ -170,6 +178,7 @@ def _close_end(start, end, ds, kappa, direction, basis, kmax):
         phi *= np.clip(1.0 - np.abs(kappa) / kmax, 0.0, None)[:, None]
     coef = np.zeros(basis)
     scale = max(length, 1e-9)
+    tolerance = 1e-9 * max(length, 1.0)  # [m]: relative to the segment, at least 1e-9 m
 
     def residual(c):
         p = _integrate(start, ds, kappa + phi @ c, direction)[-1]
@@ -177,7 +186,7 @@ def _close_end(start, end, ds, kappa, direction, basis, kmax):
 
     r = residual(coef)
     for _ in range(12):
-        if np.max(np.abs(r)) < 1e-11:
+        if np.max(np.abs(r)) < 1e-2 * tolerance:
             break
         jac = np.empty((3, basis))
         h = 1e-7
@@ -188,10 +197,11 @@ def _close_end(start, end, ds, kappa, direction, basis, kmax):
         step, *_ = np.linalg.lstsq(jac, -r, rcond=None)
         coef = coef + step
         r = residual(coef)
-    if np.max(np.abs(r)) > 1e-9:
+    if np.max(np.abs(r)) > tolerance:
         return None
     new_k = kappa + phi @ coef
     poses = _integrate(start, ds, new_k, direction)
     poses[:, 2] = wrap_angle(poses[:, 2])
-    poses[-1] = end
+    poses[:, :2] += origin
+    poses[-1] = goal
     return poses, new_k
