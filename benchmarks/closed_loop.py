@@ -5,8 +5,8 @@ Prints one JSON object:
 - ``demo``: seconds for ``wheelbase.run("demo")`` plus writing its report without the GIF
   (median of ``--repeat`` runs after one warm-up run that compiles and caches the kernels), and
   the GIF alone; target: under 5 s end to end without the GIF.
-- ``batch``: ``--seeds`` runs of the demo scenario with encoder noise (0.3 tick per reading)
-  on ``--workers`` local processes: wall time, runs per second, success rate.
+- ``batch``: ``--seeds`` runs of the demo scenario with encoder noise (0.3 tick on each tick
+  difference) on ``--workers`` local processes: wall time, runs per second, success rate.
 
 Usage: ``python benchmarks/closed_loop.py [--seeds 100] [--workers 2] [--repeat 3] [--quick]``.
 """

@@ -3,6 +3,7 @@ allowed and what was given; extreme but valid values are accepted (and headings 
 
 import math
 
+import numpy as np
 import pytest
 
 from wheelbase.errors import ScenarioError
@@ -107,3 +108,24 @@ def test_unreadable_files_are_scenario_errors(tmp_path, content, match):
     path.write_bytes(content)
     with pytest.raises(ScenarioError, match=match):
         load_scenario(path)
+
+
+def test_tick_noise_is_per_tick_difference_and_accumulates():
+    # What tick_noise_std is: Gaussian noise (rounded) on each tick difference, i.e. at every
+    # step dt, so the count wanders as a random walk (variance grows with the number of reads);
+    # the schema and the encoder say so.
+    from wheelbase.odometry import Encoder
+    from wheelbase.scenario import scenario_json_schema
+
+    sigma, reads, runs = 2.0, 200, 4000
+    encoder = Encoder(1024, noise_std=sigma)
+    angles = np.zeros((reads + 1, runs))  # the wheel does not turn
+    counts = encoder.measure(angles, np.random.default_rng(1))
+    variance = np.var(counts[1:], axis=1)  # across runs, after 1..reads reads
+    per_read = sigma**2 + 1 / 12  # rounding adds ~1/12 tick²
+    slope = np.polyfit(np.arange(1, reads + 1), variance, 1)[0]
+    assert slope == pytest.approx(per_read, rel=0.05)
+    schema = scenario_json_schema()["$defs"]["OdometrySpec"]["properties"]["tick_noise_std"]
+    assert "each tick difference" in schema["description"]
+    assert "random walk" in schema["description"]
+    assert "each tick difference" in " ".join(Encoder.__doc__.split())

@@ -174,7 +174,13 @@ class OdometrySpec(_Strict):
     mode: Literal["perfect", "encoders"] = Field("encoders")
     pulses_per_revolution: int = Field(2048, gt=0, description="Encoder resolution.")
     method: Literal["euler", "midpoint", "exact"] = Field("exact")
-    tick_noise_std: float = Field(0.0, ge=0, description="Gaussian noise per reading [ticks].")
+    tick_noise_std: float = Field(
+        0.0,
+        ge=0,
+        description="σ [ticks] of Gaussian noise (rounded) added to each tick difference, i.e. "
+        "at every step dt; the counts wander as a random walk (σ√n ticks after n steps), so "
+        "the same σ drifts more with a smaller dt.",
+    )
     wheel_radius_scale: tuple[float, float] = Field(
         (1.0, 1.0),
         description="True (left, right) wheel radius / nominal: systematic odometry error.",
