@@ -99,6 +99,91 @@ def test_loader_errors(tmp_path):
         grid.in_collision(Footprint.rectangle(1, 1), [1.0, 2.0])
 
 
+ROS_BASE = "image: m.pgm\nresolution: 0.1\norigin: [1, 2, 0]\n"
+
+
+@pytest.mark.parametrize(
+    ("yaml_text", "error", "match"),
+    [
+        (ROS_BASE + "negate: maybe\n", MapError, r"negate must be 0 or 1 \(got 'maybe'\)"),
+        (ROS_BASE + "negate: 2\n", MapError, r"negate must be 0 or 1 \(got 2\)"),
+        (ROS_BASE.replace("[1, 2, 0]", "[a, b, 0]"), MapError, r"origin must be \[x, y, yaw\]"),
+        (ROS_BASE.replace("[1, 2, 0]", "[.nan, 0, 0]"), MapError, r"origin must be finite"),
+        (ROS_BASE + "occupied_thresh: 1.5\n", MapError, r"occupied_thresh must be in \[0, 1\]"),
+        (ROS_BASE + "free_thresh: 0.9\n", MapError, r"free_thresh .* <= occupied_thresh"),
+        (ROS_BASE.replace("0.1", "abc"), MapError, r"resolution must be a real number"),
+        (ROS_BASE + "x: " + "9" * 5000 + "\n", MapError, r"invalid YAML: .*4300 digits"),
+        ("image: [" * 3000 + "]" * 3000 + "\n", MapError, r"invalid YAML"),
+    ],
+    ids=["negate-word", "negate-2", "origin-letters", "origin-nan", "occupied-1.5",
+         "free-above-occupied", "resolution-letters", "5000-digits", "nested-3000-deep"],
+)  # fmt: skip
+def test_bad_ros_yaml_fields_are_map_errors(tmp_path, yaml_text, error, match):
+    _write_pgm(tmp_path / "m.pgm", np.array([[0, 254]], np.uint8))
+    (tmp_path / "bad.yaml").write_text(yaml_text)
+    with pytest.raises(error, match=match):
+        OccupancyGrid.from_ros_yaml(tmp_path / "bad.yaml")
+
+
+def test_yaml_booleans_for_negate_are_read_as_map_server_does(tmp_path):
+    _write_pgm(tmp_path / "m.pgm", np.array([[0, 254]], np.uint8))
+    (tmp_path / "y.yaml").write_text(ROS_BASE + "negate: true\n")
+    np.testing.assert_array_equal(
+        OccupancyGrid.from_ros_yaml(tmp_path / "y.yaml").occupied[0], [False, True]
+    )
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "match"),
+    [
+        ("m.yaml", b"image: m.pgm\nresolution: 0.1\norigin: [1, 2, 0] # caf\xe9\n", "not UTF-8"),
+        ("m.map", b"type octile\nheight 1\nwidth 1\nmap\n\xff\n", "not UTF-8"),
+        ("m.scen", b"version 1\n\xfe\n", "not UTF-8"),
+        ("m.map", b"type octile\nheight abc\nwidth 2\nmap\n..\n", r"height must be an integer"),
+        ("m.map", b"type octile\nheight -1\nwidth 2\nmap\n..\n", r"height must be an integer"),
+        ("m.map", b"type octile\nheight 100000\nwidth 100000\nmap\n", r"1e\+10 cells.*max_cells"),
+        ("m.pgm", b"P5\n100000000 100000000\n255\n\x00", r"1e\+16 pixels.*max_cells"),
+        ("m.pgm", b"P5\n4 4\n255\n\x00\x00", r"cannot read map image"),
+        ("m.png", b"\x89PNG\r\n\x1a\n\x00\x00", r"cannot read map image"),
+    ],
+    ids=["yaml-latin1", "map-binary", "scen-binary", "height-abc", "height-negative",
+         "map-1e10-cells", "pgm-1e16-pixels", "pgm-truncated", "png-truncated"],
+)  # fmt: skip
+def test_unreadable_map_files_are_wheelbase_errors(tmp_path, name, content, match):
+    from wheelbase.errors import WheelbaseError
+    from wheelbase.planning import read_movingai_scenarios
+    from wheelbase.planning.maps import load_map
+
+    path = tmp_path / name
+    path.write_bytes(content)
+    with pytest.raises(WheelbaseError, match=match):
+        if name.endswith(".scen"):
+            read_movingai_scenarios(path)
+        else:
+            load_map(path)
+
+
+def test_cell_limit_can_be_raised(tmp_path):
+    from PIL import Image
+
+    Image.fromarray(np.full((30, 40), 255, np.uint8)).save(tmp_path / "m.png")
+    with pytest.raises(MapError, match=r"40 × 30 = 1.2e\+03 pixels.*max_cells = 1000"):
+        OccupancyGrid.from_image(tmp_path / "m.png", 0.1, max_cells=1000)
+    assert OccupancyGrid.from_image(tmp_path / "m.png", 0.1, max_cells=1200).shape == (30, 40)
+
+
+@pytest.mark.parametrize("threshold", [math.nan, math.inf, "abc"])
+def test_thresholds_must_be_finite(tmp_path, threshold):
+    # occupied_thresh=nan made every cell free: a silently wrong map
+    from PIL import Image
+
+    with pytest.raises(ConfigError, match="occupied_thresh"):
+        OccupancyGrid.from_array(np.array([[0.0, 0.9]]), 1.0, occupied_thresh=threshold)
+    Image.fromarray(np.zeros((2, 2), np.uint8)).save(tmp_path / "m.png")
+    with pytest.raises(ConfigError, match="threshold"):
+        OccupancyGrid.from_image(tmp_path / "m.png", 1.0, threshold=threshold)
+
+
 @pytest.mark.skipif(not TB3.exists(), reason="../shared/data/maps/turtlebot3_world.yaml absent")
 def test_turtlebot3_pixels_follow_map_server_rules():
     with pytest.warns(UserWarning, match="not found"):  # its YAML names map.pgm

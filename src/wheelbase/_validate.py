@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
-from wheelbase.errors import ConfigError, InputError
+from wheelbase.errors import ConfigError, DataError, InputError
 
 __all__ = [
     "as_float_array",
@@ -23,6 +24,7 @@ __all__ = [
     "nonnegative",
     "parse_angle",
     "positive",
+    "read_text",
 ]
 
 
@@ -145,6 +147,34 @@ def as_rng(rng: np.random.Generator | int | None) -> np.random.Generator:
     if rng is not None and (isinstance(rng, bool) or not isinstance(rng, int | np.integer)):
         raise ConfigError(f"rng must be a numpy Generator, an integer seed or None (got {rng!r})")
     return np.random.default_rng(rng)
+
+
+def read_text(
+    path: Path, what: str, error: type[Exception] = DataError, label: str | None = None
+) -> str:
+    """The UTF-8 text of a file, or ``error`` naming it: unreadable, or not UTF-8.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    what : str
+        What the file is (``"Moving AI map"``), for the message.
+    error : type
+        The WheelbaseError subclass to raise.
+    label : str, optional
+        How to name the file in the message (default: its path).
+    """
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        byte = exc.object[exc.start]
+        raise error(
+            f"{label or path}: not UTF-8 text (byte {byte:#04x} at offset {exc.start}); "
+            f"save the {what} as UTF-8"
+        ) from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {label or path}: {exc}") from None
 
 
 def parse_angle(text: str | float, name: str = "angle", default_unit: str = "rad") -> float:

@@ -17,6 +17,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from wheelbase._validate import read_text
 from wheelbase.errors import ScenarioError
 from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
 
@@ -368,13 +369,9 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
     else:
         path = _resolve(source)
         label = path.name
+        text = read_text(path, "scenario", ScenarioError, label)
         try:
-            data = yaml.safe_load(path.read_text(encoding="utf-8"))
-        except UnicodeDecodeError as error:
-            raise ScenarioError(
-                f"{label}: not UTF-8 text (byte {error.object[error.start]:#04x} at offset "
-                f"{error.start}); save the file as UTF-8"
-            ) from None
+            data = yaml.safe_load(text)
         except (ValueError, RecursionError) as error:
             # e.g. an integer of more than 4300 digits, or lists nested thousands deep
             raise ScenarioError(f"{label}: unreadable YAML: {error}") from None

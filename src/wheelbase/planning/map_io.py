@@ -7,6 +7,7 @@ image formats store the top row first and are flipped here. Moving AI ``.map`` f
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path as FilePath
 
@@ -14,8 +15,9 @@ import numpy as np
 import yaml
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import check_choice, finite
-from wheelbase.errors import DataError, MapError
+from wheelbase._validate import check_choice, finite, read_text
+from wheelbase.errors import ConfigError, DataError, MapError
+from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__: list[str] = []
@@ -29,21 +31,27 @@ def _read_image(
     origin: ArrayLike = (0.0, 0.0),
     *,
     threshold: float = 0.5,
+    max_cells: int = MAX_MAP_CELLS,
 ) -> OccupancyGrid:
     """The implementation of :meth:`OccupancyGrid.from_image` (documented there)."""
-    gray = _read_gray(FilePath(path))
+    threshold = finite("threshold", threshold)
+    if not 0.0 <= threshold < 1.0:
+        raise ConfigError(f"threshold must be in [0, 1) (got {threshold:g})")
+    gray = _read_gray(FilePath(path), max_cells)
     darkness = 1.0 - gray / 255.0
     return OccupancyGrid(np.flipud(darkness > threshold), resolution, tuple(np.ravel(origin)[:2]))
 
 
-def _read_ros_yaml(path: str | FilePath, *, unknown_as_occupied: bool = True) -> OccupancyGrid:
+def _read_ros_yaml(
+    path: str | FilePath, *, unknown_as_occupied: bool = True, max_cells: int = MAX_MAP_CELLS
+) -> OccupancyGrid:
     """The implementation of :meth:`OccupancyGrid.from_ros_yaml` (documented there)."""
     path = FilePath(path)
+    text = read_text(path, "map YAML")
     try:
-        meta = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise DataError(f"cannot read map YAML {path}: {exc}") from None
-    except yaml.YAMLError as exc:
+        meta = yaml.safe_load(text)
+    except (yaml.YAMLError, ValueError, RecursionError) as exc:
+        # ValueError: an integer of more than 4300 digits; RecursionError: lists nested deep
         raise MapError(f"{path}: invalid YAML: {exc}") from None
     if not isinstance(meta, dict):
         raise MapError(f"{path}: expected a mapping with image, resolution, origin")
@@ -66,14 +74,29 @@ def _read_ros_yaml(path: str | FilePath, *, unknown_as_occupied: bool = True) ->
     mode = check_choice("mode", str(meta.get("mode", "trinary")), _ROS_MODES)
     occ_t = finite("occupied_thresh", meta.get("occupied_thresh", 0.65), error=MapError)
     free_t = finite("free_thresh", meta.get("free_thresh", 0.196), error=MapError)
-    negate = bool(int(meta.get("negate", 0)))
+    for name, value in (("occupied_thresh", occ_t), ("free_thresh", free_t)):
+        if not 0.0 <= value <= 1.0:
+            raise MapError(f"{path}: {name} must be in [0, 1] (got {value:g})")
+    if free_t > occ_t:
+        raise MapError(
+            f"{path}: free_thresh must be <= occupied_thresh (got {free_t:g} > {occ_t:g})"
+        )
+    negate = meta.get("negate", 0)
+    if negate not in (0, 1):  # YAML's true/false are 1/0 too, as map_server reads them
+        raise MapError(f"{path}: negate must be 0 or 1 (got {negate!r})")
     resolution = finite("resolution", meta["resolution"], "m/cell", error=MapError)
     if resolution <= 0:
         raise MapError(f"{path}: resolution must be > 0 m/cell (got {resolution})")
     origin = meta["origin"]
-    if not isinstance(origin, list | tuple) or len(origin) < 2:
-        raise MapError(f"{path}: origin must be [x, y, yaw] (got {origin!r})")
-    gray = _read_gray(image)
+    try:
+        origin_xy = np.asarray(origin[:2], dtype=np.float64)
+    except (TypeError, ValueError, KeyError):
+        origin_xy = np.zeros(0)
+    if not isinstance(origin, list | tuple) or origin_xy.shape != (2,):
+        raise MapError(f"{path}: origin must be [x, y, yaw] in m, m, rad (got {origin!r})")
+    if not np.all(np.isfinite(origin_xy)):
+        raise MapError(f"{path}: origin must be finite (got {origin!r})")
+    gray = _read_gray(image, max_cells)
     if mode == "raw":
         unknown = gray > 100
         occ = (gray / 100.0 > occ_t) & ~unknown
@@ -83,8 +106,7 @@ def _read_ros_yaml(path: str | FilePath, *, unknown_as_occupied: bool = True) ->
         unknown = ~occ & (p >= free_t) if mode == "trinary" else np.zeros_like(occ)
     if unknown_as_occupied:
         occ = occ | unknown
-    origin_xy = (float(origin[0]), float(origin[1]))
-    return OccupancyGrid(np.flipud(occ), resolution, origin_xy, np.flipud(unknown))
+    return OccupancyGrid(np.flipud(occ), resolution, tuple(origin_xy), np.flipud(unknown))
 
 
 def _write_ros_yaml(
@@ -118,15 +140,34 @@ def _write_ros_yaml(
     return image_path
 
 
-def _read_gray(path: FilePath) -> np.ndarray:
+def _read_gray(path: FilePath, max_cells: int = MAX_MAP_CELLS) -> np.ndarray:
+    """Gray levels 0..255 of an image, its size checked against ``max_cells`` before decoding."""
     from PIL import Image, UnidentifiedImageError
 
+    def too_big(pixels: str) -> MapError:
+        return MapError(
+            f"map image {path} has {pixels} pixels: more than max_cells = {max_cells}; use a "
+            "coarser image or raise max_cells (scenarios: resources.max_map_cells)"
+        )
+
     try:
-        with Image.open(path) as img:
-            if img.mode in ("LA", "RGBA", "PA"):
-                img = img.convert("RGBA").convert("RGB")
-            gray = np.asarray(img.convert("L") if img.mode != "L" else img, dtype=np.float64)
-    except (OSError, UnidentifiedImageError) as exc:
+        with warnings.catch_warnings():
+            # PIL warns above 8.9e7 pixels and refuses twice that: the size is checked here
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as img:
+                width, height = img.size
+                if width * height > max_cells:
+                    raise too_big(f"{width} × {height} = {width * height:.3g}")
+                if img.mode in ("LA", "RGBA", "PA"):
+                    img = img.convert("RGBA").convert("RGB")
+                gray = np.asarray(img.convert("L") if img.mode != "L" else img, dtype=np.float64)
+    except MapError:
+        raise
+    except Image.DecompressionBombError as exc:
+        # PIL refuses before the size can be read here; its message has it
+        found = re.search(r"\((\d+) pixels\)", str(exc))
+        raise too_big(f"{int(found[1]):.3g}" if found else "too many") from None
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError, EOFError) as exc:
         raise DataError(f"cannot read map image {path}: {exc}") from None
     if gray.ndim != 2 or gray.size == 0:
         raise MapError(f"map image {path} is empty")

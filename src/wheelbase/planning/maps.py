@@ -15,7 +15,8 @@ from pathlib import Path as FilePath
 import numpy as np
 import yaml
 
-from wheelbase._validate import check_choice
+from wheelbase._validate import check_choice, integer
+from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["BUNDLED_MAPS", "IMAGE_RESOLUTION", "PlanningScenario", "bundled_scenarios", "load_map"]
@@ -30,7 +31,7 @@ def _data_dir() -> FilePath:
     return FilePath(str(resources.files("wheelbase") / "data" / "maps"))
 
 
-def load_map(name_or_path: str | FilePath) -> OccupancyGrid:
+def load_map(name_or_path: str | FilePath, *, max_cells: int = MAX_MAP_CELLS) -> OccupancyGrid:
     """Load a bundled map by name, or any ROS ``.yaml`` / Moving AI ``.map`` file by path.
 
     Parameters
@@ -39,6 +40,9 @@ def load_map(name_or_path: str | FilePath) -> OccupancyGrid:
         One of :data:`BUNDLED_MAPS`, or a file path (``.yaml``/``.yml``: ROS map_server;
         ``.map``: Moving AI at 1 m/cell; an image: dark pixels occupied, at
         :data:`IMAGE_RESOLUTION` m/pixel with its lower-left corner at the origin).
+    max_cells : int
+        Most cells (pixels) a map file may have, checked before it is decoded (default
+        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
 
     Returns
     -------
@@ -51,12 +55,13 @@ def load_map(name_or_path: str | FilePath) -> OccupancyGrid:
     """
     text = str(name_or_path)
     path = FilePath(text)
+    max_cells = integer("max_cells", max_cells, minimum=1)
     if path.suffix.lower() in (".yaml", ".yml"):
-        return OccupancyGrid.from_ros_yaml(path)
+        return OccupancyGrid.from_ros_yaml(path, max_cells=max_cells)
     if path.suffix.lower() == ".map":
-        return OccupancyGrid.from_movingai(path)
+        return OccupancyGrid.from_movingai(path, max_cells=max_cells)
     if path.suffix.lower() in _IMAGE_SUFFIXES:
-        return OccupancyGrid.from_image(path, IMAGE_RESOLUTION)
+        return OccupancyGrid.from_image(path, IMAGE_RESOLUTION, max_cells=max_cells)
     check_choice("map", text, BUNDLED_MAPS)
     return OccupancyGrid.from_ros_yaml(_data_dir() / f"{text}.yaml")
 

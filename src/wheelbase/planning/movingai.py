@@ -9,7 +9,9 @@ from pathlib import Path as FilePath
 import numpy as np
 from numpy.typing import ArrayLike
 
+from wheelbase._validate import read_text
 from wheelbase.errors import DataError, MapError
+from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["MovingAIScenario", "read_movingai_scenarios"]
@@ -18,14 +20,14 @@ _MOVINGAI_PASSABLE = frozenset(".GS")
 
 
 def _read_movingai_map(
-    path: str | FilePath, resolution: float = 1.0, origin: ArrayLike = (0.0, 0.0)
+    path: str | FilePath,
+    resolution: float = 1.0,
+    origin: ArrayLike = (0.0, 0.0),
+    max_cells: int = MAX_MAP_CELLS,
 ) -> OccupancyGrid:
     """The implementation of :meth:`OccupancyGrid.from_movingai` (documented there)."""
     path = FilePath(path)
-    try:
-        lines = path.read_text().splitlines()
-    except OSError as exc:
-        raise DataError(f"cannot read Moving AI map {path}: {exc}") from None
+    lines = read_text(path, "Moving AI map").splitlines()
     header: dict[str, str] = {}
     row0 = None
     for i, line in enumerate(lines):
@@ -37,13 +39,24 @@ def _read_movingai_map(
             header[parts[0]] = parts[1]
     if row0 is None or "height" not in header or "width" not in header:
         raise MapError(f"{path}: not a Moving AI map (needs height, width and map lines)")
-    height, width = int(header["height"]), int(header["width"])
+    height, width = (_dimension(path, name, header[name]) for name in ("height", "width"))
+    if height * width > max_cells:
+        raise MapError(
+            f"{path}: {height} × {width} = {height * width:.3g} cells: more than max_cells = "
+            f"{max_cells}; raise max_cells (scenarios: resources.max_map_cells) if you mean it"
+        )
     rows = lines[row0 : row0 + height]
     if len(rows) < height or any(len(r) < width for r in rows):
         raise MapError(f"{path}: expected {height} rows of {width} characters")
     chars = np.array([list(r[:width]) for r in rows])
     blocked = ~np.isin(chars, list(_MOVINGAI_PASSABLE))
     return OccupancyGrid(np.flipud(blocked), resolution, tuple(np.ravel(origin)[:2]))
+
+
+def _dimension(path: FilePath, name: str, text: str) -> int:
+    if not (text.isascii() and text.isdigit() and len(text) <= 18) or int(text) < 1:
+        raise MapError(f"{path}: {name} must be an integer >= 1 [cells] (got {text!r})")
+    return int(text)
 
 
 @dataclass(frozen=True)
@@ -98,10 +111,7 @@ def read_movingai_scenarios(path: str | FilePath) -> list[MovingAIScenario]:
     list of MovingAIScenario
     """
     path = FilePath(path)
-    try:
-        lines = path.read_text().splitlines()
-    except OSError as exc:
-        raise DataError(f"cannot read scenario file {path}: {exc}") from None
+    lines = read_text(FilePath(path), "scenario file").splitlines()
     out = []
     for line in lines[1:]:
         parts = line.split()

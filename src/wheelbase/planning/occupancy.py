@@ -31,8 +31,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 
-from wheelbase._validate import as_float_array, nonnegative, positive
+from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.errors import InputError, MapError
+from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.collision import _clearance_batch, _collides_batch
 
 if TYPE_CHECKING:
@@ -111,12 +112,13 @@ class OccupancyGrid:
         origin : array_like
             ``(x0, y0)`` [m] of the lower-left corner of cell (0, 0).
         occupied_thresh : float
-            Threshold for numeric arrays.
+            Threshold for numeric arrays, finite (NaN would make every cell free).
 
         Returns
         -------
         OccupancyGrid
         """
+        occupied_thresh = finite("occupied_thresh", occupied_thresh)
         array = np.asarray(occupied)
         if array.dtype == bool:
             return cls(array, resolution, tuple(np.ravel(origin)[:2]))
@@ -136,6 +138,7 @@ class OccupancyGrid:
         origin: ArrayLike = (0.0, 0.0),
         *,
         threshold: float = 0.5,
+        max_cells: int = MAX_MAP_CELLS,
     ) -> OccupancyGrid:
         """Load a plain image (PNG, PGM, BMP…): dark pixels are occupied.
 
@@ -148,7 +151,12 @@ class OccupancyGrid:
         origin : array_like
             ``(x0, y0)`` [m] of the lower-left corner of the image.
         threshold : float
-            A pixel is occupied when its darkness ``1 − gray/255`` exceeds this value.
+            A pixel is occupied when its darkness ``1 − gray/255`` exceeds this value, in
+            [0, 1).
+        max_cells : int
+            Most pixels accepted, checked before decoding (default
+            :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8); PIL itself refuses more than
+            ``2 × PIL.Image.MAX_IMAGE_PIXELS`` (1.8e8).
 
         Returns
         -------
@@ -156,11 +164,15 @@ class OccupancyGrid:
         """
         from wheelbase.planning.map_io import _read_image
 
-        return _read_image(path, resolution, origin, threshold=threshold)
+        return _read_image(path, resolution, origin, threshold=threshold, max_cells=max_cells)
 
     @classmethod
     def from_ros_yaml(
-        cls, path: str | FilePath, *, unknown_as_occupied: bool = True
+        cls,
+        path: str | FilePath,
+        *,
+        unknown_as_occupied: bool = True,
+        max_cells: int = MAX_MAP_CELLS,
     ) -> OccupancyGrid:
         """Load a ROS ``map_server`` map: a YAML file naming a PGM/PNG image.
 
@@ -177,6 +189,8 @@ class OccupancyGrid:
             The YAML file.
         unknown_as_occupied : bool
             Treat unknown cells as occupied (default) or as free.
+        max_cells : int
+            Most pixels accepted (see :meth:`from_image`).
 
         Returns
         -------
@@ -191,11 +205,16 @@ class OccupancyGrid:
         """
         from wheelbase.planning.map_io import _read_ros_yaml
 
-        return _read_ros_yaml(path, unknown_as_occupied=unknown_as_occupied)
+        return _read_ros_yaml(path, unknown_as_occupied=unknown_as_occupied, max_cells=max_cells)
 
     @classmethod
     def from_movingai(
-        cls, path: str | FilePath, resolution: float = 1.0, origin: ArrayLike = (0.0, 0.0)
+        cls,
+        path: str | FilePath,
+        resolution: float = 1.0,
+        origin: ArrayLike = (0.0, 0.0),
+        *,
+        max_cells: int = MAX_MAP_CELLS,
     ) -> OccupancyGrid:
         """Load a Moving AI benchmark ``.map`` file (Sturtevant 2012).
 
@@ -212,6 +231,9 @@ class OccupancyGrid:
             Cell side [m/cell].
         origin : array_like
             ``(x0, y0)`` [m] of the lower-left corner.
+        max_cells : int
+            Most cells accepted, checked from the header before the rows are read (default
+            :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
 
         Returns
         -------
@@ -219,7 +241,7 @@ class OccupancyGrid:
         """
         from wheelbase.planning.movingai import _read_movingai_map
 
-        return _read_movingai_map(path, resolution, origin)
+        return _read_movingai_map(path, resolution, origin, max_cells)
 
     # ------------------------------------------------------------------ writer
     def to_ros_yaml(self, path: str | FilePath, *, image: str | None = None) -> FilePath:
