@@ -10,7 +10,7 @@ Prints one JSON object:
 - ``tracking``: one row per (reference, law, plant) with the RMS and max lateral error after 5 s;
 - ``tracking_runtime_s``;
 - ``rm100``: the pose benchmark and the figure-eight trackers on the dynamic RM100 of document 000
-  through a computed-torque velocity loop (``wheelbase.control.loop.dynamic_benchmark``), and
+  through a computed-torque velocity loop (``control_cases.dynamic_benchmark``), and
   ``rm100_runtime_s``.
 
 Usage: ``python benchmarks/control.py [--quick] [--repeat N]`` (``--quick``: pose benchmark on
@@ -23,7 +23,7 @@ import argparse
 import json
 import time
 
-from wheelbase.control.loop import (
+from control_cases import (  # benchmarks/ is on sys.path when a script in it runs
     dynamic_benchmark,
     pose_benchmark,
     pose_benchmark_starts,

@@ -46,6 +46,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from control_cases import figure_eight_reference, three_point_turn_path
 from wheelbase.control import (
     MPPI,
     Polyline,
@@ -53,11 +54,10 @@ from wheelbase.control import (
     RearWheelFeedback,
     SteeringLimits,
     VelocityLimits,
-    run_closed_loop,
 )
-from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.models import RearWheelBicycle, Unicycle
 from wheelbase.planning import Footprint, load_map
+from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
 ROBOT = Footprint.rectangle(0.4, 0.4)
@@ -162,8 +162,8 @@ def gpu(grid, calls: int) -> dict:
 
 
 def errors(result, path) -> dict:
-    distance = path.distance(result.poses[:, 0, :2])[result.t >= 5.0]
-    end = np.hypot(*(result.poses[-1, 0, :2] - path.points[-1]))
+    distance = path.distance(result.true_pose[0, :, :2])[result.t >= 5.0]
+    end = np.hypot(*(result.true_pose[0, -1, :2] - path.points[-1]))
     return {
         "rms_lateral_error_m": float(np.sqrt(np.mean(distance**2))),
         "max_lateral_error_m": float(np.max(distance)),
@@ -202,13 +202,13 @@ def tracking() -> list[dict]:
             }  # fmt: skip
             for law_name, law in laws.items():
                 begin = time.perf_counter()
-                result = run_closed_loop(law, model, start, path, t_end, 0.05)
+                result = closed_loop(law, model, start, path, t_end, 0.05)
                 rows.append(
                     {"reference": reference, "plant": plant, "law": law_name}
                     | errors(result, path)
                     | {
-                        "reversals": int(result.reversals[0]),
-                        "path_length_driven_m": float(result.path_length[0]),
+                        "reversals": int(result.metrics()[0]["reversals"]),
+                        "path_length_driven_m": float(result.metrics()[0]["distance_travelled_m"]),
                         "reference_length_m": path.length,
                         "runtime_s": time.perf_counter() - begin,
                     }
@@ -218,15 +218,15 @@ def tracking() -> list[dict]:
 
 def clearance(grid, seeds: int) -> dict:
     start = np.array([1.0, 4.0, 0.0])
-    pp = run_closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
+    pp = closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
                          26.0, 0.1)  # fmt: skip
-    pp_clear = grid.footprint_clearance(ROBOT, pp.poses[:, 0])
+    pp_clear = grid.footprint_clearance(ROBOT, pp.true_pose[0])
     minima, successes, times = [], 0, []
     for seed in range(seeds):
         mppi = MPPI(Unicycle(), 30, 0.1, 400, (0.2, 0.5), 0.03, None, LIMITS, seed=seed,
                     backend="numba", grid=grid, footprint=ROBOT)  # fmt: skip
-        result = run_closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
-        poses = result.poses[:, 0]
+        result = closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
+        poses = result.true_pose[0]
         low = float(grid.footprint_clearance(ROBOT, poses).min())
         reached = np.hypot(*(poses[-1, :2] - STRAIGHT.points[-1])) < 0.2
         arrive = np.flatnonzero(np.hypot(*(poses[:, :2] - STRAIGHT.points[-1]).T) < 0.2)
@@ -235,7 +235,7 @@ def clearance(grid, seeds: int) -> dict:
         successes += int(low >= 0.1 and reached and not grid.in_collision(ROBOT, poses).any())
     return {
         "stated_clearance_m": 0.1,
-        "pure_pursuit_collides": bool(grid.in_collision(ROBOT, pp.poses[:, 0]).any()),
+        "pure_pursuit_collides": bool(grid.in_collision(ROBOT, pp.true_pose[0]).any()),
         "pure_pursuit_min_clearance_m": float(pp_clear.min()),
         "mppi_seeds": seeds,
         "mppi_success_rate": successes / seeds,

@@ -15,10 +15,31 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
-from wheelbase.commands.control import plot_fan
-from wheelbase.control.loop import POSE_LAWS, pose_benchmark
+from wheelbase.control import POSE_LAWS
+from wheelbase.sim import Log, status_code
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from control_cases import pose_benchmark
+
+
+def plot_fan(log: Log, title: str, ax) -> None:
+    """Every robot's path on one plot: arrived in blue, the others in red."""
+    ok = log.status == status_code("arrived")
+    for i in range(log.n_robots):
+        xy = log.true_pose[i, : log.length[i], :2]
+        ax.plot(xy[:, 0], xy[:, 1], lw=0.7, color="tab:blue" if ok[i] else "tab:red", alpha=0.7)
+    starts = log.true_pose[:, 0]
+    ax.quiver(starts[:, 0], starts[:, 1], np.cos(starts[:, 2]), np.sin(starts[:, 2]),
+              scale=25, width=0.003, color="0.3")  # fmt: skip
+    ax.plot(0.0, 0.0, "k*", ms=12, zorder=5)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{title} — {int(ok.sum())}/{ok.size} reached")
+    ax.grid(True, alpha=0.3)
 
 
 def main(out: Path) -> None:

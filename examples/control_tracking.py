@@ -20,11 +20,34 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from wheelbase.commands.control import plot_tracking_errors
 from wheelbase.control import SteeringLimits
-from wheelbase.control.loop import run_closed_loop, three_point_turn_path, tracking_benchmark
 from wheelbase.control.path import PurePursuit, RearWheelFeedback, SegmentFollower, Stanley
 from wheelbase.models import RearWheelBicycle
+from wheelbase.sim import closed_loop
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from control_cases import three_point_turn_path, tracking_benchmark
+
+
+def plot_tracking_errors(traces: dict) -> Figure:
+    """Lateral error against time [cm] for every (reference, law, plant) of the tracking run."""
+    references = sorted({key[0] for key in traces})
+    fig = Figure(figsize=(10.0, 4.0 * len(references)), layout="constrained")
+    for row, reference in enumerate(references, start=1):
+        ax = fig.add_subplot(len(references), 1, row)
+        for (ref, law, plant), (t, lateral) in traces.items():
+            if ref == reference:
+                ax.plot(t, 100.0 * np.abs(lateral), lw=1, label=f"{law} ({plant})",
+                        ls="-" if plant == "unicycle" else "--")  # fmt: skip
+        ax.set_yscale("log")
+        ax.set_ylim(1e-3, 100)
+        ax.axvline(5.0, color="0.5", lw=0.8)
+        ax.set_title(reference.replace("_", " "))
+        ax.set_ylabel("|lateral error| [cm]")
+        ax.set_xlabel("t [s]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, ncol=2)
+    return fig
 
 
 def main(out: Path) -> None:
@@ -43,8 +66,8 @@ def main(out: Path) -> None:
                 color="0.7" if forward[index] else "salmon", lw=6)  # fmt: skip
     for cls in (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback):
         law = cls(speed=0.3, output="steering", wheel_base=0.5, limits=limits)
-        result = run_closed_loop(law, car, np.array([0.0, 0.05, 0.0]), path, 40.0, 0.01)
-        ax.plot(result.poses[:, 0, 0], result.poses[:, 0, 1], lw=1.2, label=cls.__name__)
+        result = closed_loop(law, car, np.array([0.0, 0.05, 0.0]), path, 40.0, 0.01)
+        ax.plot(result.true_pose[0, :, 0], result.true_pose[0, :, 1], lw=1.2, label=cls.__name__)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")

@@ -20,9 +20,10 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from wheelbase.control import MPPI, Polyline, PurePursuit, VelocityLimits, run_closed_loop
+from wheelbase.control import MPPI, Polyline, PurePursuit, VelocityLimits
 from wheelbase.models import Unicycle
 from wheelbase.planning import Footprint, load_map
+from wheelbase.sim import closed_loop
 
 
 def main(out: Path) -> None:
@@ -38,9 +39,9 @@ def main(out: Path) -> None:
     ax.imshow(grid.occupied, origin="lower", extent=grid.extent, cmap="Greys", alpha=0.8)
     ax.plot(*path.points.T, "k--", lw=1, label="reference path")
 
-    pursuit = run_closed_loop(PurePursuit(speed=0.4, limits=limits), Unicycle(), start, path,
+    pursuit = closed_loop(PurePursuit(speed=0.4, limits=limits), Unicycle(), start, path,
                               26.0, 0.1)  # fmt: skip
-    poses = pursuit.poses[:, 0]
+    poses = pursuit.true_pose[0]
     hits = grid.in_collision(robot, poses)
     ax.plot(poses[:, 0], poses[:, 1], color="tab:red", lw=1.5, label="pure pursuit")
     for pose in poses[hits][::8]:
@@ -69,8 +70,8 @@ def main(out: Path) -> None:
                 for rollout in fan:
                     ax.plot(rollout[:, 0], rollout[:, 1], color="tab:blue", lw=0.3, alpha=0.5)
             mppi.reset()
-        result = run_closed_loop(mppi, Unicycle(), start, path, 30.0, 0.1)
-        poses = result.poses[:, 0]
+        result = closed_loop(mppi, Unicycle(), start, path, 30.0, 0.1)
+        poses = result.true_pose[0]
         label = "MPPI (5 seeds)" if seed == 0 else None
         ax.plot(poses[:, 0], poses[:, 1], color="tab:green", lw=1.2, label=label)
         clearances[f"mppi_seed_{seed}"] = float(grid.footprint_clearance(robot, poses).min())

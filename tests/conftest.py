@@ -6,7 +6,13 @@ counterexamples, run ``pytest --hypothesis-profile=explore`` (random, 10× the e
 what it finds as ``@example``.
 """
 
+import sys
+from pathlib import Path
+
 from hypothesis import settings
+
+# The benchmark harness (reference paths, the pose benchmark) is not the library; tests use it.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 settings.register_profile("default", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False, max_examples=1000)

@@ -7,7 +7,6 @@ from hypothesis import strategies as st
 
 from wheelbase import ConfigError, InputError, Unicycle
 from wheelbase.control import SteeringLimits, VelocityLimits
-from wheelbase.control.loop import run_closed_loop
 from wheelbase.control.path import (
     Polyline,
     PurePursuit,
@@ -17,6 +16,7 @@ from wheelbase.control.path import (
 )
 from wheelbase.geometry import wrap_angle
 from wheelbase.models import RearWheelBicycle
+from wheelbase.sim import closed_loop
 
 LAWS = (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback)
 LIMITS = VelocityLimits(0.5, 1.5)
@@ -68,19 +68,19 @@ def test_polyline_bad_input():
 def test_straight_line_offset_decays(law):
     path = Polyline([[0.0, 0.0], [8.0, 0.0]])
     controller = law(speed=0.4, wheel_base=0.2, limits=LIMITS)
-    result = run_closed_loop(controller, Unicycle(), [0.0, 0.3, 0.3], path, 28.0, 0.01)
-    y = np.abs(result.poses[:, 0, 1])
+    result = closed_loop(controller, Unicycle(), [0.0, 0.3, 0.3], path, 28.0, 0.01)
+    y = np.abs(result.true_pose[0, :, 1])
     assert y[result.t >= 10.0].max() < 2e-3
     # it stops at the end of the path
-    assert result.poses[-1, 0, 0] == pytest.approx(8.0, abs=0.02)
-    assert np.all(result.commands[-50:, 0] == 0.0)
+    assert result.true_pose[0, -1, 0] == pytest.approx(8.0, abs=0.02)
+    assert np.all(result.command[0, -50:] == 0.0)
 
 
 @pytest.mark.parametrize("law", [PurePursuit, RearWheelFeedback])
 def test_circle_is_followed_closely(law):
     path = Polyline(circle(1.0, 300, turns=0.9))
-    result = run_closed_loop(law(speed=0.3, limits=LIMITS), Unicycle(), [0, 0, 0], path, 25, 0.01)
-    error = path.distance(result.poses[:, 0, :2])
+    result = closed_loop(law(speed=0.3, limits=LIMITS), Unicycle(), [0, 0, 0], path, 25, 0.01)
+    error = path.distance(result.true_pose[0, :, :2])
     assert error.max() < 0.01
 
 
@@ -89,8 +89,8 @@ def test_segment_follower_steady_offset_on_a_circle_is_the_closed_form():
     # it gets from the offset atan(K_r·d/ℓ) = e: d = ℓ·tan(v/(R·K_φ))/K_r (outside the circle)
     path = Polyline(circle(1.0, 600, turns=0.9))
     law = SegmentFollower(speed=0.3, k_r=1.0, k_heading=4.0, length_scale=0.25, limits=LIMITS)
-    result = run_closed_loop(law, Unicycle(), [0, 0, 0], path, 12, 0.01)
-    late = result.poses[result.t > 8, 0, :2]
+    result = closed_loop(law, Unicycle(), [0, 0, 0], path, 12, 0.01)
+    late = result.true_pose[0, result.t > 8, :2]
     offset = np.hypot(late[:, 0], late[:, 1] - 1.0) - 1.0
     np.testing.assert_allclose(offset, 0.25 * math.tan(0.3 / 4.0), atol=1e-3)
 
@@ -101,8 +101,8 @@ def test_stanley_rear_axle_offtracking_matches_the_closed_form():
     radius, base = 1.0, 0.3
     path = Polyline(circle(radius, 400, turns=0.95))
     law = Stanley(speed=0.3, wheel_base=base, k=3.0, limits=LIMITS)
-    result = run_closed_loop(law, Unicycle(), [0, 0, 0], path, 16, 0.01)
-    late = result.poses[(result.t > 8) & (result.t < 16), 0, :2]
+    result = closed_loop(law, Unicycle(), [0, 0, 0], path, 16, 0.01)
+    late = result.true_pose[0, (result.t > 8) & (result.t < 16), :2]
     rear_radius = np.hypot(late[:, 0], late[:, 1] - radius)
     np.testing.assert_allclose(rear_radius, math.sqrt(radius**2 - base**2), atol=2e-3)
 
@@ -117,15 +117,15 @@ def test_cusp_path_with_reverse_section(law, plant):
         model = RearWheelBicycle(wheel_base=0.5, max_steering=math.radians(35))
         limits = SteeringLimits(math.radians(35), max_steering_rate=3.0)
         controller = law(speed=0.3, output="steering", wheel_base=0.5, limits=limits)
-    result = run_closed_loop(controller, model, [0.0, 0.05, 0.0], path, 40.0, 0.01)
-    assert result.reversals[0] == 2
-    end = result.poses[-1, 0]
+    result = closed_loop(controller, model, [0.0, 0.05, 0.0], path, 40.0, 0.01)
+    assert result.metrics()[0]["reversals"] == 2
+    end = result.true_pose[0, -1]
     assert np.hypot(end[0] - 1.0, end[1]) < 0.03
     assert abs(abs(end[2]) - math.pi) < 0.1
-    error = path.distance(result.poses[result.t >= 5, 0, :2])
+    error = path.distance(result.true_pose[0, result.t >= 5, :2])
     assert error.max() < (0.1 if law is Stanley else 0.02)  # Stanley: rear-axle offtracking
     if plant == "bicycle":
-        assert np.all(np.abs(result.commands[..., 1]) <= math.radians(35) + 1e-12)
+        assert np.all(np.abs(result.command[..., 1]) <= math.radians(35) + 1e-12)
 
 
 @given(
@@ -176,9 +176,9 @@ def test_planned_path_with_per_sample_directions_is_accepted():
     except TypeError:  # the planner's Path may need more fields: an equivalent stand-in
         planned = type("P", (), {"poses": poses, "directions": per_sample})()
     law = PurePursuit(speed=0.3, limits=LIMITS)
-    result = run_closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)
-    assert result.reversals[0] == 2
-    assert np.hypot(*(result.poses[-1, 0, :2] - [1.0, 0.0])) < 0.03
+    result = closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)
+    assert result.metrics()[0]["reversals"] == 2
+    assert np.hypot(*(result.true_pose[0, -1, :2] - [1.0, 0.0])) < 0.03
 
 
 @pytest.mark.parametrize("law", [PurePursuit, Stanley, RearWheelFeedback])
@@ -188,11 +188,11 @@ def test_velocity_followers_turn_in_place_to_a_planned_final_heading(law):
         poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, math.pi]])
 
     follower = law(speed=0.3, limits=VelocityLimits(max_speed=0.5, max_yaw_rate=1.5))
-    result = run_closed_loop(follower, Unicycle(), (0.0, 0.0, 0.0), Planned(), 12.0, 0.02)
-    final = result.poses[-1, 0]
+    result = closed_loop(follower, Unicycle(), (0.0, 0.0, 0.0), Planned(), 12.0, 0.02)
+    final = result.true_pose[0, -1]
     assert np.hypot(final[0] - 1.0, final[1]) < 0.02
     assert abs(wrap_angle(final[2] - math.pi)) < 0.01
     # without the poses (a bare polyline) it stops facing the way it came
     plain = law(speed=0.3, limits=VelocityLimits(max_speed=0.5, max_yaw_rate=1.5))
-    result = run_closed_loop(plain, Unicycle(), (0.0, 0.0, 0.0), Planned.poses[:, :2], 12.0, 0.02)
-    assert abs(wrap_angle(result.poses[-1, 0, 2])) < 0.05
+    result = closed_loop(plain, Unicycle(), (0.0, 0.0, 0.0), Planned.poses[:, :2], 12.0, 0.02)
+    assert abs(wrap_angle(result.true_pose[0, -1, 2])) < 0.05

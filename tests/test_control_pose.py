@@ -6,12 +6,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from control_cases import evaluate_pose_law, pose_benchmark_starts
 from wheelbase import ConfigError, DiffDrive, InputError, Unicycle
 from wheelbase.control import VelocityLimits, saturate_velocity
-from wheelbase.control.loop import evaluate_pose_law, pose_benchmark_starts, run_closed_loop
 from wheelbase.control.point import GoToPoint
 from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
 from wheelbase.geometry import compose
+from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
 STARTS = pose_benchmark_starts()
@@ -40,7 +41,7 @@ def test_laws_2_to_6_reach_every_pose_of_the_benchmark(name):
     # a path from a circle of 2 m is at least 2 m long
     assert metrics["mean_path_length_m"] >= 2.0
     # every command respected the limits
-    commands = result.commands
+    commands = result.command
     assert np.all(np.abs(commands[..., 0]) <= 0.5 + 1e-9)
     assert np.all(np.abs(commands[..., 1]) <= 1.5 + 1e-9)
 
@@ -81,15 +82,15 @@ def test_polar_law_closed_form():
 
 def test_polar_law_reverses_for_the_whole_episode_when_the_goal_is_behind():
     start = np.array([[2.0, 0.0, 0.0], [-2.0, 0.5, 0.0]])  # goal behind / ahead
-    result = run_closed_loop(
+    result = closed_loop(
         PolarPose(limits=LIMITS), Unicycle(), start, [0, 0, 0], 30.0, 0.01,
-        goal_tolerance=(0.01, math.radians(1)),
+        goal=[0, 0, 0], tolerance=(0.01, math.radians(1)),
     )  # fmt: skip
-    assert result.arrived.all()
-    moving = np.abs(result.commands[:-1, :, 0]) > 1e-6
-    assert np.all(result.commands[:-1, 0, 0][moving[:, 0]] < 0)
-    assert np.all(result.commands[:-1, 1, 0][moving[:, 1]] > 0)
-    assert np.all(result.reversals == 0)
+    assert result.statuses == ["arrived", "arrived"]
+    moving = np.abs(result.command[:, :-1, 0]) > 1e-6
+    assert np.all(result.command[0, :-1, 0][moving[0]] < 0)
+    assert np.all(result.command[1, :-1, 0][moving[1]] > 0)
+    assert [row["reversals"] for row in result.metrics()] == [0, 0]
 
 
 def test_polar_gains_stability_conditions():
@@ -128,8 +129,8 @@ def test_bidirectional_go_to_point_backs_up_to_a_goal_behind():
 
 def test_aicardi_lyapunov_function_never_increases():
     law = Aicardi(gamma=1.0, k=3.0, h=1.0, limits=LIMITS)
-    result = run_closed_loop(law, Unicycle(), STARTS[::5], [0, 0, 0], 20.0, 0.001)
-    x, y, theta = np.moveaxis(result.poses, -1, 0)
+    result = closed_loop(law, Unicycle(), STARTS[::5], [0, 0, 0], 20.0, 0.001)
+    x, y, theta = np.moveaxis(np.swapaxes(result.true_pose, 0, 1), -1, 0)  # (T, N) each
     psi = np.arctan2(-y, -x)
     alpha = np.angle(np.exp(1j * (psi - theta)))
     lyapunov = 0.5 * (x**2 + y**2 + alpha**2 + psi**2)
@@ -189,22 +190,23 @@ def test_line_arc_plan_is_tangent_and_follows_the_circle():
 
 def test_via_point_passes_near_its_intermediate_point():
     law = ViaPoint(distance=0.4, switch_distance=0.05, limits=LIMITS)
-    result = run_closed_loop(
-        law, Unicycle(), STARTS[::9], [0, 0, 0], 60.0, 0.01, goal_tolerance=(0.01, 0.0175)
-    )
-    gap = np.hypot(result.poses[..., 0] + 0.4, result.poses[..., 1]).min(axis=0)
+    result = closed_loop(
+        law, Unicycle(), STARTS[::9], [0, 0, 0], 60.0, 0.01, goal=[0, 0, 0],
+        tolerance=(0.01, 0.0175),
+    )  # fmt: skip
+    gap = np.hypot(result.true_pose[..., 0] + 0.4, result.true_pose[..., 1]).min(axis=1)
     assert np.all(gap < 0.05)
 
 
 def test_differential_drive_plant_with_wheel_speed_limits():
     robot = DiffDrive(wheel_radius=0.05, half_track=0.2)
     limits = VelocityLimits(max_speed=0.5, max_wheel_speed=12.0, wheel_radius=0.05, half_track=0.2)
-    result = run_closed_loop(
+    result = closed_loop(
         ViaDirection(limits=limits), robot, STARTS[::7], [0, 0, 0], 60.0, 0.01,
-        goal_tolerance=(0.01, math.radians(1)),
+        goal=[0, 0, 0], tolerance=(0.01, math.radians(1)),
     )  # fmt: skip
-    assert result.arrived.all()
-    v, omega = result.commands[..., 0], result.commands[..., 1]
+    assert set(result.statuses) == {"arrived"}
+    v, omega = result.command[..., 0], result.command[..., 1]
     wheels = np.maximum(np.abs(v - 0.2 * omega), np.abs(v + 0.2 * omega)) / 0.05
     assert wheels.max() <= 12.0 + 1e-9
-    np.testing.assert_allclose(saturate_velocity(result.commands, limits), result.commands)
+    np.testing.assert_allclose(saturate_velocity(result.command, limits), result.command)

@@ -7,7 +7,6 @@ from hypothesis import strategies as st
 
 from wheelbase import ConfigError, InputError, Unicycle
 from wheelbase.control import VelocityLimits
-from wheelbase.control.loop import run_closed_loop
 from wheelbase.control.tracking import (
     Kanayama,
     LinearTracker,
@@ -15,6 +14,7 @@ from wheelbase.control.tracking import (
     tracking_errors,
 )
 from wheelbase.models import reference_from_derivatives
+from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(0.5, 1.5)
 
@@ -57,8 +57,8 @@ def test_linear_tracker_poles(v_r, omega_r, zeta, g):
 @pytest.mark.parametrize("law", [LinearTracker(limits=LIMITS), Kanayama(limits=LIMITS)])
 def test_figure_eight_is_tracked_to_the_millimetre(law):
     reference = figure_eight()
-    result = run_closed_loop(law, Unicycle(), [1.1, 0.8, 0.0], reference, 30.0, 0.01)
-    errors = tracking_errors(result.poses[:, 0], reference.poses)
+    result = closed_loop(law, Unicycle(), [1.1, 0.8, 0.0], reference, 30.0, 0.01)
+    errors = tracking_errors(result.true_pose[0], reference.poses)
     late = result.t >= 5.0
     assert np.abs(errors[late, 1]).max() < 1e-3
     assert np.hypot(errors[late, 0], errors[late, 1]).max() < 2e-3

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from control_cases import figure_eight_reference, three_point_turn_path
 from wheelbase.control import (
     MPPI,
     MPPICritics,
@@ -23,9 +24,7 @@ from wheelbase.control import (
     PurePursuit,
     SteeringLimits,
     VelocityLimits,
-    run_closed_loop,
 )
-from wheelbase.control.loop import figure_eight_reference, three_point_turn_path
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.models import (
     Bicycle,
@@ -36,6 +35,7 @@ from wheelbase.models import (
     mecanum4,
 )
 from wheelbase.planning import Footprint, OccupancyGrid, load_map
+from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
 STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])  # the cluttered map's reference path
@@ -331,13 +331,13 @@ def test_holonomic_bases_follow_the_path_and_use_their_lateral_speed():
         mppi = MPPI(base, 30, 0.05, 300, (0.2, 0.2, 0.4), 0.03, critics, LIMITS,
                     backend="numba", goal_tolerance=(0.05, 3.2))  # fmt: skip
         assert mppi.command_names == ("vx", "vy", "omega")
-        result = run_closed_loop(mppi, base, (0.0, 0.0, math.pi / 2), path, 20.0, 0.05)
+        result = closed_loop(mppi, base, (0.0, 0.0, math.pi / 2), path, 20.0, 0.05)
         assert mppi.status == "arrived"
-        assert np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])) <= 0.05
-        assert path.distance(result.poses[:, 0, :2]).max() < 0.05
+        assert np.hypot(*(result.true_pose[0, -1, :2] - path.points[-1])) <= 0.05
+        assert path.distance(result.true_pose[0, :, :2]).max() < 0.05
         # the speed limit holds in every direction (no √2 on the diagonal)
-        assert np.hypot(*result.commands[:, 0, :2].T).max() <= 0.5 + 1e-12
-        commands = np.abs(result.commands[:, 0])
+        assert np.hypot(*result.command[0, :, :2].T).max() <= 0.5 + 1e-12
+        commands = np.abs(result.command[0])
         lateral[critics is None] = commands[:, 1].mean() / commands[:, 0].mean()
     assert lateral[False] > 1.0 > lateral[True]
 
@@ -365,7 +365,7 @@ def test_jax_backend_missing_names_the_extra(monkeypatch):
 
 # --------------------------------------------------------------------------- closed loop
 def lateral_errors(result, path, after=5.0):
-    error = path.distance(result.poses[:, 0, :2])[result.t >= after]
+    error = path.distance(result.true_pose[0, :, :2])[result.t >= after]
     return float(np.sqrt(np.mean(error**2))), float(np.max(error))
 
 
@@ -373,30 +373,30 @@ def test_figure_eight_tracking_beside_pure_pursuit():
     eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
     start = np.array([1.1, 0.8, 0.0])
     pursuit = PurePursuit(speed=eight.length / 30.0, limits=LIMITS)
-    pp = run_closed_loop(pursuit, Unicycle(), start, eight, 30.0, 0.05)
+    pp = closed_loop(pursuit, Unicycle(), start, eight, 30.0, 0.05)
     mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.5), 0.03, None,
                 VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba")  # fmt: skip
-    result = run_closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
+    result = closed_loop(mppi, Unicycle(), start, eight, 36.0, 0.05)
     rms, worst = lateral_errors(result, eight)
     rms_pp, worst_pp = lateral_errors(pp, eight)
     # measured 3.3 / 13 mm beside pure pursuit's 5.9 / 17 mm
     assert rms < rms_pp and worst < worst_pp
-    assert result.reversals[0] <= 2  # no twitching backwards on a forward path
+    assert result.metrics()[0]["reversals"] <= 2  # no twitching backwards on a forward path
     # went all the way round (the path is closed: its end is its start)
-    assert result.path_length[0] > 0.97 * eight.length
-    assert np.hypot(*(result.poses[-1, 0, :2] - eight.points[-1])) < 0.05
+    assert result.metrics()[0]["distance_travelled_m"] > 0.97 * eight.length
+    assert np.hypot(*(result.true_pose[0, -1, :2] - eight.points[-1])) < 0.05
 
 
 def test_clearance_where_pure_pursuit_collides(cluttered):
     start = np.array([1.0, 4.0, 0.0])
-    pp = run_closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
+    pp = closed_loop(PurePursuit(speed=0.4, limits=LIMITS), Unicycle(), start, STRAIGHT,
                          26.0, 0.1)  # fmt: skip
-    assert cluttered.in_collision(ROBOT, pp.poses[:, 0]).any()
+    assert cluttered.in_collision(ROBOT, pp.true_pose[0]).any()
     for seed in range(3):
         mppi = MPPI(Unicycle(), 30, 0.1, 200, (0.2, 0.5), 0.03, None, LIMITS, seed=seed,
                     backend="numba", grid=cluttered, footprint=ROBOT)  # fmt: skip
-        result = run_closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
-        poses = result.poses[:, 0]
+        result = closed_loop(mppi, Unicycle(), start, STRAIGHT, 30.0, 0.1)
+        poses = result.true_pose[0]
         assert cluttered.footprint_clearance(ROBOT, poses).min() >= 0.1
         assert np.hypot(*(poses[-1, :2] - STRAIGHT.points[-1])) < 0.2
 
@@ -416,17 +416,46 @@ def test_clearance_where_pure_pursuit_collides(cluttered):
 def test_cusp_path_reverses_and_arrives(model, limits, noise):
     path = three_point_turn_path()
     mppi = MPPI(model, 30, 0.05, 200, noise, 0.03, None, limits, backend="numba")
-    result = run_closed_loop(mppi, model, (0.0, 0.05, 0.0), path, 40.0, 0.05)
+    result = closed_loop(mppi, model, (0.0, 0.05, 0.0), path, 40.0, 0.05)
     assert mppi.status == "arrived"
-    assert np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])) <= 0.05
-    assert 2 <= result.reversals[0] <= 6  # the two cusps (and a correction at the goal)
+    assert np.hypot(*(result.true_pose[0, -1, :2] - path.points[-1])) <= 0.05
+    # the two cusps (and a correction at the goal)
+    assert 2 <= result.metrics()[0]["reversals"] <= 6
     # in the sections before the goal, the speed keeps the sign of the path section
-    v = result.commands[:, 0, 0]
-    near_goal = np.hypot(*(result.poses[: v.size, 0, :2] - path.points[-1]).T) < 0.5
+    v = result.command[0, :, 0]
+    near_goal = np.hypot(*(result.true_pose[0, : v.size, :2] - path.points[-1]).T) < 0.5
     section = np.cumsum(np.abs(np.diff(np.sign(v), prepend=1.0)) > 1.0)
     assert section[~near_goal].max() <= 2
-    assert path.distance(result.poses[:, 0, :2]).max() < 0.15
-    np.testing.assert_array_equal(result.commands[-2, 0], [0.0, 0.0])
+    assert path.distance(result.true_pose[0, :, :2]).max() < 0.15
+    np.testing.assert_array_equal(result.command[0, -2], [0.0, 0.0])
+
+
+def test_progress_is_kept_when_the_path_is_a_fresh_array_each_call():
+    """Seam: MPPI knows the path by its content; a fresh copy per call changes nothing."""
+    path = three_point_turn_path()
+
+    class FreshCopy:
+        command_names = ("v", "omega")
+        per_robot = True
+
+        def __init__(self, law):
+            self.law = law
+
+        def reset(self):
+            self.law.reset()
+
+        def __call__(self, t, pose, reference):
+            fresh = Polyline(reference.points.copy(), reference.directions.copy())
+            return self.law(t, pose, fresh)
+
+    def mppi():
+        return MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.5), 0.03, None,
+                    VelocityLimits(0.3, 1.5), backend="numba")  # fmt: skip
+
+    same = closed_loop(mppi(), Unicycle(), (0.0, 0.05, 0.0), path, 40.0, 0.05)
+    fresh = closed_loop(FreshCopy(mppi()), Unicycle(), (0.0, 0.05, 0.0), path, 40.0, 0.05)
+    assert same.metrics()[0]["reversals"] >= 2  # it passed the cusps
+    np.testing.assert_array_equal(fresh.true_pose, same.true_pose)
 
 
 def test_from_gains_builds_the_limits_and_critics(cluttered):
@@ -538,8 +567,8 @@ def test_closed_path_is_driven_round_before_arriving():
     mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, None,
                 VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba",
                 goal_tolerance=(0.2, 3.0))  # fmt: skip
-    result = run_closed_loop(mppi, Unicycle(), (1.1, 0.8, 0.0), eight, 3.0, 0.05)
-    assert mppi.status == "ok" and result.path_length[0] > 0.5
+    result = closed_loop(mppi, Unicycle(), (1.1, 0.8, 0.0), eight, 3.0, 0.05)
+    assert mppi.status == "ok" and result.metrics()[0]["distance_travelled_m"] > 0.5
 
 
 def test_speed_is_capped_into_a_cusp():
@@ -577,9 +606,9 @@ def test_goal_next_to_an_obstacle_is_reached(cluttered):
     for near in (0.0, 1.0):
         mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, {"near_goal_distance": near},
                     LIMITS, backend="numba", grid=cluttered, footprint=ROBOT)  # fmt: skip
-        result = run_closed_loop(mppi, Unicycle(), (1.5, 4.0, 0.0), path, 20.0, 0.05)
-        assert not cluttered.in_collision(ROBOT, result.poses[:, 0]).any()
-        ends[near] = (mppi.status, np.hypot(*(result.poses[-1, 0, :2] - path.points[-1])))
+        result = closed_loop(mppi, Unicycle(), (1.5, 4.0, 0.0), path, 20.0, 0.05)
+        assert not cluttered.in_collision(ROBOT, result.true_pose[0]).any()
+        ends[near] = (mppi.status, np.hypot(*(result.true_pose[0, -1, :2] - path.points[-1])))
     assert ends[1.0][0] == "arrived" and ends[1.0][1] <= 0.05
     assert ends[0.0][0] != "arrived" and ends[0.0][1] > 0.1
 

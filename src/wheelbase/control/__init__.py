@@ -8,6 +8,7 @@ from wheelbase.control.base import (
     GoalController,
     SteeringLimits,
     VelocityLimits,
+    command_to_inputs,
     saturate_steering,
     saturate_velocity,
     steering_to_velocity,
@@ -22,7 +23,6 @@ from wheelbase.control.goal import (
     run_go_to_goal,
     saturate_keep_turn_rate,
 )
-from wheelbase.control.loop import ClosedLoopResult, run_closed_loop
 from wheelbase.control.mppi import MPPI, MPPI_BACKENDS, MPPICritics, MPPIPlan
 from wheelbase.control.path import (
     PathFollower,
@@ -34,7 +34,15 @@ from wheelbase.control.path import (
 )
 from wheelbase.control.pid import ANTI_WINDUP, PID
 from wheelbase.control.point import GoToPoint
-from wheelbase.control.pose import Aicardi, LineArc, PolarPose, ViaDirection, ViaPoint
+from wheelbase.control.pose import (
+    POSE_LAWS,
+    Aicardi,
+    LineArc,
+    PolarPose,
+    ViaDirection,
+    ViaPoint,
+    make_pose_law,
+)
 from wheelbase.control.torque import (
     ComputedTorquePID,
     TorqueGains,
@@ -51,10 +59,10 @@ __all__: list[str] = [
     "MPPI",
     "MPPI_BACKENDS",
     "PID",
+    "POSE_LAWS",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
     "Aicardi",
-    "ClosedLoopResult",
     "ComputedTorquePID",
     "Controller",
     "DriveTrain",
@@ -81,7 +89,8 @@ __all__: list[str] = [
     "VelocityLimits",
     "ViaDirection",
     "ViaPoint",
-    "run_closed_loop",
+    "command_to_inputs",
+    "make_pose_law",
     "run_go_to_goal",
     "saturate_keep_turn_rate",
     "saturate_steering",

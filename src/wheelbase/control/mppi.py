@@ -67,7 +67,7 @@ from wheelbase.control.mppi_numba import (
     NORMAL_TABLE,
     mppi_kernel,
 )
-from wheelbase.control.path import _as_polyline, _final_heading
+from wheelbase.control.path import _as_polyline, path_key, same_path
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
@@ -181,6 +181,7 @@ class MPPI:
     """
 
     command_names: ClassVar[tuple[str, ...]] = VELOCITY_COMMAND
+    per_robot: ClassVar[bool] = True  # one warm-started sequence per robot: one copy each
 
     def __init__(
         self,
@@ -277,7 +278,7 @@ class MPPI:
             import_jax()
         ahead = 1.2 * self.horizon_steps * self.dt * float(self._hi[0]) + 2.0 * self.path_spacing
         self._window_points = math.ceil(ahead / self.path_spacing) + 1
-        self._tables: tuple[object, PathTables] | None = None
+        self._tables: tuple[object, PathTables, tuple] | None = None
         self.reset()
 
     @classmethod
@@ -646,18 +647,21 @@ class MPPI:
 
     # ------------------------------------------------------------------ path
     def _path_tables(self, reference: Any) -> PathTables:
+        # The path is known by its content, not by the object: a caller that builds a fresh
+        # array on every call keeps its progress along the path (and its cusp section).
         if self._tables is not None and self._tables[0] is reference:
             return self._tables[1]
         line = _as_polyline(reference)
+        key = path_key(line, reference)
+        if self._tables is not None and same_path(self._tables[2], key):
+            self._tables = (reference, self._tables[1], self._tables[2])
+            return self._tables[1]
         points = np.asarray(line.points)
         self._anchor = points[0].copy()  # the tables' origin: their numbers stay small
         tables = PathTables(
-            points - self._anchor,
-            np.asarray(line.directions),
-            self.path_spacing,
-            _final_heading(reference),
+            points - self._anchor, np.asarray(line.directions), self.path_spacing, key[2]
         )
-        self._tables = (reference, tables)
+        self._tables = (reference, tables, key)
         self._progress, self._section = None, 0
         return tables
 
@@ -762,7 +766,7 @@ class MPPI:
 
     # ------------------------------------------------------------------ NumPy reference
     def _twist(self, controls: np.ndarray) -> np.ndarray:
-        from wheelbase.control.loop import command_to_inputs
+        from wheelbase.control.base import command_to_inputs
 
         return self.model.twist(command_to_inputs(controls, self.command_names, self.model))
 

@@ -236,6 +236,21 @@ def _final_heading(reference: object) -> float | None:
     return None if poses is None else float(np.asarray(poses, dtype=np.float64)[-1, 2])
 
 
+def path_key(line: Polyline, reference: object) -> tuple[np.ndarray, np.ndarray, float | None]:
+    """What identifies a followed path: its points, directions and final heading."""
+    return (np.asarray(line.points), np.asarray(line.directions), _final_heading(reference))
+
+
+def same_path(a: tuple, b: tuple) -> bool:
+    """Whether two :func:`path_key` values describe the same path (exactly)."""
+    return (
+        a[2] == b[2]
+        and a[0].shape == b[0].shape
+        and np.array_equal(a[0], b[0])
+        and np.array_equal(a[1], b[1])
+    )
+
+
 # --------------------------------------------------------------------------- follower base
 @dataclass(frozen=True)
 class PathFollower:
@@ -311,15 +326,21 @@ class PathFollower:
         """
         pose = as_float_array("pose", pose, 3)
         path = self._state.get("path")
-        if path is None or (reference is not self._state.get("reference")):
-            path = _as_polyline(reference)
-            self._state.clear()
-            self._state.update(
-                path=path,
-                reference=reference,
-                tables=_tables(path),
-                final_heading=_final_heading(reference),
-            )
+        if path is None or reference is not self._state.get("reference"):
+            # Known by content: a fresh array of the same path keeps the progress.
+            line = _as_polyline(reference)
+            key = path_key(line, reference)
+            if path is not None and same_path(self._state["key"], key):
+                self._state["reference"] = reference
+            else:
+                self._state.clear()
+                self._state.update(
+                    path=line,
+                    reference=reference,
+                    key=key,
+                    tables=_tables(line),
+                    final_heading=key[2],
+                )
         shape = pose.shape[:-1]
         flat = pose.reshape(-1, 3)
         if self._state.get("shape") != shape:

@@ -33,15 +33,24 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import finite, positive
+from wheelbase._validate import check_choice, finite, positive
 from wheelbase.control.base import GoalController
-from wheelbase.control.point import check_point_gains, go_to_point_law
+from wheelbase.control.point import GoToPoint, check_point_gains, go_to_point_law
 from wheelbase.errors import ConfigError
 
-__all__ = ["Aicardi", "LineArc", "PolarPose", "ViaDirection", "ViaPoint"]
+__all__ = [
+    "POSE_LAWS",
+    "Aicardi",
+    "LineArc",
+    "PolarPose",
+    "ViaDirection",
+    "ViaPoint",
+    "make_pose_law",
+]
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:
@@ -460,3 +469,29 @@ class LineArc(_Aligning):
         v = np.where(on_arc, v_arc, v_line)
         omega = np.where(on_arc, omega_arc, omega_line)
         return self._aligned(x, y, theta, v, omega)
+
+
+POSE_LAWS: tuple[str, ...] = ("point", "polar", "aicardi", "via_point", "via_direction", "line_arc")
+"""Names of the pose laws (document 002 control list, laws 1–6), in order."""
+
+
+def make_pose_law(name: str, limits: Any = None) -> GoalController:
+    """A pose law of :data:`POSE_LAWS` with its default gains and the given limits.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`POSE_LAWS`.
+    limits : VelocityLimits, optional
+        Command limits.
+    """
+    check_choice("law", name, POSE_LAWS)
+    classes = {
+        "point": GoToPoint,
+        "polar": PolarPose,
+        "aicardi": Aicardi,
+        "via_point": ViaPoint,
+        "via_direction": ViaDirection,
+        "line_arc": LineArc,
+    }
+    return classes[name](limits=limits)

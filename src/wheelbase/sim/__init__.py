@@ -7,7 +7,7 @@
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.
 """
 
-from wheelbase.sim.engine import Arrival, Engine, EngineState
+from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
 from wheelbase.sim.log import STATUSES, Log, status_code
 from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
 from wheelbase.sim.sensing import EncoderOdometry, PerfectState
@@ -23,5 +23,6 @@ __all__ = [
     "Log",
     "PerfectState",
     "WheelAxle",
+    "closed_loop",
     "status_code",
 ]

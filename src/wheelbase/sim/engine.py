@@ -44,7 +44,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.sim.log import STATUSES, Log
 from wheelbase.sim.sensing import EncoderReadings, PerfectState
 
-__all__ = ["Arrival", "Engine", "EngineState"]
+__all__ = ["Arrival", "Engine", "EngineState", "closed_loop"]
 
 RUNNING, ARRIVED, MISSED_GOAL, COLLISION, TIMEOUT, DIVERGED = range(len(STATUSES))
 
@@ -197,7 +197,8 @@ class Engine:
         ``controller(t, measured (N, 3) or (N, 6), reference) -> (N, k)`` with
         ``command_names`` and ``reset()`` (every law of :mod:`wheelbase.control`). On a dynamic
         plant it is called with the estimated state (x, y, θ, u, v, r) and returns wheel
-        torques. ``per_robot = True`` on the controller: one copy per robot, called with (3,).
+        torques. ``per_robot = True`` on the controller: robot 0 runs it, every other robot a
+        copy, each called with its own (3,) pose.
     reference : object
         Passed to the controller unchanged (a goal pose, a path, a trajectory).
     dt : float
@@ -289,7 +290,8 @@ class Engine:
         if reset is not None:
             reset()
         if getattr(self.controller, "per_robot", False):
-            controllers = [copy.deepcopy(self.controller) for _ in range(n)]
+            # robot 0 runs the given object (its status and plan stay visible to the caller)
+            controllers = [self.controller] + [copy.deepcopy(self.controller) for _ in range(n - 1)]
         else:
             controllers = [self.controller]
         encoder = self.estimator.encoder
@@ -567,3 +569,87 @@ def _shaped(raw: np.ndarray, n: int, width: int, names: tuple[str, ...]) -> np.n
         f"the controller returned commands of shape {raw.shape}; the plant expects ({n}, {width}) "
         f"= {names} per robot"
     )
+
+
+def closed_loop(
+    controller: Any,
+    plant: Any,
+    poses: ArrayLike,
+    reference: Any,
+    duration: float,
+    dt: float,
+    *,
+    goal: ArrayLike | None = None,
+    tolerance: tuple[float, float] | None = None,
+    integrator: str = "exact",
+    estimator: Any = None,
+    collides: Callable[[np.ndarray], np.ndarray] | None = None,
+    seeds: ArrayLike | int | None = None,
+) -> Log:
+    """Run a controller on a plant from one or N start poses: the engine in one call.
+
+    Parameters
+    ----------
+    controller : callable
+        Any law of :mod:`wheelbase.control` (``controller(t, poses, reference)``).
+    plant : KinematicModel, DiffDriveDynamics, KinematicPlant or DynamicPlant
+        A model of :mod:`wheelbase.models` (integrated by ``integrator`` under a held
+        command), a dynamic model (the controller then gives wheel torques: wrap a (v, ω)
+        law in :class:`~wheelbase.control.TwistTorqueLoop`), or a plant.
+    poses : array_like, shape (3,) or (N, 3)
+        Start poses [m, m, rad].
+    reference : object
+        Passed to the controller (a goal pose, a path, a trajectory).
+    duration : float
+        Time limit [s].
+    dt : float
+        Control period and step [s].
+    goal : array_like, shape (3,) or (N, 3), optional
+        Where the robots should stop: the run of a robot ends ``arrived`` by the arrival rule
+        (:class:`Arrival`); without it every robot runs to the time limit.
+    tolerance : (float, float), optional
+        (position [m], heading [rad]) of arrival (default 0.05 m, 5°).
+    integrator : str
+        Integration method of a kinematic model (default ``exact``: the closed-form arc, exact
+        under the held command, so the only error is the controller's sampling).
+    estimator : PerfectState or EncoderOdometry, optional
+        What the controller sees (default: the true state).
+    collides : callable, optional
+        ``collides(poses (M, 3)) -> (M,) bool``.
+    seeds : int or array_like of int, optional
+        Seeds of the robots' random encoder errors.
+
+    Returns
+    -------
+    Log
+
+    Examples
+    --------
+    >>> from wheelbase.control import PolarPose
+    >>> from wheelbase.models import Unicycle
+    >>> log = closed_loop(PolarPose(), Unicycle(), [-1.0, 0.5, 0.0], [0, 0, 0], 30.0, 0.01,
+    ...                   goal=[0, 0, 0], tolerance=(0.01, 0.02))
+    >>> log.statuses
+    ['arrived']
+    """
+    from wheelbase.dynamics import DiffDriveDynamics
+    from wheelbase.sim.plants import DynamicPlant, KinematicPlant
+
+    if isinstance(plant, DiffDriveDynamics):
+        plant = DynamicPlant(plant)
+    elif not isinstance(plant, (KinematicPlant, DynamicPlant)):
+        plant = KinematicPlant(plant, integrator=integrator)
+    arrival = None
+    if goal is not None:
+        arrival = Arrival(goal) if tolerance is None else Arrival(goal, tolerance)
+    engine = Engine(
+        plant,
+        controller,
+        reference,
+        dt=dt,
+        duration=duration,
+        estimator=PerfectState() if estimator is None else estimator,
+        arrival=arrival,
+        collides=collides,
+    )
+    return engine.run(poses, seeds)

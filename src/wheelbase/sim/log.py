@@ -201,7 +201,9 @@ class Log:
         Returns
         -------
         list of dict
-            ``status``, ``collision``, ``duration_s``, ``distance_travelled_m``, tracking
+            ``status``, ``collision``, ``duration_s``, ``distance_travelled_m``,
+            ``reversals`` (changes of the direction of travel; speeds under 1e-6 m/s do not
+            count as a direction), tracking
             errors against the reference (RMS and max of the position error, RMS heading error
             in degrees), the final pose errors of the true and the estimated pose against the
             goal (when there is one), and the odometry drift at the end (|true − estimated|) and
@@ -238,6 +240,7 @@ class Log:
                     ),
                     final_position_error_estimated_m=float(np.hypot(*(est[-1, :2] - goal[:2]))),
                 )
+            row["reversals"] = _reversals(self.twist[i, : max(n - 1, 0), 0])
             row["odometry_drift_m"] = drift
             row["odometry_drift_per_m"] = drift / travelled if travelled > 0 else 0.0
             counts = self.controller_status_counts(i)
@@ -339,3 +342,9 @@ class Log:
         ax.set_ylabel("y [m]")
         ax.legend(loc="best", fontsize=8)
         return fig
+
+
+def _reversals(speed: np.ndarray) -> int:
+    """How often the sign of the forward speed changes (|u| <= 1e-6 m/s: no direction)."""
+    sign = np.sign(speed[np.abs(speed) > 1e-6])
+    return int(np.count_nonzero(sign[1:] != sign[:-1]))
