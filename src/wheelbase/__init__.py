@@ -32,6 +32,7 @@ from wheelbase.dynamics import RM100, DiffDriveDynamics, RigidBody, simulate_dyn
 from wheelbase.errors import (
     ConfigError,
     DataError,
+    DependencyError,
     InputError,
     MapError,
     PlanningError,
@@ -88,6 +89,7 @@ __all__ = [
     "ComputedTorquePID",
     "ConfigError",
     "DataError",
+    "DependencyError",
     "DiffDrive",
     "DiffDriveDynamics",
     "Encoder",

@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "ConfigError",
     "DataError",
+    "DependencyError",
     "InputError",
     "MapError",
     "PlanningError",
@@ -45,3 +46,7 @@ class DataError(WheelbaseError, ValueError):
 
 class ScenarioError(ConfigError):
     """A scenario file is invalid; the message names the file and the field path."""
+
+
+class DependencyError(WheelbaseError, ImportError):
+    """An optional dependency is missing; the message names the extra that installs it."""

@@ -13,6 +13,8 @@ from wheelbase.geometry import transform_points, wrap_angle
 from wheelbase.sim import Log
 
 __all__ = [
+    "MCAP_FILE",
+    "REPORT_FILES",
     "animate_run",
     "figure_commands",
     "figure_errors",
@@ -223,9 +225,14 @@ REPORT_FILES = (
 )
 """Files a closed-loop report folder holds."""
 
+MCAP_FILE = "run.mcap"
+"""The report's MCAP file for Foxglove (written on request: ``wheelbase run --mcap``)."""
 
-def write_report(result, folder, *, force: bool = False, gif: bool = True) -> list:
-    """Write a run's report: metrics, log, resolved scenario, figures and animation.
+
+def write_report(
+    result, folder, *, force: bool = False, gif: bool = True, mcap: bool = False
+) -> list:
+    """Write a run's report: metrics, log, resolved scenario, figures, animation and MCAP.
 
     Parameters
     ----------
@@ -238,6 +245,9 @@ def write_report(result, folder, *, force: bool = False, gif: bool = True) -> li
         exists there).
     gif : bool
         Also render ``animation.gif`` (the slowest part).
+    mcap : bool
+        Also write ``run.mcap`` for Foxglove (:func:`wheelbase.mcap_export.write_mcap`; needs
+        the ``wheelbase[foxglove]`` extra).
 
     Returns
     -------
@@ -254,7 +264,12 @@ def write_report(result, folder, *, force: bool = False, gif: bool = True) -> li
     import matplotlib.pyplot as plt
 
     folder = Path(folder)
-    existing = [folder / name for name in REPORT_FILES if (folder / name).exists()]
+    names = (*REPORT_FILES, MCAP_FILE) if mcap else REPORT_FILES
+    if mcap:
+        from wheelbase.mcap_export import require_foxglove
+
+        require_foxglove()  # a missing extra fails before anything is written
+    existing = [folder / name for name in names if (folder / name).exists()]
     if existing and not force:
         raise FileExistsError(f"{existing[0]} exists: a report is already there (use --force)")
     folder.mkdir(parents=True, exist_ok=True)
@@ -270,6 +285,10 @@ def write_report(result, folder, *, force: bool = False, gif: bool = True) -> li
     if result.log is None:
         return written
     written.append(result.log.to_csv(folder / "log.csv"))
+    if mcap:
+        from wheelbase.mcap_export import write_mcap
+
+        written.append(write_mcap(result, folder / MCAP_FILE))
     plan = None if result.plan is None else result.plan.poses
     polygon = result.footprint_polygon
     figures = {

@@ -45,20 +45,26 @@ def _summary(metrics: dict, title: str) -> Table:
     return table
 
 
-def _run_and_report(source, out: Path, *, force: bool, gif: bool, console: Console) -> dict:
+def _run_and_report(
+    source, out: Path, *, force: bool, gif: bool, console: Console, mcap: bool = False
+) -> dict:
     from wheelbase.report import write_report
     from wheelbase.runner import run
     from wheelbase.scenario import load_scenario
 
     scenario = load_scenario(source)
     if not force:
-        from wheelbase.report import REPORT_FILES
+        from wheelbase.report import MCAP_FILE, REPORT_FILES
 
-        for name in REPORT_FILES:
+        for name in (*REPORT_FILES, MCAP_FILE) if mcap else REPORT_FILES:
             if (out / name).exists():
                 raise FileExistsError(
                     f"{out / name} exists: a report is already there (use --force)"
                 )
+    if mcap:
+        from wheelbase.mcap_export import require_foxglove
+
+        require_foxglove()  # before the run: a missing extra should not cost a run
     started = time.perf_counter()
     with Progress(
         TextColumn("[progress.description]{task.description}"),
@@ -80,7 +86,7 @@ def _run_and_report(source, out: Path, *, force: bool, gif: bool, console: Conso
         except WheelbaseError as error:
             _write_failure(out, scenario, error, force=force)
             raise
-    written = write_report(result, out, force=force, gif=gif)
+    written = write_report(result, out, force=force, gif=gif, mcap=mcap)
     console.print(
         _summary(result.metrics, f"{scenario.name} ({time.perf_counter() - started:.1f} s)")
     )
@@ -126,14 +132,17 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(None, help="Report folder [default: ./<scenario name>/]."),
         force: bool = typer.Option(False, help="Overwrite an existing report."),
         gif: bool = typer.Option(True, help="Render animation.gif."),
+        mcap: bool = typer.Option(
+            False, help="Also write run.mcap for Foxglove (needs the 'foxglove' extra)."
+        ),
     ) -> None:
         """Run a closed-loop scenario and write its report (metrics.json, log.csv,
-        scenario.yaml, PNG figures, animation.gif)."""
+        scenario.yaml, PNG figures, animation.gif, and run.mcap with --mcap)."""
         from wheelbase.scenario import load_scenario
 
         name = load_scenario(scenario).name
         target = out if out is not None else Path(name)
-        _run_and_report(scenario, target, force=force, gif=gif, console=Console())
+        _run_and_report(scenario, target, force=force, gif=gif, console=Console(), mcap=mcap)
 
     @app.command("schema")
     def schema_command() -> None:

@@ -1,0 +1,237 @@
+"""MCAP export: read the file back and compare it with the log it came from."""
+
+import json
+import math
+import sys
+from collections import Counter
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mcap")
+pytest.importorskip("foxglove_schemas_protobuf")
+
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+from typer.testing import CliRunner
+
+from wheelbase.cli import app
+from wheelbase.errors import DependencyError, InputError
+from wheelbase.geometry import compose, wrap_angle
+from wheelbase.mcap_export import write_log_mcap, write_mcap
+from wheelbase.runner import run
+
+SCENARIO = {
+    "name": "mcap",
+    "map": "warehouse",
+    "robot": {"model": "diffdrive", "preset": "rm100"},
+    "plant": "dynamic",
+    "controller": {"law": "kanayama"},
+    "odometry": {"mode": "encoders", "wheel_radius_scale": [1.01, 0.99]},
+    "start": [3.0, 2.0, 0.0],
+    "goals": [[5.0, 2.5, 0.0], [8.0, 2.5, 0.0]],
+    "trajectory": {"max_speed": 0.8, "max_acceleration": 0.8},
+    "goal_tolerance": [0.2, 20.0],
+    "dt": 0.05,
+}
+
+PROTOBUF_TOPICS = {
+    "/map": "foxglove.Grid",
+    "/plan": "foxglove.PosesInFrame",
+    "/pose/true": "foxglove.PoseInFrame",
+    "/pose/estimated": "foxglove.PoseInFrame",
+    "/tf": "foxglove.FrameTransforms",
+    "/markers": "foxglove.SceneUpdate",
+}
+JSON_TOPICS = ("/command", "/twist", "/wheel_rates", "/torques", "/metrics")
+
+
+@pytest.fixture(scope="module")
+def result():
+    return run(SCENARIO)
+
+
+@pytest.fixture(scope="module")
+def decoded(result, tmp_path_factory):
+    path = write_mcap(result, tmp_path_factory.mktemp("mcap") / "run.mcap")
+    messages: dict[str, list] = {}
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        for schema, channel, message in reader.iter_messages():
+            payload = json.loads(message.data) if channel.message_encoding == "json" else None
+            messages.setdefault(channel.topic, []).append((schema, channel, message, payload))
+        handle.seek(0)
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        protobuf = {}
+        for _, channel, message, proto in reader.iter_decoded_messages(
+            topics=list(PROTOBUF_TOPICS)
+        ):
+            protobuf.setdefault(channel.topic, []).append((message.log_time, proto))
+    return summary, messages, protobuf
+
+
+def _theta(q) -> float:
+    assert q.x == 0.0 and q.y == 0.0
+    assert math.isclose(q.z**2 + q.w**2, 1.0, abs_tol=1e-15)
+    return 2.0 * math.atan2(q.z, q.w)
+
+
+def test_schemas_are_foxglove_and_counts_match_the_log(result, decoded):
+    summary, messages, _ = decoded
+    log = result.log
+    rows = len(log.t)
+    assert result.metrics["status"] in ("arrived", "missed_goal")
+    schemas = {
+        channel.topic: (summary.schemas[channel.schema_id].name, channel.message_encoding)
+        for channel in summary.channels.values()
+    }
+    for topic, name in PROTOBUF_TOPICS.items():
+        assert schemas[topic] == (name, "protobuf")
+    for topic in JSON_TOPICS:
+        assert schemas[topic][1] == "json"
+        assert summary.schemas[messages[topic][0][1].schema_id].encoding == "jsonschema"
+    counts = Counter({topic: len(values) for topic, values in messages.items()})
+    per_row = ("/pose/true", "/pose/estimated", "/tf", "/command", "/twist", "/wheel_rates")
+    assert counts == Counter(
+        {"/map": 1, "/plan": 1, "/markers": 1, "/metrics": 1, "/torques": rows}
+        | dict.fromkeys(per_row, rows)
+    )
+    assert sum(summary.statistics.channel_message_counts.values()) == sum(counts.values())
+
+
+def test_poses_and_times_equal_the_log(result, decoded):
+    _, messages, protobuf = decoded
+    log = result.log
+    t = log.t
+    for topic, poses in (("/pose/true", log.true_pose[0]), ("/pose/estimated",
+                                                          log.estimated_pose[0])):  # fmt: skip
+        got = protobuf[topic]
+        times = np.array([log_time for log_time, _ in got]) * 1e-9
+        stamps = np.array([m.timestamp.seconds + 1e-9 * m.timestamp.nanos for _, m in got])
+        np.testing.assert_allclose(times, t, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(stamps, t, rtol=0, atol=1e-9)
+        assert {m.frame_id for _, m in got} == {"map"}
+        xy = np.array([[m.pose.position.x, m.pose.position.y] for _, m in got])
+        theta = np.array([_theta(m.pose.orientation) for _, m in got])
+        np.testing.assert_allclose(xy, poses[:, :2], rtol=0, atol=1e-9)
+        assert np.max(np.abs(wrap_angle(theta - poses[:, 2]))) < 1e-9
+    # The frame tree map → odom → base_link composes to the true pose; odom → base_link is
+    # the estimate, so the odom frame carries the drift.
+    composed = []
+    for _, message in protobuf["/tf"]:
+        first, second = message.transforms
+        assert (first.parent_frame_id, first.child_frame_id) == ("map", "odom")
+        assert (second.parent_frame_id, second.child_frame_id) == ("odom", "base_link")
+        a = [first.translation.x, first.translation.y, _theta(first.rotation)]
+        b = [second.translation.x, second.translation.y, _theta(second.rotation)]
+        composed.append(compose(np.array(a), np.array(b)))
+    composed = np.array(composed)
+    np.testing.assert_allclose(composed[:, :2], log.true_pose[0, :, :2], rtol=0, atol=1e-9)
+    assert np.max(np.abs(wrap_angle(composed[:, 2] - log.true_pose[0, :, 2]))) < 1e-9
+    drift = np.hypot(*(log.true_pose[0, -1, :2] - log.estimated_pose[0, -1, :2]))
+    assert drift > 1e-3  # the wheel radii are off by 1 %: the odom frame must have moved
+    # JSON signals: the command columns, torques and wheel rates of every row.
+    command = messages["/command"]
+    assert [p["t"] for *_, p in command] == t.tolist()
+    names = log.command_names
+    np.testing.assert_array_equal(
+        [[p[name] for name in names] for *_, p in command], log.command[0]
+    )
+    np.testing.assert_array_equal(
+        [[p["left"], p["right"]] for *_, p in messages["/torques"]], log.torques[0]
+    )
+    np.testing.assert_array_equal(
+        [[p["left"], p["right"]] for *_, p in messages["/wheel_rates"]], log.wheel_rates[0]
+    )
+    ((_, _, message, metrics),) = messages["/metrics"]
+    assert message.log_time == round(t[-1] * 1e9)
+    assert metrics["status"] == result.metrics["status"]
+    assert metrics["path_length_m"] == result.metrics["path_length_m"]
+
+
+def test_map_plan_and_markers(result, decoded):
+    _, _, protobuf = decoded
+    grid = result.grid
+    ((_, message),) = protobuf["/map"]
+    rows, cols = grid.occupied.shape
+    assert message.column_count == cols and message.row_stride == cols
+    assert message.cell_size.x == grid.resolution
+    assert (message.pose.position.x, message.pose.position.y) == tuple(grid.origin)
+    data = np.frombuffer(message.data, dtype=np.uint8).reshape(rows, cols)
+    np.testing.assert_array_equal(data == 100, grid.occupied)
+    ((_, plan),) = protobuf["/plan"]
+    poses = np.array([[p.position.x, p.position.y, _theta(p.orientation)] for p in plan.poses])
+    np.testing.assert_allclose(poses[:, :2], result.plan.poses[:, :2], rtol=0, atol=1e-12)
+    ((_, scene),) = protobuf["/markers"]
+    entities = {entity.id: entity for entity in scene.entities}
+    assert set(entities) == {"footprint", "goal0", "goal1"}
+    footprint = entities["footprint"]
+    assert footprint.frame_id == "base_link" and footprint.frame_locked
+    outline = [(p.x, p.y) for p in footprint.lines[0].points]
+    np.testing.assert_allclose(outline, result.footprint_polygon, rtol=0, atol=1e-12)
+    goal = entities["goal1"].arrows[0].pose
+    assert (goal.position.x, goal.position.y) == (8.0, 2.5)
+
+
+def test_batch_log_has_one_prefix_per_robot(tmp_path):
+    from wheelbase.control import PolarPose
+    from wheelbase.models import Unicycle
+    from wheelbase.sim import closed_loop
+
+    log = closed_loop(PolarPose(), Unicycle(), [[-1.0, 0.5, 0.0], [1.0, 1.0, 1.0]], [0, 0, 0],
+                      20.0, 0.05, goal=[0, 0, 0], tolerance=(0.05, 0.1))  # fmt: skip
+    path = write_log_mcap(log, tmp_path / "batch.mcap")
+    with path.open("rb") as handle:
+        reader = make_reader(handle)
+        topics = Counter(channel.topic for _, channel, _ in reader.iter_messages())
+    for i in range(2):
+        assert topics[f"/robot{i}/pose/true"] == log.length[i]
+        assert topics[f"/robot{i}/metrics"] == 1
+    assert "/map" not in topics and "/robot0/torques" not in topics
+    with pytest.raises(FileExistsError, match="overwrite"):
+        write_log_mcap(log, path)
+    with pytest.raises(InputError, match="one dict per robot"):
+        write_log_mcap(log, path, overwrite=True, metrics=[{}])
+
+
+def test_cli_run_mcap_and_missing_extra(tmp_path, monkeypatch):
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(
+        "name: short\nmap: empty\nrobot: {model: diffdrive}\ncontroller: {law: kanayama}\n"
+        "start: [0.0, 0.0, 0.0]\ngoal: [1.0, 0.5, 0.0]\ndt: 0.05\n"
+    )
+    out = tmp_path / "report"
+    runner = CliRunner()
+    done = runner.invoke(app, ["run", str(scenario), "--out", str(out), "--no-gif", "--mcap"])
+    assert done.exit_code == 0, done.output
+    assert (out / "run.mcap").stat().st_size > 0
+    again = runner.invoke(app, ["run", str(scenario), "--out", str(out), "--no-gif", "--mcap"])
+    assert again.exit_code == 2 and "use --force" in again.output
+    # Without the extra: one clear line naming it, and nothing run or written.
+    monkeypatch.setitem(sys.modules, "foxglove_schemas_protobuf", None)
+    other = tmp_path / "other"
+    missing = runner.invoke(app, ["run", str(scenario), "--out", str(other), "--mcap"])
+    assert missing.exit_code == 2 and "wheelbase[foxglove]" in missing.output
+    assert not other.exists()
+    with pytest.raises(DependencyError, match=r"wheelbase\[foxglove\]"):
+        write_mcap(run(scenario), tmp_path / "x.mcap")
+
+
+def test_saved_foxglove_layout_names_topics_the_export_writes():
+    from pathlib import Path
+
+    from wheelbase.mcap_export import MCAP_TOPICS
+
+    layout = json.loads(
+        (Path(__file__).parents[1] / "docs" / "foxglove" / "wheelbase_layout.json").read_text()
+    )
+    panels = layout["configById"]
+    assert set(panels["3D!wheelbase"]["topics"]) <= set(MCAP_TOPICS)
+    fields = {"/command": {"v", "omega"}, "/wheel_rates": {"left", "right"},
+              "/torques": {"left", "right"}}  # fmt: skip
+    for key, panel in panels.items():
+        for series in panel.get("paths", []):
+            topic, name = series["value"].split(".")
+            assert name in fields[topic], (key, series)
+    assert panels["RawMessages!metrics"]["topicPath"] in MCAP_TOPICS
