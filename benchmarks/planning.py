@@ -108,21 +108,10 @@ def run_ompl(grid, footprint, radius, reverse, start, goal, planner_name, budget
     bounds.setHigh(1, y1)
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
-    occ = grid.occupied.view(np.uint8)
-    prefix, dist = grid.occupancy_prefix, np.asarray(grid.distance_field)
-    args = (
-        grid.resolution,
-        grid.origin[0],
-        grid.origin[1],
-        footprint.polygon,
-        footprint.circles,
-        footprint.circle_radius,
-    )
+    args = (grid._kernel_world, footprint.polygon, footprint.circles, footprint.circle_radius)
 
     def valid(state) -> bool:
-        return not _collides_one(
-            occ, prefix, dist, *args, state.getX(), state.getY(), state.getYaw()
-        )
+        return not _collides_one(*args, state.getX(), state.getY(), state.getYaw())
 
     setup.setStateValidityChecker(valid)
     si = setup.getSpaceInformation()

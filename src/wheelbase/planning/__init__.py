@@ -18,6 +18,7 @@ from wheelbase.planning.reeds_shepp import (
     reeds_shepp_path,
 )
 from wheelbase.planning.smoothing import smooth_path
+from wheelbase.planning.world import PolygonWorld
 
 __all__ = [
     "BUNDLED_MAPS",
@@ -30,6 +31,7 @@ __all__ = [
     "Path",
     "PlanningScenario",
     "PlanningStats",
+    "PolygonWorld",
     "astar",
     "bundled_scenarios",
     "dijkstra",

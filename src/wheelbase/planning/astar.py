@@ -168,14 +168,14 @@ def _heuristic(r, c, gr, gc, connectivity):
 
 
 @numba.njit(cache=True)
-def _can_move(occ, r, c, k, rows, cols):
+def _can_move(occ, r, c, k, rows, cols, cut_corners=False):
     dr = _DR[k]
     dc = _DC[k]
     nr = r + dr
     nc = c + dc
     if nr < 0 or nr >= rows or nc < 0 or nc >= cols or occ[nr, nc]:
         return False
-    return not (k >= 4 and (occ[r + dr, c] or occ[r, c + dc]))
+    return cut_corners or not (k >= 4 and (occ[r + dr, c] or occ[r, c + dc]))
 
 
 @numba.njit(cache=True)
@@ -216,7 +216,7 @@ def _astar_kernel(occ, sr, sc, gr, gc, connectivity):
 
 
 @numba.njit(cache=True)
-def _dijkstra_kernel(occ, gr, gc, connectivity):
+def _dijkstra_kernel(occ, gr, gc, connectivity, cut_corners=False, axis=1.0, diagonal=_SQRT2):
     rows, cols = occ.shape
     n = rows * cols
     g = np.full(n, np.inf)
@@ -232,10 +232,10 @@ def _dijkstra_kernel(occ, gr, gc, connectivity):
         r = idx // cols
         c = idx % cols
         for k in range(connectivity):
-            if not _can_move(occ, r, c, k, rows, cols):
+            if not _can_move(occ, r, c, k, rows, cols, cut_corners):
                 continue
             nidx = (r + _DR[k]) * cols + (c + _DC[k])
-            cand = gs + (_SQRT2 if k >= 4 else 1.0)
+            cand = gs + (diagonal if k >= 4 else axis)
             if cand < g[nidx]:
                 g[nidx] = cand
                 heapq.heappush(heap, (cand, nidx))

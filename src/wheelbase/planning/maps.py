@@ -8,7 +8,7 @@ The maps live in ``wheelbase/data/maps/`` as ROS ``map_server`` YAML + PNG pairs
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path as FilePath
 
@@ -18,10 +18,20 @@ import yaml
 from wheelbase._validate import check_choice, integer
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
+from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["BUNDLED_MAPS", "IMAGE_RESOLUTION", "PlanningScenario", "bundled_scenarios", "load_map"]
 
-BUNDLED_MAPS = ("parking_lot", "corridor_uturn", "maze", "warehouse", "cluttered")
+BUNDLED_MAPS = (
+    "parking_lot",
+    "corridor_uturn",
+    "maze",
+    "warehouse",
+    "cluttered",
+    *(f"parallel_{p}" for p in (150, 140, 130, 125, 120, 115, 110)),
+    "perpendicular_bay",
+    "pythonrobotics_maze",
+)
 IMAGE_RESOLUTION = 0.05
 """Cell side [m/pixel] assumed for a plain image map (ROS maps carry their own)."""
 _IMAGE_SUFFIXES = (".png", ".pgm", ".bmp", ".jpg", ".jpeg")
@@ -31,39 +41,45 @@ def _data_dir() -> FilePath:
     return FilePath(str(resources.files("wheelbase") / "data" / "maps"))
 
 
-def load_map(name_or_path: str | FilePath, *, max_cells: int = MAX_MAP_CELLS) -> OccupancyGrid:
-    """Load a bundled map by name, or any ROS ``.yaml`` / Moving AI ``.map`` file by path.
+def load_map(
+    name_or_path: str | FilePath, *, max_cells: int = MAX_MAP_CELLS
+) -> OccupancyGrid | PolygonWorld:
+    """Load a bundled map or world by name, or any map or world file by path.
 
     Parameters
     ----------
     name_or_path : str or pathlib.Path
-        One of :data:`BUNDLED_MAPS`, or a file path (``.yaml``/``.yml``: ROS map_server;
-        ``.map``: Moving AI at 1 m/cell; an image: dark pixels occupied, at
-        :data:`IMAGE_RESOLUTION` m/pixel with its lower-left corner at the origin).
+        One of :data:`BUNDLED_MAPS`, or a file path (``.yaml``/``.yml``: a polygon world, or
+        a ROS map_server map when it names an ``image``; ``.geojson``/``.json``: a GeoJSON
+        polygon world (see :mod:`wheelbase.planning.world_io`); ``.map``: Moving AI at
+        1 m/cell; an image: dark pixels occupied, at :data:`IMAGE_RESOLUTION` m/pixel with its
+        lower-left corner at the origin).
     max_cells : int
         Most cells (pixels) a map file may have, checked before it is decoded (default
-        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
+        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8); a polygon world's raster counts too.
 
     Returns
     -------
-    OccupancyGrid
+    OccupancyGrid or PolygonWorld
 
     Examples
     --------
     >>> load_map("parking_lot").shape
     (300, 400)
     """
+    from wheelbase.planning.world_io import read_world_file
+
     text = str(name_or_path)
     path = FilePath(text)
     max_cells = integer("max_cells", max_cells, minimum=1)
-    if path.suffix.lower() in (".yaml", ".yml"):
-        return OccupancyGrid.from_ros_yaml(path, max_cells=max_cells)
+    if path.suffix.lower() in (".yaml", ".yml", ".geojson", ".json"):
+        return read_world_file(path, max_cells=max_cells)
     if path.suffix.lower() == ".map":
         return OccupancyGrid.from_movingai(path, max_cells=max_cells)
     if path.suffix.lower() in _IMAGE_SUFFIXES:
         return OccupancyGrid.from_image(path, IMAGE_RESOLUTION, max_cells=max_cells)
     check_choice("map", text, BUNDLED_MAPS)
-    return OccupancyGrid.from_ros_yaml(_data_dir() / f"{text}.yaml")
+    return read_world_file(_data_dir() / f"{text}.yaml", max_cells=max_cells)
 
 
 @dataclass(frozen=True)
@@ -84,6 +100,10 @@ class PlanningScenario:
         Reference point to footprint centre [m].
     turning_radius : float
         Minimum turning radius [m] (0: turns in place).
+    planner : dict
+        Extra :class:`~wheelbase.planning.HybridAStar` keywords the scenario asks for (the
+        tight parking scenarios: 0.1 m position bins and 2.5° heading bins, so that moves of
+        13 cm exist).
     """
 
     map_name: str
@@ -93,6 +113,7 @@ class PlanningScenario:
     footprint: tuple[float, float]
     rear_axle_to_center: float
     turning_radius: float
+    planner: dict = field(default_factory=dict)
 
 
 def bundled_scenarios() -> list[PlanningScenario]:
@@ -118,6 +139,7 @@ def bundled_scenarios() -> list[PlanningScenario]:
                     tuple(item["footprint"]),
                     float(item["rear_axle_to_center"]),
                     float(item["turning_radius"]),
+                    dict(item.get("planner", {})),
                 )
             )
     return out

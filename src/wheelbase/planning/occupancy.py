@@ -25,7 +25,6 @@ import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path as FilePath
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -34,16 +33,13 @@ from scipy import ndimage
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.errors import InputError, MapError
 from wheelbase.limits import MAX_MAP_CELLS
-from wheelbase.planning.collision import _clearance_batch, _collides_batch
-
-if TYPE_CHECKING:
-    from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.collision import FootprintChecks, _world_tuple
 
 __all__ = ["OccupancyGrid"]
 
 
 @dataclass(frozen=True, eq=False)
-class OccupancyGrid:
+class OccupancyGrid(FootprintChecks):
     """A 2-D occupancy grid in world coordinates.
 
     Parameters
@@ -456,125 +452,30 @@ class OccupancyGrid:
         occ = self.occupied | (self.distance_field <= radius)
         return OccupancyGrid(occ, self.resolution, self.origin, self.unknown)
 
-    # ------------------------------------------------------------------ collision
-    def in_collision(
-        self, footprint: Footprint, poses: ArrayLike, *, margin: float = 0.0
-    ) -> np.ndarray:
-        """Footprint collision check at one pose ``(3,)`` or a batch ``(N, 3)``.
+    # ------------------------------------------------------------------ collision kernels
+    @cached_property
+    def _kernel_world(self) -> tuple:
+        """The grid packed for the collision kernels (its cells are exact obstacles)."""
+        return _world_tuple(
+            self.occupied, self.occupancy_prefix, self.distance_field, self.resolution,
+            self.origin, True,
+        )  # fmt: skip
 
-        A pose collides iff the footprint polygon (grown by ``margin`` along every edge
-        normal) intersects an occupied cell's square or leaves the map. Exact to the cell
-        resolution: the distance field and covering circles decide clear cases, an exact
-        separating-axis test decides the rest.
+    def reference_blocked(self, clearance: float) -> np.ndarray:
+        """Cells where no reference point at least ``clearance`` from every obstacle can lie
+        (boolean, ``shape``): a cell whose centre is within ``clearance − r`` [m] of an
+        occupied cell's centre (``r`` the resolution), as :meth:`inflate` does.
 
         Parameters
         ----------
-        footprint : Footprint
-            Robot outline in the body frame of the reference point.
-        poses : array_like
-            Reference-point poses ``(x, y, θ)`` [m, m, rad], shape ``(3,)`` or ``(N, 3)``.
-        margin : float
-            Extra clearance [m], >= 0.
+        clearance : float
+            Distance [m] the reference point keeps from obstacles (e.g. the footprint's
+            inscribed radius), >= 0.
 
         Returns
         -------
         numpy.ndarray
-            Boolean, shape ``poses.shape[:-1]``.
         """
-        poses = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2)
-        margin = nonnegative("margin", margin, "m")
-        fp = footprint.inflated(margin) if margin > 0 else footprint
-        flat = poses.reshape(-1, 3)
-        out = _collides_batch(
-            self.occupied.view(np.uint8),
-            self.occupancy_prefix,
-            np.asarray(self.distance_field),
-            self.resolution,
-            self.origin[0],
-            self.origin[1],
-            fp.polygon,
-            fp.circles,
-            fp.circle_radius,
-            flat,
-        )
-        return out.reshape(poses.shape[:-1])
-
-    def lattice_collisions(
-        self, footprint: Footprint, poses: ArrayLike, spacing: float = 0.02
-    ) -> np.ndarray:
-        """Brute-force reference check: whether each pose's footprint, sampled as a lattice of
-        points ``spacing`` apart, has a point on an occupied cell (or off the map).
-
-        Slow and independent of :meth:`in_collision` (no distance field, no covering circles,
-        no cell rasterisation): tests and benchmarks use it to verify the fast path and planned
-        paths. A gap narrower than ``spacing`` between lattice points can be missed.
-
-        Parameters
-        ----------
-        footprint : Footprint
-            Robot outline.
-        poses : array_like, shape (N, 3)
-            Poses [m, m, rad].
-        spacing : float
-            Lattice spacing [m], > 0.
-
-        Returns
-        -------
-        numpy.ndarray
-            Boolean array of shape (N,).
-        """
-        spacing = positive("spacing", spacing, "m")
-        poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
-        poly = footprint.polygon
-        lo, hi = poly.min(0), poly.max(0)
-        xs = np.linspace(lo[0], hi[0], math.ceil((hi[0] - lo[0]) / spacing) + 1)
-        ys = np.linspace(lo[1], hi[1], math.ceil((hi[1] - lo[1]) / spacing) + 1)
-        points = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 2)
-        # keep the lattice points inside the (convex, counter-clockwise) polygon
-        edges = np.roll(poly, -1, 0) - poly
-        cross = edges[:, 0] * (points[:, None, 1] - poly[:, 1]) - edges[:, 1] * (
-            points[:, None, 0] - poly[:, 0]
-        )
-        points = points[np.all(cross >= -1e-12, axis=1)]
-        hits = np.zeros(len(poses), bool)
-        for rows in np.array_split(np.arange(len(poses)), max(1, len(poses) // 500)):
-            chunk = poses[rows]
-            c, s = np.cos(chunk[:, 2]), np.sin(chunk[:, 2])
-            wx = chunk[:, None, 0] + c[:, None] * points[:, 0] - s[:, None] * points[:, 1]
-            wy = chunk[:, None, 1] + s[:, None] * points[:, 0] + c[:, None] * points[:, 1]
-            hits[rows] = np.any(self.is_occupied(np.stack([wx, wy], -1)), axis=1)
-        return hits
-
-    def footprint_clearance(self, footprint: Footprint, poses: ArrayLike) -> np.ndarray:
-        """Distance [m] from the footprint polygon at each pose to the nearest occupied cell.
-
-        Exact polygon-to-square distance over occupied cells near the footprint (searched
-        within the distance-field bound); 0 when in collision.
-
-        Parameters
-        ----------
-        footprint : Footprint
-            Robot outline.
-        poses : array_like
-            Poses ``(N, 3)`` or ``(3,)``.
-
-        Returns
-        -------
-        numpy.ndarray
-            Clearances [m], shape ``poses.shape[:-1]``.
-        """
-        poses = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2)
-        flat = poses.reshape(-1, 3)
-        out = _clearance_batch(
-            self.occupied.view(np.uint8),
-            self.occupancy_prefix,
-            np.asarray(self.distance_field),
-            self.resolution,
-            self.origin[0],
-            self.origin[1],
-            footprint.polygon,
-            footprint.circles,
-            footprint.circle_radius,
-            flat,
-        )
-        return out.reshape(poses.shape[:-1])
+        return self.inflate(
+            max(0.0, nonnegative("clearance", clearance, "m") - self.resolution)
+        ).occupied

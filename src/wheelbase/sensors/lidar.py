@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, as_rng, nonnegative, positive
 from wheelbase.errors import ConfigError
-from wheelbase.planning import OccupancyGrid
+from wheelbase.planning import OccupancyGrid, PolygonWorld
 from wheelbase.sensors.beam_model import BeamModel
 from wheelbase.sensors.raycast import scan_rays
 
@@ -51,7 +51,7 @@ class Lidar:
 
     Examples
     --------
-    >>> from wheelbase.planning import OccupancyGrid
+    >>> from wheelbase.planning import OccupancyGrid, PolygonWorld
     >>> room = OccupancyGrid.from_array(np.pad(np.zeros((8, 8), bool), 1, constant_values=True),
     ...                                 0.5)
     >>> Lidar(beams=4, max_range=10.0).scan(room, [2.5, 2.5, 0.0], noise=False).tolist()
@@ -116,7 +116,7 @@ class Lidar:
 
     def scan(
         self,
-        grid: OccupancyGrid,
+        grid: OccupancyGrid | PolygonWorld,
         poses: ArrayLike,
         rng: np.random.Generator | int | None = None,
         *,
@@ -127,8 +127,8 @@ class Lidar:
 
         Parameters
         ----------
-        grid : OccupancyGrid
-            The map.
+        grid : OccupancyGrid or PolygonWorld
+            The map (a polygon world: its raster, see :func:`~wheelbase.sensors.scan_rays`).
         poses : array_like, shape (3,) or (N, 3)
             Robot poses (x [m], y [m], θ [rad]).
         rng : numpy.random.Generator, int or None

@@ -38,7 +38,7 @@ from scipy import ndimage
 
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.errors import InputError
-from wheelbase.planning import OccupancyGrid
+from wheelbase.planning import OccupancyGrid, PolygonWorld
 
 __all__ = ["RAY_METHODS", "cast_rays", "gap_field", "scan_rays"]
 
@@ -303,15 +303,21 @@ def _numpy_scan(
 
 
 # ---------------------------------------------------------------------- public functions
-def _prepare(grid: OccupancyGrid, method: str, max_range: float) -> tuple[np.ndarray, float]:
+def _prepare(
+    grid: OccupancyGrid | PolygonWorld, method: str, max_range: float
+) -> tuple[OccupancyGrid, np.ndarray, float]:
+    if isinstance(grid, PolygonWorld):
+        grid = grid.raster  # rays stop at its conservative raster: good to one cell
     if not isinstance(grid, OccupancyGrid):
-        raise TypeError(f"grid must be an OccupancyGrid (got {type(grid).__name__})")
+        raise TypeError(
+            f"grid must be an OccupancyGrid or a PolygonWorld (got {type(grid).__name__})"
+        )
     check_choice("method", method, RAY_METHODS)
-    return gap_field(grid), positive("max_range", max_range, "m")
+    return grid, gap_field(grid), positive("max_range", max_range, "m")
 
 
 def scan_rays(
-    grid: OccupancyGrid,
+    grid: OccupancyGrid | PolygonWorld,
     origins: ArrayLike,
     headings: ArrayLike,
     beam_angles: ArrayLike,
@@ -322,8 +328,9 @@ def scan_rays(
 
     Parameters
     ----------
-    grid : OccupancyGrid
-        The map.
+    grid : OccupancyGrid or PolygonWorld
+        The map (a polygon world's rays stop at its conservative raster, within one cell of
+        the exact polygons).
     origins : array_like, shape (N, 2)
         Sensor positions (x, y) [m] in the world frame.
     headings : array_like, shape (N,)
@@ -340,7 +347,7 @@ def scan_rays(
     numpy.ndarray, shape (N, B)
         Ranges [m] in ``[0, max_range]``.
     """
-    gap, max_range = _prepare(grid, method, max_range)
+    grid, gap, max_range = _prepare(grid, method, max_range)
     origins = as_float_array("origins", origins, 2, min_ndim=2, max_ndim=2)
     headings = as_float_array("headings", headings, min_ndim=1, max_ndim=1)
     beam_angles = as_float_array("beam_angles", beam_angles, min_ndim=1, max_ndim=1)
@@ -372,7 +379,7 @@ def scan_rays(
 
 
 def cast_rays(
-    grid: OccupancyGrid,
+    grid: OccupancyGrid | PolygonWorld,
     origins: ArrayLike,
     angles: ArrayLike,
     max_range: float,
@@ -382,8 +389,8 @@ def cast_rays(
 
     Parameters
     ----------
-    grid : OccupancyGrid
-        The map.
+    grid : OccupancyGrid or PolygonWorld
+        The map (as in :func:`scan_rays`).
     origins : array_like, shape (..., 2)
         Ray origins (x, y) [m] in the world frame.
     angles : array_like, shape (...)

@@ -10,10 +10,19 @@ deterministic. Each map is drawn with axis-aligned rectangles in world coordinat
 * ``maze``: 20 × 20 m at 0.1 m with 2 m corridors for a differential-drive robot (RM100
   size, turning in place).
 * ``warehouse``: 30 × 20 m at 0.1 m, racks with 2.4 m aisles for a small car-like tug.
+
+and the polygon worlds (world YAML, :mod:`wheelbase.planning.world_io`):
+
+* ``parallel_110`` … ``parallel_150``: parallel parking between two parked cars with a curb
+  behind, slots 1.1 to 1.5 car lengths, into the slot and out again;
+* ``perpendicular_bay``: reversing into a bay 0.5 m wider than the car from a 5.5 m aisle, and
+  out again;
+* ``pythonrobotics_maze``: the 60 × 60 m map of the PythonRobotics Hybrid A* demo with its car.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -123,6 +132,113 @@ def warehouse() -> tuple[np.ndarray, float, list[dict]]:
     return occ, res, scenarios
 
 
+# the tight-manoeuvre car of the planning benchmark: wheelbase 2.8 m, width 1.94 m, overhangs
+# 0.96 m (front) and 0.93 m (rear), steering up to 0.75 rad: R = 2.8 / tan(0.75)
+TIGHT_CAR = {
+    "footprint": [4.69, 1.94],
+    "rear_axle_to_center": round(4.69 / 2 - 0.93, 3),
+    "turning_radius": round(2.8 / math.tan(0.75), 3),
+}
+PARALLEL_SLOTS = (1.5, 1.4, 1.3, 1.25, 1.2, 1.15, 1.1)
+# tight spaces need short moves: 0.1 m position bins, 2.5 degree heading bins (13 cm arcs)
+TIGHT_PLANNER = {"planner": {"xy_resolution": 0.1, "headings": 144}}
+
+
+def _rect(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
+    return [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
+
+
+def parallel_slot(ratio: float) -> tuple[dict, list[dict]]:
+    """A slot ``ratio`` car lengths long between two parked cars, a curb behind, a 5.5 m lane."""
+    length, width = TIGHT_CAR["footprint"]
+    slot = round(ratio * length, 3)
+    a0 = 1.0
+    s0 = a0 + length
+    s1 = s0 + slot
+    x_max = round(s1 + length + 6.0, 3)
+    lane_y = 0.2 + width
+    world = {
+        "bounds": [0.0, x_max, -0.3, round(lane_y + 5.5, 3)],
+        "resolution": 0.05,
+        "polygons": [
+            _rect(0.0, -0.3, x_max, 0.0),  # the curb
+            _rect(a0, 0.2, s0, lane_y),  # parked car behind the slot
+            _rect(s1, 0.2, s1 + length, lane_y),  # parked car ahead of it
+        ],
+    }
+    rear = TIGHT_CAR["rear_axle_to_center"] - length / 2  # rear axle to the rear bumper (<0)
+    parked = [round(s0 + (slot - length) / 2 - rear, 3), round(0.2 + width / 2, 3), 0.0]
+    lane = [round(s1 + 1.0 - rear, 3), round(lane_y + 0.5 + width / 2, 3), 0.0]
+    name = f"parallel_{round(ratio * 100)}"
+    scenarios = [
+        {"name": f"{name}_in", "start": lane, "goal": parked, **TIGHT_CAR, **TIGHT_PLANNER},
+        {"name": f"{name}_out", "start": parked, "goal": lane, **TIGHT_CAR, **TIGHT_PLANNER},
+    ]
+    return world, scenarios
+
+
+def perpendicular_bay() -> tuple[dict, list[dict]]:
+    """A bay 0.5 m wider than the car between two parked cars (at the bay lines), off a 5.5 m
+    aisle whose far side is a wall; the back of the bays is a wall too."""
+    length, width = TIGHT_CAR["footprint"]
+    bay = width + 0.5
+    b0 = 10.0
+    b1 = b0 + bay
+    depth = 5.5
+    cars = [
+        _rect(b0 - width, 0.3, b0, 0.3 + length),
+        _rect(b1, 0.3, b1 + width, 0.3 + length),
+        _rect(b0 - 2 * bay + 0.25, 0.3, b0 - 2 * bay + 0.25 + width, 0.3 + length),
+        _rect(b1 + bay + 0.25, 0.3, b1 + bay + 0.25 + width, 0.3 + length),
+    ]
+    world = {
+        "bounds": [0.0, 24.0, 0.0, depth + 5.5],
+        "resolution": 0.05,
+        "polygons": [[[round(v, 3) for v in p] for p in c] for c in cars],
+    }
+    rear = TIGHT_CAR["rear_axle_to_center"] - length / 2
+    parked = [round((b0 + b1) / 2, 3), round(0.3 - rear, 3), 90.0]
+    aisle = [3.0, round(depth + 2.75, 3), 0.0]
+    scenarios = [
+        {
+            "name": "perpendicular_reverse_in",
+            "start": aisle,
+            "goal": parked,
+            **TIGHT_CAR,
+            **TIGHT_PLANNER,
+        },
+        {"name": "perpendicular_out", "start": parked, "goal": aisle, **TIGHT_CAR, **TIGHT_PLANNER},
+    ]
+    return world, scenarios
+
+
+def pythonrobotics_maze() -> tuple[dict, list[dict]]:
+    """The 60 × 60 m map of the PythonRobotics Hybrid A* demo (walls at x = 20 m from the bottom
+    and x = 40 m from the top), with its car: wheelbase 3.0 m, 1.0 m behind and 3.3 m ahead of
+    the rear axle, 2.0 m wide, steering up to 0.6 rad."""
+    world = {
+        "bounds": [0.0, 60.0, 0.0, 60.0],
+        "resolution": 0.1,
+        "polygons": [_rect(19.9, 0.0, 20.1, 39.0), _rect(39.9, 21.0, 40.1, 60.0)],
+    }
+    car = {
+        "footprint": [4.3, 2.0],
+        "rear_axle_to_center": 1.15,
+        "turning_radius": round(3.0 / math.tan(0.6), 3),
+    }
+    scenarios = [
+        {"name": "maze_car", "start": [10.0, 10.0, 90.0], "goal": [50.0, 50.0, -90.0], **car}
+    ]
+    return world, scenarios
+
+
+WORLDS = {
+    **{f"parallel_{round(r * 100)}": (lambda r=r: parallel_slot(r)) for r in PARALLEL_SLOTS},
+    "perpendicular_bay": perpendicular_bay,
+    "pythonrobotics_maze": pythonrobotics_maze,
+}
+
+
 MAPS = {
     "parking_lot": parking_lot,
     "corridor_uturn": corridor_uturn,
@@ -131,7 +247,14 @@ MAPS = {
 }
 
 
+class _NoAliases(yaml.SafeDumper):
+    def ignore_aliases(self, data: object) -> bool:
+        return True
+
+
 def main() -> None:
+    # keep the entries of maps made elsewhere (make_cluttered.py)
+    old = yaml.safe_load((HERE / "scenarios.yaml").read_text()) or {}
     scenarios: dict[str, list[dict]] = {}
     for name, build in MAPS.items():
         occ, res, scen = build()
@@ -144,8 +267,18 @@ def main() -> None:
             }
             for item in scen
         ]
+    for name, build in WORLDS.items():
+        world, scen = build()
+        doc = " ".join((build.__doc__ or parallel_slot.__doc__ or "").split())
+        header = "# " + doc.replace("``ratio`` car lengths", f"{name.split('_')[-1]} % of the car")
+        (HERE / f"{name}.yaml").write_text(
+            header + "\n" + yaml.safe_dump(world, sort_keys=False, default_flow_style=None)
+        )
+        scenarios[name] = scen
+    for name, items in old.items():
+        scenarios.setdefault(name, items)
     text = "# start/goal: [x m, y m, heading deg] of the reference point (rear-axle centre)\n"
-    text += yaml.safe_dump(scenarios, sort_keys=False, default_flow_style=None)
+    text += yaml.dump(scenarios, Dumper=_NoAliases, sort_keys=False, default_flow_style=None)
     (HERE / "scenarios.yaml").write_text(text)
 
 
