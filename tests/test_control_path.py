@@ -160,6 +160,9 @@ def test_follower_parameters():
         Stanley(max_steering=2.0)
     with pytest.raises(ConfigError, match="lookahead_gain"):
         PurePursuit(lookahead_gain=-1.0)
+    for bad in (None, [[1.0]], "abc"):  # were TypeError/ValueError from float()
+        with pytest.raises(ConfigError, match="lookahead_gain must be a real number"):
+            PurePursuit(lookahead_gain=bad)
     assert PurePursuit(output="steering").command_names == ("speed", "steering")
 
 

@@ -155,12 +155,20 @@ def test_to_csv_refuses_overwrite(tmp_path):
         ({"inputs": np.ones((3, 2))}, InputError, "sampled inputs need 10 rows"),
         ({"inputs": lambda t: (1.0, np.nan)}, InputError, "finite"),
         ({"inputs": lambda t: 1 / 0}, InputError, r"inputs\(0\) raised ZeroDivisionError"),
+        # t_end / dt steps are bounded (1e300 s asked for "Maximum allowed size exceeded")
+        ({"t_end": 1e300}, ConfigError, r"t_end / dt = 1e\+301 steps: more than max_steps"),
+        ({"t_end": 2.0, "max_steps": 19}, ConfigError, r"20 steps: more than max_steps = 19"),
     ],
 )
 def test_bad_input_is_a_clear_error(kwargs, error, match):
     arguments = {"pose0": [0, 0, 0], "inputs": (0.8, 0.6), "t_end": 1.0, "dt": 0.1} | kwargs
     with pytest.raises(error, match=match):
         simulate(ROBOT, **arguments)
+
+
+def test_step_limit_can_be_raised():
+    result = simulate(ROBOT, [0, 0, 0], (0.8, 0.6), 2.0, 0.1, max_steps=20)
+    assert len(result.t) == 21
 
 
 def test_jax_backend_without_jax_names_the_extra(monkeypatch):

@@ -711,3 +711,11 @@ def test_headings_are_wrapped_on_entry(cluttered, backend):
     second = b.plan((2.5, 3.9, -6.12), STRAIGHT, noise)
     np.testing.assert_allclose(second.costs, first.costs, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(second.command, first.command, atol=1e-9)
+
+
+def test_a_huge_step_keeps_the_path_window_to_the_path():
+    # dt = 157409 s reached 9.4e5 m ahead: a window of 1.9e7 path points (9 GiB); the window
+    # never holds more than the path has.
+    mppi = MPPI(Unicycle(), 10, 157409.0, 32, 0.2, 0.1, None, LIMITS)
+    assert mppi(0.0, (0.5, 0.0, 0.0), STRAIGHT).shape == (2,)
+    assert mppi._window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2

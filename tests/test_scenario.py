@@ -129,3 +129,9 @@ def test_tick_noise_is_per_tick_difference_and_accumulates():
     assert "each tick difference" in schema["description"]
     assert "random walk" in schema["description"]
     assert "each tick difference" in " ".join(Encoder.__doc__.split())
+
+
+@pytest.mark.parametrize("source", [True, 3, -math.inf, [], None])
+def test_a_source_that_is_not_a_file_name_or_mapping(source):
+    with pytest.raises(ScenarioError, match="a scenario is a file path, a bundled name or a"):
+        load_scenario(source)

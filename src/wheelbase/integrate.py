@@ -36,9 +36,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._io import write_csv
-from wheelbase._validate import as_float_array, check_choice, finite, positive
+from wheelbase._validate import as_float_array, check_choice, finite, integer, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import se2_exp, to_world_frame, wrap_angle
+from wheelbase.limits import MAX_STEPS
 from wheelbase.models.base import KinematicModel
 
 __all__ = ["METHODS", "SimResult", "integrate_step", "simulate", "time_grid"]
@@ -313,7 +314,7 @@ class SimResult:
 
 
 # --------------------------------------------------------------------------- simulate
-def time_grid(t_end: float, dt: float) -> np.ndarray:
+def time_grid(t_end: float, dt: float, max_steps: int = MAX_STEPS) -> np.ndarray:
     """Times 0, dt, 2·dt, …, t_end [s]; the last step is shortened to land on ``t_end``.
 
     Parameters
@@ -322,16 +323,27 @@ def time_grid(t_end: float, dt: float) -> np.ndarray:
         Duration [s], > 0.
     dt : float
         Step [s], 0 < dt <= t_end.
+    max_steps : int
+        Most steps t_end / dt (default :data:`wheelbase.limits.MAX_STEPS` = 1e6): a typo such
+        as ``dt=1e-9`` is an error, not a loop of 1e11 steps.
 
     Raises
     ------
     ConfigError
-        If ``dt`` or ``t_end`` is not finite and positive, or ``dt > t_end``.
+        If ``dt`` or ``t_end`` is not finite and positive, ``dt > t_end``, or there would be
+        more than ``max_steps`` steps.
     """
     t_end = positive("t_end", t_end, "s")
     dt = positive("dt", dt, "s")
     if dt > t_end:
         raise ConfigError(f"dt must be <= t_end (got dt={dt:g} s, t_end={t_end:g} s)")
+    max_steps = integer("max_steps", max_steps, minimum=1)
+    steps = t_end / dt
+    if steps - 1e-9 > max_steps:
+        raise ConfigError(
+            f"t_end / dt = {steps:.4g} steps: more than max_steps = {max_steps}; use a larger "
+            "dt or a shorter t_end, or raise max_steps"
+        )
     n_steps = max(1, math.ceil(t_end / dt - 1e-9))
     times = dt * np.arange(n_steps + 1, dtype=np.float64)
     times[-1] = t_end
@@ -355,6 +367,7 @@ def simulate(
     *,
     record_every: int = 1,
     backend: str = "auto",
+    max_steps: int = MAX_STEPS,
 ) -> SimResult:
     """Simulate a kinematic model from ``pose0`` under ``inputs`` for ``t_end`` seconds.
 
@@ -385,6 +398,9 @@ def simulate(
         (same arithmetic, results equal to rounding); ``jax`` runs one jit-compiled
         ``lax.scan`` in float64 (extra ``wheelbase[jax]``; on a GPU when JAX has one; see
         :mod:`wheelbase.integrate_jax`); ``auto`` picks ``numba``.
+    max_steps : int
+        Most steps t_end / dt (default :data:`wheelbase.limits.MAX_STEPS` = 1e6); raise it on
+        purpose.
 
     Returns
     -------
@@ -412,7 +428,7 @@ def simulate(
         raise ConfigError(f"record_every must be an integer >= 1 (got {record_every!r})")
     if record_every < 1:
         raise ConfigError(f"record_every must be an integer >= 1 (got {record_every})")
-    times = time_grid(t_end, dt)
+    times = time_grid(t_end, dt, max_steps)
     n_steps = times.size - 1
     pose0 = as_float_array("pose0", pose0, 3, min_ndim=1, max_ndim=2)
     batch = pose0.ndim == 2

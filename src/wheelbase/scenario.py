@@ -366,6 +366,11 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
     """
     if isinstance(source, dict):
         label, data = "<dict>", source
+    elif not isinstance(source, (str, Path)):
+        raise ScenarioError(
+            "a scenario is a file path, a bundled name or a mapping of keys to values "
+            f"(got {type(source).__name__} {source!r})"
+        )
     else:
         path = _resolve(source)
         label = path.name

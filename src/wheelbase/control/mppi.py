@@ -277,7 +277,9 @@ class MPPI:
         if self.backend == "jax":
             import_jax()
         ahead = 1.2 * self.horizon_steps * self.dt * float(self._hi[0]) + 2.0 * self.path_spacing
-        self._window_points = math.ceil(ahead / self.path_spacing) + 1
+        # points of the path window: the reach of the horizon, cut to the path (see _path_tables)
+        self._reach_points = math.ceil(min(ahead / self.path_spacing, 1e12)) + 1
+        self._window_points = self._reach_points
         self._tables: tuple[object, PathTables, tuple] | None = None
         self.reset()
 
@@ -662,6 +664,8 @@ class MPPI:
             points - self._anchor, np.asarray(line.directions), self.path_spacing, key[2]
         )
         self._tables = (reference, tables, key)
+        # A window never holds more points than the path (a huge dt reaches 1e6 m ahead).
+        self._window_points = min(self._reach_points, len(tables.xy) + 1)
         self._progress, self._section = None, 0
         return tables
 

@@ -519,10 +519,8 @@ class PurePursuit(PathFollower):
     min_lookahead: float = 0.1
 
     def _check_gains(self) -> None:
-        gain = self.lookahead_gain
-        if not (math.isfinite(float(gain)) and float(gain) >= 0.0):
-            raise ConfigError(f"lookahead_gain must be >= 0 s (got {gain!r})")
-        object.__setattr__(self, "lookahead_gain", float(gain))
+        gain = nonnegative("lookahead_gain", self.lookahead_gain, "s")
+        object.__setattr__(self, "lookahead_gain", gain)
         object.__setattr__(
             self, "min_lookahead", positive("min_lookahead", self.min_lookahead, "m")
         )
