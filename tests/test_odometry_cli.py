@@ -54,6 +54,7 @@ def test_goto_writes_files_and_metrics(tmp_path):
         (["--goal", "1", "abc"], "goal"),
         (["--goal", "1", "1", "--unit", "km"], "unit"),
         (["--goal", "1", "1", "--bogus", "3"], "unknown option"),
+        (["--goal", "1", "1", "--seed", "-1"], "seed must be an integer >= 0"),  # was ValueError
     ],
 )
 def test_goto_bad_input(tmp_path, argv, match):
@@ -61,6 +62,12 @@ def test_goto_bad_input(tmp_path, argv, match):
     assert result.exit_code != 0
     assert isinstance(result.exception, ConfigError)
     assert match in str(result.exception)
+
+
+def test_calibrate_negative_seed_is_one_clear_error(tmp_path):
+    result = runner.invoke(app, ["calibrate", "--seed", "-1", "--out", str(tmp_path / "x")])
+    assert isinstance(result.exception, ConfigError)
+    assert "seed must be an integer >= 0" in str(result.exception)
 
 
 def test_calibrate_writes_metrics(tmp_path):

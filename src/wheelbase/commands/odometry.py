@@ -23,7 +23,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from wheelbase._validate import check_choice, finite
+from wheelbase._validate import check_choice, finite, integer
 from wheelbase.errors import ConfigError
 
 __all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
@@ -211,6 +211,7 @@ def register(app: typer.Typer) -> None:
         from wheelbase.odometry.error_model import OdometryErrors
 
         goals = _goals(goal, list(ctx.args), unit)
+        seed = integer("seed", seed, minimum=0)
         drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
         paths = _prepare(out, GOTO_FILES, force)
         logs = [run_go_to_goal(g, drive=drive, seed=seed) for g in goals]

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from wheelbase._validate import check_choice, positive
+from wheelbase._validate import check_choice, integer, positive
 from wheelbase.errors import ConfigError
 from wheelbase.models.diffdrive import DiffDrive
 from wheelbase.odometry.dead_reckoning import WheelOdometry, integrate_increments
@@ -167,9 +167,8 @@ def umbmark_test(
         The return position errors of every run.
     """
     side = positive("side", side, "m")
-    if isinstance(runs, bool) or not isinstance(runs, (int, np.integer)) or runs < 1:
-        raise ConfigError(f"runs must be an integer >= 1 (got {runs!r})")
-    rng = np.random.default_rng(seed)
+    runs = integer("runs", runs, minimum=1)
+    rng = np.random.default_rng(None if seed is None else integer("seed", seed, minimum=0))
     r, ppr = odometry.wheel_radius, odometry.pulses_per_revolution
     tick = 2.0 * math.pi / ppr
     # Planned wheel rotations [rad] of one leg and of one left turn, from the odometry model.
@@ -326,7 +325,7 @@ def calibrate_umbmark(
     errors = OdometryErrors(diameter_ratio, track_ratio, slip_std)
     robot = DiffDrive(wheel_radius=wheel_radius, half_track=half_track)
     odometry = WheelOdometry(wheel_radius, half_track, pulses_per_revolution, "exact")
-    base_seed = None if seed is None else int(seed)
+    base_seed = None if seed is None else integer("seed", seed, minimum=0)
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)):
         raise ConfigError(f"iterations must be an integer >= 1 (got {iterations!r})")
     if iterations < 1:

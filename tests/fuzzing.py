@@ -1,0 +1,778 @@
+"""Hostile inputs for the fuzz suite (``tests/test_fuzz.py``) and its counter
+(``benchmarks/fuzz.py``): hypothesis strategies over scenario fields, map files of every format,
+CLI flags and public constructors, and :func:`outcome`, which runs one case within a time budget.
+
+The rule every case must keep: it runs, or it raises a :class:`~wheelbase.WheelbaseError` (or
+the CLI exits with code 2 and one line); never another exception, never past its budget.
+Resource limits keep legitimate cases small: the base scenarios cap steps, map cells and MPPI
+samples (``resources``, ``max_sample_steps``), so a case that takes longer than its budget is a
+hang, not a big problem.
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+import io
+import math
+import signal
+import tempfile
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from hypothesis import strategies as st
+
+from wheelbase.errors import WheelbaseError
+
+__all__ = [
+    "BUDGET_S",
+    "Outcome",
+    "array_map_cases",
+    "call_constructor",
+    "cli_cases",
+    "constructor_cases",
+    "grid_from_array",
+    "load_map_file",
+    "map_file_cases",
+    "outcome",
+    "run_cli",
+    "run_scenario",
+    "run_scenario_file",
+    "scenario_cases",
+    "scenario_file_cases",
+]
+
+BUDGET_S = {
+    "scenario": 30.0,
+    "scenario_file": 30.0,
+    "map_file": 10.0,
+    "cli": 60.0,
+    "constructor": 10.0,
+}
+"""Seconds one case of each kind may take (each is far below: the limits keep cases small)."""
+
+# Values a careless or hostile user can put anywhere.
+HOSTILE: list[Any] = [
+    math.nan,
+    math.inf,
+    -math.inf,
+    0,
+    0.0,
+    -1,
+    -1.0,
+    1e300,
+    -1e300,
+    1e-300,
+    2**70,
+    -(2**70),
+    2**63,
+    "abc",
+    "",
+    None,
+    True,
+    False,
+    [],
+    {},
+    [1, 2, 3],
+    [0.5, 0.5],
+    0.5,
+    3,
+    1e10,
+    -6.12,
+    1e9,
+    "1e3",
+    [math.nan, 1.0],
+    [[1.0]],
+]
+HOSTILE_TEXT = [
+    "nan",
+    "inf",
+    "-inf",
+    "0",
+    "-1",
+    "1e300",
+    "1e-300",
+    "abc",
+    "",
+    "90deg",
+    "-6.12",
+    "1e10",
+    "1e9",
+    "2",
+    "0.5",
+    "1e-9",
+    "99999999999999999999",
+    "°",
+    "rad",
+    "3",
+    "-0",
+    "1,2",
+    "NaNdeg",
+]
+
+
+class Hang(BaseException):
+    """Raised by the alarm when a case runs past its budget (a BaseException, so that no
+    ``except Exception`` in the code under test swallows it)."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one case did: ``"ok"``, ``"error"`` (a WheelbaseError), ``"raw"`` (any other
+    exception) or ``"hang"`` (past its budget); ``detail`` says which and where."""
+
+    kind: str
+    detail: str
+    seconds: float
+
+
+def outcome(call: Callable[[], Any], budget_s: float) -> Outcome:
+    """Run ``call`` and classify it; a SIGALRM stops Python code at the budget, and a compiled
+    kernel that cannot be stopped is still a hang when it returns late."""
+
+    def alarm(signum, frame):
+        raise Hang()
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, budget_s)
+    start = time.perf_counter()
+    try:
+        call()
+        kind, detail = "ok", ""
+    except Hang:
+        kind, detail = "hang", f"stopped after {budget_s:g} s"
+    except WheelbaseError as error:
+        kind, detail = "error", f"{type(error).__name__}: {error}"
+        if not str(error).strip():
+            kind, detail = "raw", f"{type(error).__name__} with an empty message"
+    except Exception as error:  # the point: anything else is a defect
+        kind, detail = "raw", f"{type(error).__name__}: {error} at {_where(error)}"
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    seconds = time.perf_counter() - start
+    if kind != "hang" and seconds > budget_s:
+        kind, detail = "hang", f"returned after {seconds:.1f} s > {budget_s:g} s"
+    return Outcome(kind, detail, seconds)
+
+
+def _where(error: BaseException) -> str:
+    frames = [f for f in traceback.extract_tb(error.__traceback__) if "/wheelbase/" in f.filename]
+    return f"{Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else "?"
+
+
+# =========================================================================== scenarios
+_FUZZ_RESOURCES = {"max_steps": 20_000, "max_map_cells": 1_000_000}
+BASES: list[dict[str, Any]] = [
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle"},
+        "controller": {"law": "kanayama"},
+        "odometry": {"mode": "perfect"},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [1.0, 0.5, 0.0],
+        "dt": 0.05,
+        "duration": 10.0,
+    },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "diffdrive", "wheel_radius": 0.05},
+        "controller": {"law": "pure_pursuit", "gains": {"min_lookahead": 0.3}},
+        "odometry": {"mode": "encoders", "tick_noise_std": 0.5},
+        "planner": {"margin": 0.05},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [1.5, 0.0, 90.0],
+        "dt": 0.05,
+        "duration": 15.0,
+    },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "rear_bicycle", "wheel_base": 0.3},
+        "controller": {"law": "stanley"},
+        "odometry": {"mode": "perfect"},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [2.0, 1.0, 0.0],
+        "dt": 0.05,
+        "duration": 15.0,
+    },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle", "footprint": [0.3, 0.3]},
+        "controller": {
+            "law": "mppi",
+            "gains": {"samples": 64, "horizon_steps": 10, "max_sample_steps": 4000},
+        },
+        "odometry": {"mode": "perfect"},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [1.0, 0.0, 0.0],
+        "dt": 0.1,
+        "duration": 10.0,
+    },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "diffdrive", "preset": "rm100"},
+        "plant": "dynamic",
+        "controller": {"law": "computed_torque"},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [1.0, 0.0, 0.0],
+        "dt": 0.02,
+        "duration": 10.0,
+    },
+]
+for _base in BASES:
+    _base["resources"] = dict(_FUZZ_RESOURCES)
+    _base.setdefault("planner", {})["options"] = {"time_limit": 2.0}
+
+
+def _scenario_paths() -> list[tuple[str, ...]]:
+    """Every field of the scenario schema, and the gains and planner options a file can set."""
+    from pydantic import BaseModel
+
+    from wheelbase.control import MPPI, Kanayama, PurePursuit, Stanley
+    from wheelbase.control.mppi_critics import MPPICritics
+    from wheelbase.planning import HybridAStar
+    from wheelbase.scenario import Scenario
+
+    paths: list[tuple[str, ...]] = []
+
+    def walk(model: type[BaseModel], prefix: tuple[str, ...]) -> None:
+        for name, field in model.model_fields.items():
+            paths.append((*prefix, name))
+            annotation = field.annotation
+            if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+                walk(annotation, (*prefix, name))
+
+    walk(Scenario, ())
+    paths.append(("goal",))
+    gains = set(inspect.signature(MPPI).parameters) | {f for f in MPPICritics.WEIGHTS}
+    for cls in (Kanayama, PurePursuit, Stanley):
+        gains |= set(inspect.signature(cls).parameters)
+    gains |= {"bandwidth", "speed", "max_torque", "model_error", "max_speed", "max_yaw_rate"}
+    paths += [("controller", "gains", name) for name in sorted(gains - {"model", "limits"})]
+    options = set(inspect.signature(HybridAStar).parameters)
+    paths += [("planner", "options", name) for name in sorted(options)]
+    return paths
+
+
+_PATHS: list[tuple[str, ...]] = []
+
+
+def scenario_paths() -> list[tuple[str, ...]]:
+    """The field paths a mutation can touch (computed once)."""
+    if not _PATHS:
+        _PATHS.extend(_scenario_paths())
+    return _PATHS
+
+
+def _mutation(paths: list[tuple[str, ...]]) -> st.SearchStrategy:
+    value = st.one_of(
+        st.sampled_from(HOSTILE),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(min_value=-(2**80), max_value=2**80),
+        st.text(max_size=8),
+        st.sampled_from(
+            [
+                "empty",
+                "warehouse",
+                "maze",
+                "mppi",
+                "segment",
+                "linear",
+                "rear_wheel_feedback",
+                "ackermann",
+                "bicycle",
+                "dynamic",
+                "rm100",
+                "numba",
+                "numpy",
+                "exact",
+                "encoders",
+                "trinary",
+            ]
+        ),
+    )
+    return st.tuples(
+        st.sampled_from(paths),
+        st.sampled_from(["set", "set", "set", "delete", "unknown"]),
+        value,
+    )
+
+
+def _apply(data: dict[str, Any], mutation: tuple) -> None:
+    path, action, value = mutation
+    node: Any = data
+    for key in path[:-1]:
+        if not isinstance(node, dict):
+            return
+        node = node.setdefault(key, {}) if action == "set" else node.get(key)
+    if not isinstance(node, dict):
+        return
+    if action == "set":
+        node[path[-1]] = copy.deepcopy(value)
+    elif action == "delete":
+        node.pop(path[-1], None)
+    else:
+        node[f"{path[-1]}_typo"] = copy.deepcopy(value)
+
+
+@st.composite
+def scenario_cases(draw) -> dict[str, Any]:
+    """A base scenario with one to three fields set to hostile values, deleted or misspelt."""
+    data = copy.deepcopy(draw(st.sampled_from(BASES)))
+    for mutation in draw(st.lists(_mutation(scenario_paths()), min_size=1, max_size=3)):
+        _apply(data, mutation)
+    return data
+
+
+def run_scenario(data: dict[str, Any]) -> Any:
+    """Run a scenario case from its mapping, as ``wheelbase.run`` does."""
+    from wheelbase.runner import run
+
+    return run(copy.deepcopy(data))
+
+
+def run_scenario_file(content: bytes) -> Any:
+    """Write a scenario file case and run it by path."""
+    from wheelbase.runner import run
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "scenario.yaml"
+        path.write_bytes(content)
+        return run(path)
+
+
+@st.composite
+def scenario_file_cases(draw) -> bytes:
+    """The bytes of a scenario file: a valid one cut, re-encoded or with bytes flipped."""
+    text = yaml.safe_dump(draw(st.sampled_from(BASES)), sort_keys=False)
+    raw = text.encode(draw(st.sampled_from(["utf-8", "utf-16", "latin-1"])))
+    return _damage(draw, raw)
+
+
+def _damage(draw, raw: bytes) -> bytes:
+    how = draw(st.sampled_from(["keep", "cut", "flip", "insert", "append"]))
+    if how == "cut" and raw:
+        return raw[: draw(st.integers(0, len(raw) - 1))]
+    if how == "flip" and raw:
+        at = draw(st.integers(0, len(raw) - 1))
+        return raw[:at] + bytes([draw(st.integers(0, 255))]) + raw[at + 1 :]
+    if how == "insert":
+        at = draw(st.integers(0, len(raw)))
+        return raw[:at] + draw(st.binary(min_size=1, max_size=16)) + raw[at:]
+    if how == "append":
+        return raw + draw(
+            st.sampled_from(
+                [
+                    b"\n: :\n",
+                    b"\x00",
+                    b"\n- [",
+                    b"\nkey: &a [*a]\n",
+                    b"\n" + b"[" * 200,
+                    b"\xff\xfe",
+                ]
+            )
+        )
+    return raw
+
+
+# =========================================================================== map files
+def _pgm(width: Any, height: Any, body: bytes, maxval: Any = 255) -> bytes:
+    return f"P5\n{width} {height}\n{maxval}\n".encode() + body
+
+
+@st.composite
+def _image_bytes(draw) -> tuple[str, bytes]:
+    kind = draw(st.sampled_from(["pgm", "png", "bmp", "jpg", "header", "random"]))
+    if kind == "random":
+        return ".png", draw(st.binary(max_size=64))
+    if kind == "header":
+        dims = st.one_of(
+            st.sampled_from([0, 1, 3, -1, 10**8, 2**31, "abc", "1e3", ""]), st.integers(0, 50)
+        )
+        maxval = draw(st.sampled_from([255, 65535, 0, 1, 70000, "x"]))
+        body = draw(st.binary(max_size=64))
+        return ".pgm", _pgm(draw(dims), draw(dims), body, maxval)
+    from PIL import Image
+
+    rows, cols = draw(st.integers(1, 12)), draw(st.integers(1, 12))
+    mode = draw(st.sampled_from(["L", "RGB", "RGBA", "LA", "1", "P", "I", "F", "I;16"]))
+    pixels = np.asarray(
+        draw(st.lists(st.integers(0, 255), min_size=rows * cols, max_size=rows * cols)), np.uint8
+    ).reshape(rows, cols)
+    image = Image.fromarray(pixels, "L").convert(mode if mode != "I;16" else "I")
+    if mode == "I;16":
+        image = Image.fromarray(pixels.astype(np.uint16) * 257)
+    fmt = {"pgm": "PPM", "png": "PNG", "bmp": "BMP", "jpg": "JPEG"}[kind]
+    buffer = io.BytesIO()
+    try:
+        image.save(buffer, fmt)
+    except (OSError, ValueError, KeyError):
+        image.convert("L").save(buffer, fmt)
+    return f".{kind}", _damage(draw, buffer.getvalue())
+
+
+@st.composite
+def _ros_yaml(draw) -> tuple[str, bytes, dict[str, bytes]]:
+    suffix, image = draw(_image_bytes())
+    fields: dict[str, Any] = {
+        "image": f"m{suffix}",
+        "resolution": 0.1,
+        "origin": [0.0, 0.0, 0.0],
+        "negate": 0,
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+        "mode": "trinary",
+    }
+    for key in draw(st.lists(st.sampled_from(sorted(fields)), max_size=3)):
+        choice = draw(st.sampled_from(["set", "delete"]))
+        if choice == "delete":
+            fields.pop(key, None)
+        else:
+            fields[key] = draw(
+                st.one_of(
+                    st.sampled_from(HOSTILE),
+                    st.sampled_from(
+                        ["scale", "raw", "m.pgm", "missing.png", "yes", "no", [1, "a"], [0, 0]]
+                    ),
+                )
+            )
+    text = yaml.safe_dump(fields).encode()
+    return ".yaml", _damage(draw, text), {f"m{suffix}": image}
+
+
+@st.composite
+def _movingai(draw) -> tuple[str, bytes, dict[str, bytes]]:
+    height = draw(
+        st.one_of(st.integers(0, 12), st.sampled_from([-1, "abc", 10**6, "1e3", "", "²", "9" * 30]))
+    )
+    width = draw(st.one_of(st.integers(0, 12), st.sampled_from([-1, "x", 10**6, ""])))
+    rows = draw(st.lists(st.text(alphabet=".@TGSWO \t", max_size=14), max_size=14))
+    header = draw(st.sampled_from(["type octile\n", "", "type\n", "type octile extra\n"]))
+    text = f"{header}height {height}\nwidth {width}\nmap\n" + "\n".join(rows)
+    encoding = draw(st.sampled_from(["utf-8", "utf-8", "latin-1", "utf-16"]))
+    return ".map", _damage(draw, text.encode(encoding, errors="replace")), {}
+
+
+@st.composite
+def _scen(draw) -> tuple[str, bytes, dict[str, bytes]]:
+    field = st.one_of(st.integers(-5, 100), st.sampled_from(["x", "1e3", "nan", "inf", ""]))
+    lines = ["version 1"]
+    for _ in range(draw(st.integers(0, 4))):
+        values = [draw(field) for _ in range(draw(st.sampled_from([9, 9, 9, 8, 10])))]
+        lines.append("\t".join(map(str, values)))
+    return ".scen", _damage(draw, "\n".join(lines).encode()), {}
+
+
+@st.composite
+def map_file_cases(draw) -> tuple[str, bytes, dict[str, bytes]]:
+    """(suffix, bytes, side files) of a map file of any format, possibly damaged."""
+    return draw(
+        st.one_of(
+            _ros_yaml(),
+            _movingai(),
+            _scen(),
+            _image_bytes().map(lambda pair: (pair[0], pair[1], {})),
+        )
+    )
+
+
+def load_map_file(case: tuple[str, bytes, dict[str, bytes]]) -> Any:
+    """Write a map case into a fresh folder and read it the way a user would."""
+    from wheelbase.planning import read_movingai_scenarios
+    from wheelbase.planning.maps import load_map
+
+    suffix, content, side = case
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"map{suffix}"
+        path.write_bytes(content)
+        for name, data in side.items():
+            (Path(folder) / name).write_bytes(data)
+        if suffix == ".scen":
+            return read_movingai_scenarios(path)
+        return load_map(path)
+
+
+@st.composite
+def array_map_cases(draw) -> dict[str, Any]:
+    """Arguments of ``OccupancyGrid.from_array``: odd arrays, resolutions, origins, thresholds."""
+    rows, cols = draw(st.integers(0, 6)), draw(st.integers(0, 6))
+    element = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-2, 2))
+    values = draw(st.lists(element, min_size=rows * cols, max_size=rows * cols))
+    dtype = draw(st.sampled_from([float, bool, int, object, str]))
+    try:
+        array = np.asarray(values, dtype=dtype).reshape(rows, cols)
+    except (ValueError, OverflowError):
+        array = np.zeros((rows, cols))
+    return {
+        "occupied": draw(st.one_of(st.just(array), st.sampled_from(HOSTILE))),
+        "resolution": draw(st.one_of(st.just(0.1), st.sampled_from(HOSTILE))),
+        "origin": draw(st.one_of(st.just((0.0, 0.0)), st.sampled_from(HOSTILE))),
+        "occupied_thresh": draw(st.one_of(st.just(0.5), st.sampled_from(HOSTILE))),
+    }
+
+
+def grid_from_array(kwargs: dict[str, Any]) -> Any:
+    """Build a grid from an array case."""
+    from wheelbase.planning import OccupancyGrid
+
+    return OccupancyGrid.from_array(**kwargs)
+
+
+# =========================================================================== constructors
+def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
+    """Public constructors and entry points with valid arguments (one is then made hostile)."""
+    import wheelbase as wb
+    from wheelbase.control import VelocityLimits
+    from wheelbase.planning import Footprint, OccupancyGrid, dubins_length, reeds_shepp_length
+
+    grid = OccupancyGrid.from_array(np.zeros((40, 40), bool), 0.1)
+    line = wb.Polyline([[0.0, 0.0], [2.0, 0.0]])
+    limits = VelocityLimits(max_speed=0.5, max_yaw_rate=1.0)
+
+    def plan(**kw):
+        planner = wb.HybridAStar(grid, kw.pop("footprint"), kw.pop("turning_radius"), **kw)
+        return planner.plan((1.0, 1.0, 0.0), (3.0, 2.0, 1.0))
+
+    def plan_poses(start, goal):
+        return wb.HybridAStar(grid, (0.4, 0.3), 0.5).plan(start, goal)
+
+    def mppi(**kw):
+        controller = wb.MPPI(wb.Unicycle(), **kw)
+        return controller(0.0, (0.5, 0.5, 0.0), line)
+
+    def mppi_pose(pose, reference):
+        controller = wb.MPPI(wb.Unicycle(), 10, 0.1, 32, 0.2, 0.1, None, limits)
+        return controller(0.0, pose, reference)
+
+    def simulate(**kw):
+        return wb.simulate(wb.DiffDrive(0.05, 0.2), **kw)
+
+    def follow(**kw):
+        return wb.PurePursuit(**kw)(0.0, (0.1, 0.1, 0.2), line)
+
+    def track(**kw):
+        return wb.Kanayama(**kw)
+
+    return {
+        "DiffDrive": (wb.DiffDrive, {"wheel_radius": 0.05, "half_track": 0.2}),
+        "Bicycle": (wb.Bicycle, {"wheel_base": 0.5, "max_steering": 0.6}),
+        "RearWheelBicycle": (wb.RearWheelBicycle, {"wheel_base": 0.5, "max_steering": 0.6}),
+        "Ackermann": (wb.Ackermann, {"wheel_base": 0.5, "track": 0.3, "max_steering": 0.6}),
+        "mecanum4": (
+            wb.mecanum4,
+            {"wheel_radius": 0.05, "half_length": 0.2, "half_width": 0.15},
+        ),
+        "omni3": (wb.omni3, {"wheel_radius": 0.05, "base_radius": 0.2}),
+        "Footprint.rectangle": (
+            Footprint.rectangle,
+            {"length": 0.6, "width": 0.4, "rear_axle_to_center": 0.1},
+        ),
+        "OccupancyGrid.from_array": (
+            OccupancyGrid.from_array,
+            {
+                "occupied": np.zeros((3, 3)),
+                "resolution": 0.1,
+                "origin": (0.0, 0.0),
+                "occupied_thresh": 0.5,
+            },
+        ),
+        "HybridAStar.plan": (
+            plan,
+            {
+                "footprint": (0.4, 0.3),
+                "turning_radius": 0.5,
+                "headings": 36,
+                "xy_resolution": 0.2,
+                "time_limit": 1.0,
+                "curvatures": 3,
+                "smooth": True,
+            },
+        ),
+        "HybridAStar.plan(poses)": (
+            plan_poses,
+            {"start": (1.0, 1.0, 0.0), "goal": (3.0, 2.0, -6.12)},
+        ),
+        "MPPI": (
+            mppi,
+            {
+                "horizon_steps": 10,
+                "dt": 0.1,
+                "samples": 32,
+                "noise_std": 0.2,
+                "temperature": 0.1,
+                "critics": None,
+                "limits": limits,
+                "backend": "numpy",
+                "seed": 0,
+            },
+        ),
+        "MPPI(pose)": (mppi_pose, {"pose": (0.5, 0.5, -6.12), "reference": line}),
+        "simulate": (
+            simulate,
+            {
+                "pose0": (0.0, 0.0, 0.0),
+                "inputs": (1.0, 0.8),
+                "t_end": 1.0,
+                "dt": 0.1,
+                "method": "rk4",
+            },
+        ),
+        "PurePursuit": (follow, {"speed": 0.3, "min_lookahead": 0.3, "lookahead_gain": 0.2}),
+        "Kanayama": (track, {"k_x": 1.0, "k_y": 4.0, "k_theta": 2.0}),
+        "Encoder": (wb.Encoder, {"pulses_per_revolution": 1024, "noise_std": 0.5, "seed": 1}),
+        "SpeedLimits": (wb.SpeedLimits, {"max_speed": 0.5, "max_acceleration": 0.5}),
+        "VelocityLimits": (VelocityLimits, {"max_speed": 0.5, "max_yaw_rate": 1.0}),
+        "dubins_length": (
+            dubins_length,
+            {"start": (0.0, 0.0, 0.0), "goal": (2.0, 1.0, 1.0), "turning_radius": 1.0},
+        ),
+        "reeds_shepp_length": (
+            reeds_shepp_length,
+            {"start": (0.0, 0.0, 0.0), "goal": (2.0, 1.0, 1.0), "turning_radius": 1.0},
+        ),
+        "load_scenario": (wb.load_scenario, {"source": "demo"}),
+    }
+
+
+_CONSTRUCTORS: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {}
+
+
+def constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
+    """The constructor table (built once)."""
+    if not _CONSTRUCTORS:
+        _CONSTRUCTORS.update(_constructors())
+    return _CONSTRUCTORS
+
+
+@st.composite
+def constructor_cases(draw) -> tuple[str, dict[str, Any]]:
+    """(name, keyword arguments) with one or two arguments made hostile."""
+    table = constructors()
+    name = draw(st.sampled_from(sorted(table)))
+    _function, arguments = table[name]
+    kwargs = dict(arguments)
+    value = st.one_of(
+        st.sampled_from(HOSTILE),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(-(2**70), 2**70),
+    )
+    for key in draw(st.lists(st.sampled_from(sorted(arguments)), min_size=1, max_size=2)):
+        kwargs[key] = draw(value)
+    return name, kwargs
+
+
+def call_constructor(case: tuple[str, dict[str, Any]]) -> Any:
+    """Call the constructor of a case."""
+    name, kwargs = case
+    return constructors()[name][0](**copy.deepcopy(kwargs))
+
+
+# =========================================================================== CLI
+# command → (required arguments, optional flags with their number of values)
+CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
+    "simulate": (
+        ["--no-gif", "--left", "1", "--right", "0.8", "--t-end", "2"],
+        {
+            "--model": 1,
+            "--wheel-radius": 1,
+            "--half-track": 1,
+            "--left": 1,
+            "--right": 1,
+            "--v": 1,
+            "--omega": 1,
+            "--wheel-base": 1,
+            "--speed": 1,
+            "--steering": 1,
+            "--max-steering": 1,
+            "--t-end": 1,
+            "--dt": 1,
+            "--method": 1,
+            "--pose0": 3,
+            "--length": 1,
+        },
+    ),
+    "control": (
+        ["--start", "1", "1", "0", "--t-end", "5", "--dt", "0.05"],
+        {
+            "--law": 1,
+            "--start": 3,
+            "--goal": 3,
+            "--max-speed": 1,
+            "--max-yaw-rate": 1,
+            "--t-end": 1,
+            "--dt": 1,
+        },
+    ),
+    "plan": (
+        ["maze", "--start", "1", "1", "0", "--goal", "3", "1", "0"],
+        {
+            "--start": 3,
+            "--goal": 3,
+            "--turning-radius": 1,
+            "--footprint": 2,
+            "--rear-axle-to-center": 1,
+        },
+    ),
+    "goto": (
+        ["--goal", "0.5", "0.5", "--unit", "m"],
+        {"--goal": 2, "--unit": 1, "--ed": 1, "--eb": 1, "--method": 1, "--seed": 1},
+    ),
+    "dynamics": (
+        ["--no-gif", "--t-end", "2"],
+        {"--torques": 2, "--t-end": 1, "--dt": 1, "--method": 1, "--preset": 1},
+    ),
+    "schema": ([], {}),
+    "scenarios": ([], {}),
+}
+
+
+@st.composite
+def cli_cases(draw) -> list[str]:
+    """Arguments of one command (without ``--out``) with one to three flags made hostile."""
+    command = draw(st.sampled_from(sorted(CLI_COMMANDS)))
+    required, flags = CLI_COMMANDS[command]
+    args = [command, *required]
+    if flags:
+        for flag in draw(st.lists(st.sampled_from(sorted(flags)), min_size=1, max_size=3)):
+            values = [
+                draw(st.one_of(st.sampled_from(HOSTILE_TEXT), st.text(max_size=6)))
+                for _ in range(flags[flag])
+            ]
+            args += [flag, *values]
+    return args
+
+
+def run_cli(args: list[str]) -> Any:
+    """Run ``wheelbase ARGS --out TMP``; raise unless it ended with code 0 or 2 and no exception
+    escaped (exit code 2 is both the CLI's one-line errors and click's usage errors)."""
+    from typer.testing import CliRunner
+
+    from wheelbase.cli import app
+
+    with tempfile.TemporaryDirectory() as folder:
+        extra = [] if args[0] in ("schema", "scenarios") else ["--out", str(Path(folder) / "o")]
+        result = CliRunner().invoke(app, [*args, *extra])
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    if result.exit_code not in (0, 2):
+        raise RuntimeError(f"exit code {result.exit_code}: {result.output[-300:]}")
+    if "Traceback" in result.output:
+        raise RuntimeError(f"a traceback was printed: {result.output[-300:]}")
+    if result.exit_code == 2:
+        raise CliRefused(result.output.strip()[-300:] or "exit code 2")
+    return result
+
+
+class CliRefused(WheelbaseError):
+    """The CLI refused the arguments cleanly (exit code 2: one line, or click's usage)."""

@@ -1,0 +1,95 @@
+"""Fuzz suite (issue 16): hostile scenario fields, map files of every format, CLI flags and public
+constructors. Every case runs, or raises a WheelbaseError (the CLI: exit code 2, one line),
+within the budget of its kind (``fuzzing.BUDGET_S``): never another exception, never a hang.
+
+In CI the examples are derandomized (tests/conftest.py) and few (about 20 s in all); to hunt,
+``pytest tests/test_fuzz.py --hypothesis-profile=explore`` draws at random (keep what it finds
+as ``@example``), and ``python benchmarks/fuzz.py`` counts raw exceptions and hangs over 10,000
+cases instead of stopping at the first.
+"""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, example, given, settings
+
+import fuzzing
+
+# max_examples is set per test for CI; the explore profile's 1000 wins when it is loaded.
+FAST = {"deadline": None, "suppress_health_check": list(HealthCheck)}
+
+
+def _examples(count: int) -> dict:
+    from hypothesis import settings as current
+
+    return {"max_examples": count if current.default.derandomize else current.default.max_examples}
+
+
+def check(call, case, kind: str) -> None:
+    """Fail unless the case ran or raised a WheelbaseError within its budget."""
+    result = fuzzing.outcome(lambda: call(case), fuzzing.BUDGET_S[kind])
+    if result.kind in ("raw", "hang"):
+        pytest.fail(f"{result.kind}: {result.detail}\ncase: {case!r}"[:2000])
+
+
+@settings(**FAST, **_examples(40))
+@given(fuzzing.scenario_cases())
+@example({**fuzzing.BASES[0], "dt": 1e-9})
+@example({**fuzzing.BASES[0], "goal": [1e300, 0.0, 0.0]})
+@example({**fuzzing.BASES[3], "controller": {"law": "mppi", "gains": {"seed": 2**70}}})
+@example({**fuzzing.BASES[0], "planner": {"options": {"headings": float("inf")}}})
+def test_scenario_fields(case):
+    check(fuzzing.run_scenario, case, "scenario")
+
+
+@settings(**FAST, **_examples(15))
+@given(fuzzing.scenario_file_cases())
+@example("name: café\n".encode("latin-1"))
+def test_scenario_files(case):
+    check(fuzzing.run_scenario_file, case, "scenario_file")
+
+
+@settings(**FAST, **_examples(150))
+@given(fuzzing.map_file_cases())
+@example((".pgm", b"P5\n100000000 100000000\n255\n\x00", {}))
+@example((".map", b"type octile\nheight abc\nwidth 2\nmap\n..\n", {}))
+@example((".yaml", b"image: m.pgm\nresolution: 0.1\norigin: [a, 0, 0]\n", {}))
+def test_map_files(case):
+    check(fuzzing.load_map_file, case, "map_file")
+
+
+@settings(**FAST, **_examples(60))
+@given(fuzzing.array_map_cases())
+def test_map_arrays(case):
+    check(fuzzing.grid_from_array, case, "map_file")
+
+
+@settings(**FAST, **_examples(150))
+@given(fuzzing.constructor_cases())
+@example(("simulate", {"pose0": (0.0, 0.0, 0.0), "inputs": (1.0, 0.8), "t_end": 1e300,
+                       "dt": 0.1, "method": "rk4"}))  # fmt: skip
+def test_constructors(case):
+    check(fuzzing.call_constructor, case, "constructor")
+
+
+@settings(**FAST, **_examples(12))
+@given(fuzzing.cli_cases())
+def test_cli_flags(case):
+    check(fuzzing.run_cli, case, "cli")
+
+
+def test_outcome_classifies_and_stops_a_hang():
+    # The harness itself: a clean error, a raw exception, and a loop stopped at its budget.
+    from wheelbase.errors import ConfigError
+
+    def loop():
+        while True:
+            pass
+
+    def raise_config():
+        raise ConfigError("x must be > 0 m (got -1)")
+
+    assert fuzzing.outcome(raise_config, 1.0).kind == "error"
+    assert fuzzing.outcome(lambda: 1 / 0, 1.0).kind == "raw"
+    stopped = fuzzing.outcome(loop, 0.2)
+    assert stopped.kind == "hang" and stopped.seconds < 1.0
