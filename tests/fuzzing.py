@@ -275,8 +275,21 @@ def scenario_paths() -> list[tuple[str, ...]]:
     return _PATHS
 
 
+# numbers for tuples (poses, footprints, scales): wide, with the extremes and non-finite ones
+_NUMBER = st.one_of(
+    st.floats(min_value=-20.0, max_value=20.0),
+    st.floats(min_value=-1e11, max_value=1e11),
+    st.sampled_from([math.nan, math.inf, 1e300, 1e-300, 0.0, -6.12, 4.5e9, 1e10]),
+)
+_TUPLES = st.one_of(
+    st.lists(_NUMBER, min_size=0, max_size=4),
+    st.lists(st.lists(_NUMBER, min_size=2, max_size=4), min_size=0, max_size=4),
+)
+
+
 def _mutation(paths: list[tuple[str, ...]]) -> st.SearchStrategy:
     value = st.one_of(
+        _TUPLES,
         st.sampled_from(HOSTILE),
         st.floats(allow_nan=True, allow_infinity=True),
         st.integers(min_value=-(2**80), max_value=2**80),

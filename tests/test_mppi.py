@@ -719,3 +719,18 @@ def test_a_huge_step_keeps_the_path_window_to_the_path():
     mppi = MPPI(Unicycle(), 10, 157409.0, 32, 0.2, 0.1, None, LIMITS)
     assert mppi(0.0, (0.5, 0.0, 0.0), STRAIGHT).shape == (2,)
     assert mppi._window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2
+
+
+def test_a_long_horizon_smooths_without_a_horizon_squared_matrix():
+    # 130,539 steps made a 127 GiB Savitzky–Golay matrix; long horizons filter directly.
+    from scipy.signal import savgol_filter
+
+    mppi = MPPI(Unicycle(), 130_539, 0.1, 2, 0.2, 0.1, None, LIMITS, savgol_window=9)
+    sequence = np.random.default_rng(0).standard_normal((130_539, 2))
+    expected = savgol_filter(sequence, 9, 3, axis=0, mode="interp")
+    np.testing.assert_allclose(mppi._smooth(sequence), expected, atol=1e-12)
+    short = make(steps=20)
+    small = np.random.default_rng(1).standard_normal((20, 2))
+    np.testing.assert_allclose(
+        short._smooth(small), savgol_filter(small, 9, 3, axis=0, mode="interp"), atol=1e-12
+    )

@@ -392,3 +392,11 @@ def test_smoothing_is_the_same_at_a_4_5e9_m_offset():
     assert not np.allclose(near.poses, raw.poses)  # smoothing did something
     np.testing.assert_allclose(far.poses - shift, near.poses, atol=1e-6 * raw.length)
     np.testing.assert_allclose(far.curvatures, near.curvatures, atol=1e-6)
+
+
+def test_xy_resolution_larger_than_the_map():
+    # 1.8e9 m bins: the heuristic's coarse grid padded the map to 1.8e10 cells a side
+    grid = OccupancyGrid.from_array(np.zeros((40, 40), bool), 0.1)
+    planner = HybridAStar(grid, (0.4, 0.3), 0.5, xy_resolution=1834191526.0, time_limit=1.0)
+    path = planner.plan((1.0, 1.0, 0.0), (3.0, 2.0, 1.0))
+    assert path.success  # one bin: the analytic shot from the start

@@ -266,13 +266,17 @@ class MPPI:
                 f"savgol_window must be 0 or an odd integer >= 3 (got {savgol_window!r})"
             )
         self.savgol_window = window
-        # Savitzky–Golay as a matrix along the horizon: the filter is linear in the sequence.
+        # Savitzky–Golay as a matrix along the horizon: the filter is linear in the sequence
+        # (a long horizon is filtered directly: its T × T matrix would not fit in memory).
         steps = self.horizon_steps
         window = min(window, steps if steps % 2 else steps - 1)
-        self._savgol = None
+        self._savgol: np.ndarray | tuple[int, int] | None = None
         if window >= 3:
             order = min(3, window - 1)
-            self._savgol = savgol_filter(np.eye(steps), window, order, axis=0, mode="interp")
+            if steps <= SAVGOL_MATRIX_STEPS:
+                self._savgol = savgol_filter(np.eye(steps), window, order, axis=0, mode="interp")
+            else:
+                self._savgol = (window, order)
         self._set_map(grid, footprint)
         if self.backend == "jax":
             import_jax()
@@ -620,7 +624,12 @@ class MPPI:
         return out
 
     def _smooth(self, sequence: np.ndarray) -> np.ndarray:
-        return sequence if self._savgol is None else self._savgol @ sequence
+        if self._savgol is None:
+            return sequence
+        if isinstance(self._savgol, tuple):
+            window, order = self._savgol
+            return savgol_filter(sequence, window, order, axis=0, mode="interp")
+        return self._savgol @ sequence
 
     def predict(
         self, plan: MPPIPlan | None = None, controls: ArrayLike | None = None
@@ -920,6 +929,9 @@ def _model_kind(model: Any) -> tuple[int, float]:
         f"and holonomic wheeled bases (got {type(model).__name__})"
     )
 
+
+SAVGOL_MATRIX_STEPS = 1024
+"""Horizons up to this many steps smooth with a precomputed T × T matrix (8 MB at 1024)."""
 
 OUTLINE_SPACING = 0.2
 """Spacing [m] of the edge disks that stand for a long footprint (see ``_set_map``)."""

@@ -490,8 +490,9 @@ class HybridAStar:
         A weight above 1 gives this up on purpose, for speed.
         """
         blocked = self._heuristic_blocked
-        f = max(1, round(self.xy_resolution / self.grid.resolution))
         rows, cols = blocked.shape
+        # a coarse cell wider than the map is the map (and keeps the padding finite)
+        f = max(1, min(round(self.xy_resolution / self.grid.resolution), max(rows, cols)))
         pr, pc = (-rows) % f, (-cols) % f
         free = np.pad(~blocked, ((0, pr), (0, pc)), constant_values=False)
         coarse_free = free.reshape(free.shape[0] // f, f, free.shape[1] // f, f).any(axis=(1, 3))
