@@ -12,6 +12,7 @@ __all__ = [
     "ConfigError",
     "DataError",
     "DependencyError",
+    "EstimationError",
     "InputError",
     "MapError",
     "PlanningError",
@@ -50,3 +51,8 @@ class ScenarioError(ConfigError):
 
 class DependencyError(WheelbaseError, ImportError):
     """An optional dependency is missing; the message names the extra that installs it."""
+
+
+class EstimationError(WheelbaseError, ArithmeticError):
+    """An estimator's belief broke down (a covariance no longer positive definite, all particle
+    weights zero): the message names the filter, the robot and the parameters to look at."""

@@ -1,0 +1,32 @@
+"""Localisation: EKF and UKF with known landmarks, and AMCL (a particle filter as Nav2's)."""
+
+from wheelbase.localization.amcl import AMCL, AMCLInfo, AMCLState, PoseEstimate
+from wheelbase.localization.ekf import EKF
+from wheelbase.localization.kalman import KalmanFilter, UpdateInfo, chi2_gate
+from wheelbase.localization.motion import OdometryMotion, VelocityMotion, arc_move, odometry_delta
+from wheelbase.localization.particles import Cluster, kld_particles, low_variance_resample
+from wheelbase.localization.trials import AMCLRun, noisy_odometry, run_amcl, wander
+from wheelbase.localization.ukf import UKF
+
+__all__ = [
+    "AMCL",
+    "EKF",
+    "UKF",
+    "AMCLInfo",
+    "AMCLRun",
+    "AMCLState",
+    "Cluster",
+    "KalmanFilter",
+    "OdometryMotion",
+    "PoseEstimate",
+    "UpdateInfo",
+    "VelocityMotion",
+    "arc_move",
+    "chi2_gate",
+    "kld_particles",
+    "low_variance_resample",
+    "noisy_odometry",
+    "odometry_delta",
+    "run_amcl",
+    "wander",
+]

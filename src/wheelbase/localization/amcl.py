@@ -1,0 +1,681 @@
+"""AMCL: adaptive Monte Carlo localisation as Nav2's ``nav2_amcl`` does it.
+
+One filter update (:meth:`AMCL.update`) takes the robot's odometry pose and, optionally, a lidar
+scan and landmark measurements:
+
+1. **When to update.** Nothing happens until the odometry has moved ``update_min_d`` or turned
+   ``update_min_a`` since the last update (Nav2's rule; 0 and 0 update on every call).
+2. **Motion.** Every particle moves by the odometry's relative motion with independent noise
+   (:class:`~wheelbase.localization.motion.OdometryMotion`).
+3. **Measurement.** The weights are multiplied by the likelihood of the scan on the map's
+   likelihood field (``max_beams`` beams, evenly subsampled) and of the landmark measurements
+   (:mod:`wheelbase.localization.likelihood`).
+4. **Recovery (augmented MCL, Thrun, Burgard and Fox Table 8.3).** Short- and long-term averages
+   w_fast and w_slow (rates ``recovery_alpha_fast`` and ``recovery_alpha_slow``) give the
+   probability max(0, 1 − w_fast/w_slow) with which each resampled particle is replaced by a
+   random pose in the free space: when the scans suddenly fit worse than they used to (a
+   kidnapped robot) fresh guesses come in. Departures from the book, whose averages are of the
+   mean likelihood: here they are averages of the *log*-likelihood of the *best* particle, per
+   measurement (a geometric mean over the beams, so that w_fast/w_slow means the same with 6 or
+   60 beams).
+   With 60 beams the likelihoods span e^±100, so linear averages take tens of updates to notice
+   a kidnapping, and the mean over thousands of random guesses stays low after one of them has
+   found the pose, which keeps the injection going until nothing is left of the good cluster;
+   the best particle's fit drops at once when the robot is carried off and comes back as soon
+   as one guess is right. Unlike Nav2, which
+   restarts both averages after every injection (so that one injection is all it does until
+   they drift apart again), the averages run on as in the book: the injection goes on while
+   the fit stays worse.
+5. **Resampling** every ``resample_interval`` updates: the KLD bound fixes the number of
+   particles between ``min_particles`` and ``max_particles`` and one low-variance pass draws
+   them (:mod:`wheelbase.localization.particles`).
+
+The belief is an :class:`AMCLState` passed in and returned. :meth:`AMCL.estimate` reports the
+heaviest cluster of particles as the pose, and every cluster: where the map is ambiguous the
+weight is split between clusters (``ambiguous`` is true), rather than hidden in one mean.
+
+Defaults are Nav2's (recovery off, as there), except two: the KLD quantile (see
+:mod:`~wheelbase.localization.particles`) and the beams of the likelihood field, combined as
+the book's product rather than Nav2's 1 + Σ p³ (``beam_combination="cubes"`` restores it): with
+the sum of cubes a particle that explains nothing keeps 1/9 of the weight of one that explains
+every beam, and in the bundled warehouse a tracked cloud leaked into a look-alike aisle within
+12 m and jumped there.
+
+For global localisation and the kidnapped robot use
+``sensor_model="beam"`` (the ray-cast beam model of Thrun et al. §6.3, which also penalises
+beams that pass through walls: the likelihood field ignores them, and the maze's corridors,
+4 m apart, then look alike), ``min_ess`` about 0.3, and recovery rates such as 0.001 and 0.1
+(Thrun's): the tests and ``benchmarks/sensors.py`` do.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import as_float_array, as_rng, check_choice, nonnegative, positive
+from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
+from wheelbase.geometry import compose
+from wheelbase.localization.likelihood import (
+    field_table,
+    landmark_log_likelihood,
+    scan_log_likelihood,
+)
+from wheelbase.localization.motion import OdometryMotion, odometry_delta
+from wheelbase.localization.particles import (
+    Cluster,
+    clusters,
+    kld_particles,
+    low_variance_resample,
+)
+from wheelbase.planning import OccupancyGrid
+from wheelbase.sensors import BeamModel, Lidar, scan_rays
+
+__all__ = ["AMCL", "BEAM_COMBINATIONS", "SENSOR_MODELS", "AMCLInfo", "AMCLState", "PoseEstimate"]
+
+SENSOR_MODELS: tuple[str, ...] = ("likelihood_field", "beam")
+"""Lidar models of :class:`AMCL` (its docstring)."""
+BEAM_COMBINATIONS: tuple[str, ...] = ("cubes", "product")
+"""How the likelihood field combines beams: Nav2's 1 + Σ p³ or the book's Π p."""
+
+
+@dataclass(frozen=True)
+class AMCLState:
+    """The particle filter's belief.
+
+    Attributes
+    ----------
+    particles : numpy.ndarray, shape (P, 3)
+        Particle poses (x [m], y [m], θ [rad]).
+    weights : numpy.ndarray, shape (P,)
+        Normalised weights.
+    odom : numpy.ndarray, shape (3,)
+        Odometry pose at the last filter update.
+    log_w_slow, log_w_fast : float
+        Logarithms of the long- and short-term likelihood averages (−inf: not started).
+    updates : int
+        Filter updates so far.
+    """
+
+    particles: np.ndarray
+    weights: np.ndarray
+    odom: np.ndarray
+    log_w_slow: float = -math.inf
+    log_w_fast: float = -math.inf
+    updates: int = 0
+
+
+@dataclass(frozen=True)
+class AMCLInfo:
+    """What one call of :meth:`AMCL.update` did.
+
+    Attributes
+    ----------
+    updated : bool
+        Whether the filter updated (the odometry moved enough).
+    beams_used : int
+        Lidar readings that weighted the particles.
+    beams_skipped : int
+        NaN or negative readings skipped (max-range readings are not counted: they carry no
+        return).
+    landmarks_used : int
+        Landmark measurements that weighted the particles.
+    landmarks_skipped : int
+        Measurements skipped: unknown identity, NaN or negative range, NaN bearing.
+    injected : int
+        Random particles added by recovery.
+    particles : int
+        Particles after the update.
+    """
+
+    updated: bool
+    beams_used: int = 0
+    beams_skipped: int = 0
+    landmarks_used: int = 0
+    landmarks_skipped: int = 0
+    injected: int = 0
+    particles: int = 0
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """The filter's answer: the heaviest cluster's mean, and all clusters.
+
+    Attributes
+    ----------
+    pose : numpy.ndarray, shape (3,)
+        Mean of the heaviest cluster.
+    cov : numpy.ndarray, shape (3, 3)
+        Its covariance.
+    clusters : list of Cluster
+        Every cluster, heaviest first, weights summing to 1.
+    ambiguous : bool
+        True when a second cluster holds at least ``ambiguity_weight`` of the weight.
+    """
+
+    pose: np.ndarray
+    cov: np.ndarray
+    clusters: list[Cluster]
+    ambiguous: bool
+
+
+def _count(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ConfigError(f"{name} must be an integer >= 1 (got {value!r})")
+    return int(value)
+
+
+@dataclass(frozen=True, eq=False)
+class AMCL:
+    """Adaptive Monte Carlo localisation (module docstring).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or None
+        The map: needed for lidar scans and for random particles (global localisation,
+        recovery).
+    lidar : Lidar or None
+        The lidar whose scans are given (beam angles, range limits, mount).
+    landmarks : array_like or None, shape (L, 2)
+        Known landmark positions [m] for range–bearing measurements.
+    motion : OdometryMotion
+        Odometry noise (Nav2 ``alpha1``–``alpha4``).
+    min_particles, max_particles : int
+        Limits of the KLD-adapted particle count (Nav2 500 and 2,000).
+    kld_err : float
+        ε of KLD sampling (Nav2 ``pf_err``, 0.05).
+    kld_delta : float
+        δ of KLD sampling: the bound holds with probability 1 − δ (0.01).
+    bin_size : tuple of float
+        KLD and cluster bins (x [m], y [m], θ [rad]); Nav2 0.5 m, 0.5 m, 10°.
+    max_beams : int
+        Beams used per scan (Nav2 60).
+    z_hit, z_rand : float
+        Weights of the likelihood field (Nav2 0.5, 0.5); z_hit > 0.
+    sigma_hit : float
+        σ_hit of the likelihood field [m] (Nav2 0.2).
+    likelihood_max_dist : float
+        Distance cap of the likelihood field [m] (Nav2 ``laser_likelihood_max_dist`` 2.0).
+    sensor_model : {"likelihood_field", "beam"}
+        Lidar model: Nav2's likelihood field (:mod:`~wheelbase.localization.likelihood`), or
+        the beam model of Thrun et al. §6.3 on ranges ray-cast from every particle
+        (:func:`wheelbase.sensors.scan_rays`; about 10× the cost).
+    beam_combination : {"product", "cubes"}
+        How the likelihood field combines beams: the book's product or Nav2's 1 + Σ p³.
+    z_short : float
+        Weight of short readings in the beam model (Nav2 0.05).
+    lambda_short : float
+        Rate of short readings in the beam model [1/m] (Nav2 0.1).
+    min_ess : float
+        Tempering, in [0, 1): when an update would leave fewer than ``min_ess``·P effective
+        particles, the likelihood is raised to the largest power β < 1 that keeps that many
+        (annealing; it keeps several hypotheses alive while the particles are spread). 0: off.
+    landmark_range_std, landmark_bearing_std : float
+        Standard deviations of landmark range [m] and bearing [rad].
+    landmark_z_rand : float
+        Weight of the uniform floor of the landmark likelihood (robustness to outliers), in
+        [0, 1); the Gaussian has weight 1 − landmark_z_rand.
+    landmark_max_range : float
+        Range [m] over which that floor is spread.
+    recovery_alpha_slow, recovery_alpha_fast : float
+        Averaging rates of w_slow and w_fast, 0 <= slow < fast <= 1; 0 and 0 disable recovery.
+    update_min_d : float
+        Translation [m] that triggers an update (Nav2 0.25).
+    update_min_a : float
+        Rotation [rad] that triggers an update (Nav2 0.2).
+    resample_interval : int
+        Resample every this many updates (Nav2 1).
+    """
+
+    grid: OccupancyGrid | None = None
+    lidar: Lidar | None = None
+    landmarks: np.ndarray | None = None
+    motion: OdometryMotion = field(default_factory=OdometryMotion)
+    min_particles: int = 500
+    max_particles: int = 2000
+    kld_err: float = 0.05
+    kld_delta: float = 0.01
+    bin_size: tuple[float, float, float] = (0.5, 0.5, math.radians(10.0))
+    max_beams: int = 60
+    z_hit: float = 0.5
+    z_rand: float = 0.5
+    sigma_hit: float = 0.2
+    likelihood_max_dist: float = 2.0
+    sensor_model: str = "likelihood_field"
+    beam_combination: str = "product"
+    z_short: float = 0.05
+    lambda_short: float = 0.1
+    min_ess: float = 0.0
+    landmark_range_std: float = 0.1
+    landmark_bearing_std: float = 0.05
+    landmark_z_rand: float = 0.0
+    landmark_max_range: float = 10.0
+    recovery_alpha_slow: float = 0.0
+    recovery_alpha_fast: float = 0.0
+    update_min_d: float = 0.25
+    update_min_a: float = 0.2
+    resample_interval: int = 1
+
+    def __post_init__(self) -> None:
+        if self.grid is not None and not isinstance(self.grid, OccupancyGrid):
+            raise ConfigError(f"grid must be an OccupancyGrid (got {type(self.grid).__name__})")
+        if self.lidar is not None:
+            if not isinstance(self.lidar, Lidar):
+                raise ConfigError(f"lidar must be a Lidar (got {type(self.lidar).__name__})")
+            if self.grid is None:
+                raise ConfigError("a lidar needs a grid: the likelihood field is built on it")
+        if self.landmarks is not None:
+            marks = as_float_array("landmarks", self.landmarks, 2, min_ndim=2, max_ndim=2)
+            object.__setattr__(self, "landmarks", marks)
+        if not isinstance(self.motion, OdometryMotion):
+            raise ConfigError(
+                f"motion must be an OdometryMotion (got {type(self.motion).__name__})"
+            )
+        lo = _count("min_particles", self.min_particles)
+        hi = _count("max_particles", self.max_particles)
+        if lo > hi:
+            raise ConfigError(f"min_particles must be <= max_particles = {hi} (got {lo})")
+        positive("kld_err", self.kld_err)
+        delta = positive("kld_delta", self.kld_delta)
+        if delta >= 1.0:
+            raise ConfigError(f"kld_delta must be in (0, 1) (got {delta:g})")
+        size = as_float_array("bin_size", self.bin_size, 3, max_ndim=1)
+        if np.any(size <= 0):
+            raise ConfigError(f"bin_size must be > 0 (x [m], y [m], θ [rad]) (got {size})")
+        object.__setattr__(self, "bin_size", tuple(float(v) for v in size))
+        _count("max_beams", self.max_beams)
+        _count("resample_interval", self.resample_interval)
+        for name in ("z_hit", "landmark_range_std", "landmark_bearing_std", "sigma_hit",
+                     "likelihood_max_dist", "landmark_max_range"):  # fmt: skip
+            positive(name, getattr(self, name))
+        for name in ("z_rand", "z_short", "update_min_d", "update_min_a"):
+            nonnegative(name, getattr(self, name))
+        positive("lambda_short", self.lambda_short, "1/m")
+        check_choice("sensor_model", self.sensor_model, SENSOR_MODELS)
+        check_choice("beam_combination", self.beam_combination, BEAM_COMBINATIONS)
+        ess = nonnegative("min_ess", self.min_ess)
+        if ess >= 1.0:
+            raise ConfigError(f"min_ess must be in [0, 1) (got {ess:g})")
+        z = nonnegative("landmark_z_rand", self.landmark_z_rand)
+        if z >= 1.0:
+            raise ConfigError(f"landmark_z_rand must be in [0, 1) (got {z:g})")
+        slow = nonnegative("recovery_alpha_slow", self.recovery_alpha_slow)
+        fast = nonnegative("recovery_alpha_fast", self.recovery_alpha_fast)
+        if fast > 1.0 or slow > fast or (slow == fast and slow > 0.0):
+            raise ConfigError(
+                "recovery rates must satisfy 0 <= recovery_alpha_slow < recovery_alpha_fast <= 1 "
+                f"(got {slow:g} and {fast:g}); 0 and 0 disable recovery"
+            )
+
+    # ------------------------------------------------------------------ derived maps
+    @cached_property
+    def _field(self) -> np.ndarray:
+        assert self.grid is not None and self.lidar is not None
+        return field_table(
+            self.grid, self.z_hit, self.z_rand, self.sigma_hit, self.likelihood_max_dist,
+            self.lidar.max_range,
+        )  # fmt: skip
+
+    @cached_property
+    def _log_field(self) -> np.ndarray:
+        return np.log(self._field)
+
+    @cached_property
+    def _beam_model(self) -> BeamModel:
+        total = self.z_hit + self.z_short + self.z_rand
+        return BeamModel(
+            z_hit=self.z_hit / total,
+            z_short=self.z_short / total,
+            z_max=0.0,
+            z_rand=self.z_rand / total,
+            lambda_short=self.lambda_short,
+        )
+
+    @cached_property
+    def _outside(self) -> float:
+        assert self.lidar is not None
+        d = self.likelihood_max_dist
+        return self.z_hit * math.exp(-d * d / (2.0 * self.sigma_hit**2)) + (
+            self.z_rand / self.lidar.max_range
+        )
+
+    @cached_property
+    def _beam_index(self) -> np.ndarray:
+        assert self.lidar is not None
+        count = self.lidar.beams
+        if self.max_beams >= count:
+            return np.arange(count)
+        return np.unique(np.round(np.linspace(0, count - 1, self.max_beams)).astype(np.int64))
+
+    @cached_property
+    def _free_cells(self) -> np.ndarray:
+        if self.grid is None:
+            raise ConfigError("random particles need a grid: pass grid= to AMCL")
+        free = np.argwhere(~self.grid.occupied)
+        if free.size == 0:
+            raise MapError("the map has no free cell: global localisation has nowhere to look")
+        return free
+
+    def random_poses(self, n: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
+        """Poses uniformly distributed over the free cells of the map, any heading.
+
+        Parameters
+        ----------
+        n : int
+            Number of poses.
+        rng : numpy.random.Generator, int or None
+            Source of randomness.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 3)
+        """
+        rng = as_rng(rng)
+        free = self._free_cells
+        assert self.grid is not None
+        cells = free[rng.integers(len(free), size=n)].astype(np.float64)
+        xy = np.asarray(self.grid.origin) + (cells[:, ::-1] + rng.random((n, 2))) * (
+            self.grid.resolution
+        )
+        return np.column_stack([xy, rng.uniform(-math.pi, math.pi, n)])
+
+    # ------------------------------------------------------------------ initial beliefs
+    def initial_state(
+        self,
+        pose: ArrayLike,
+        cov: ArrayLike,
+        odom: ArrayLike = (0.0, 0.0, 0.0),
+        rng: np.random.Generator | int | None = None,
+    ) -> AMCLState:
+        """``max_particles`` particles drawn from a Gaussian around a pose (Nav2's initial pose).
+
+        Parameters
+        ----------
+        pose : array_like, shape (3,)
+            Mean pose.
+        cov : array_like, shape (3, 3)
+            Covariance (positive semi-definite).
+        odom : array_like, shape (3,)
+            The odometry pose at this moment.
+        rng : numpy.random.Generator, int or None
+            Source of randomness.
+
+        Returns
+        -------
+        AMCLState
+        """
+        pose = as_float_array("pose", pose, 3, max_ndim=1)
+        cov = as_float_array("cov", cov, 3, min_ndim=2, max_ndim=2)
+        if cov.shape != (3, 3) or np.linalg.eigvalsh(0.5 * (cov + cov.T))[0] < -1e-12:
+            raise InputError("cov must be a 3×3 positive semi-definite matrix")
+        rng = as_rng(rng)
+        particles = rng.multivariate_normal(pose, cov, self.max_particles, method="eigh")
+        particles[:, 2] = np.arctan2(np.sin(particles[:, 2]), np.cos(particles[:, 2]))
+        return self._state(particles, odom)
+
+    def global_state(
+        self, odom: ArrayLike = (0.0, 0.0, 0.0), rng: np.random.Generator | int | None = None
+    ) -> AMCLState:
+        """``max_particles`` particles spread uniformly over the free space (global localisation).
+
+        Parameters
+        ----------
+        odom : array_like, shape (3,)
+            The odometry pose at this moment.
+        rng : numpy.random.Generator, int or None
+            Source of randomness.
+
+        Returns
+        -------
+        AMCLState
+        """
+        return self._state(self.random_poses(self.max_particles, rng), odom)
+
+    def _state(self, particles: np.ndarray, odom: ArrayLike) -> AMCLState:
+        odom = as_float_array("odom", odom, 3, max_ndim=1)
+        n = particles.shape[0]
+        return AMCLState(particles, np.full(n, 1.0 / n), odom.copy())
+
+    # ------------------------------------------------------------------ the update
+    def needs_update(self, state: AMCLState, odom: ArrayLike) -> bool:
+        """Whether the odometry moved ``update_min_d`` or turned ``update_min_a`` since the
+        last update.
+
+        Parameters
+        ----------
+        state : AMCLState
+            The belief.
+        odom : array_like, shape (3,)
+            Odometry pose now.
+
+        Returns
+        -------
+        bool
+        """
+        odom = np.asarray(odom, dtype=np.float64)
+        moved = math.hypot(odom[0] - state.odom[0], odom[1] - state.odom[1])
+        turned = abs(math.remainder(odom[2] - state.odom[2], 2.0 * math.pi))
+        return moved >= self.update_min_d or turned >= self.update_min_a
+
+    def update(
+        self,
+        state: AMCLState,
+        odom: ArrayLike,
+        rng: np.random.Generator | int | None = None,
+        *,
+        scan: ArrayLike | None = None,
+        landmark_ids: ArrayLike | None = None,
+        landmark_z: ArrayLike | None = None,
+        force: bool = False,
+    ) -> tuple[AMCLState, AMCLInfo]:
+        """One filter update from the odometry pose and the measurements taken there.
+
+        Parameters
+        ----------
+        state : AMCLState
+            The belief.
+        odom : array_like, shape (3,)
+            Odometry pose now (x [m], y [m], θ [rad]) in the odometry frame.
+        rng : numpy.random.Generator, int or None
+            Source of randomness.
+        scan : array_like or None, shape (beams,)
+            Lidar ranges [m] from the :attr:`lidar`.
+        landmark_ids : array_like of int or None, shape (M,)
+            Identities of measured landmarks (rows of :attr:`landmarks`).
+        landmark_z : array_like or None, shape (M, 2)
+            Their (range [m], bearing [rad]).
+        force : bool
+            Update even if the robot has not moved ``update_min_d`` / ``update_min_a``.
+
+        Returns
+        -------
+        state : AMCLState
+            The new belief (the same object when nothing happened).
+        info : AMCLInfo
+            What was done.
+        """
+        odom = as_float_array("odom", odom, 3, max_ndim=1)
+        if not (force or self.needs_update(state, odom)):
+            return state, AMCLInfo(updated=False, particles=state.particles.shape[0])
+        delta = odometry_delta(state.odom, odom)
+        rng = as_rng(rng)
+        particles = self.motion.sample(state.particles, delta, rng)
+        log_lik = np.zeros(particles.shape[0])
+        beams_used = beams_skipped = marks_used = marks_skipped = 0
+        if scan is not None:
+            log_scan, beams_used, beams_skipped = self._scan_likelihood(particles, scan)
+            log_lik += log_scan
+        if landmark_ids is not None or landmark_z is not None:
+            log_marks, marks_used, marks_skipped = self._landmark_likelihood(
+                particles, landmark_ids, landmark_z
+            )
+            log_lik += log_marks
+        measured = beams_used + marks_used > 0
+        log_prior = np.log(np.maximum(state.weights, 1e-300))
+        log_w = log_prior + log_lik
+        top = float(log_w.max())
+        if not np.isfinite(top):
+            raise EstimationError(
+                "AMCL: every particle weight is zero or not finite; check sigma_hit, "
+                "landmark_range_std and landmark_bearing_std"
+            )
+        # how well the best particle explains the data, per measurement
+        log_best = float(log_lik.max()) / max(1, beams_used + marks_used)
+        if measured and self.min_ess > 0.0:
+            log_w = log_prior + _tempering(log_prior, log_lik, self.min_ess) * log_lik
+            top = float(log_w.max())
+        weights = np.exp(log_w - top)
+        weights /= weights.sum()
+        log_slow, log_fast = state.log_w_slow, state.log_w_fast
+        if measured:
+            log_slow = _average(log_slow, log_best, self.recovery_alpha_slow)
+            log_fast = _average(log_fast, log_best, self.recovery_alpha_fast)
+        updates = state.updates + 1
+        injected = 0
+        if measured and updates % self.resample_interval == 0:
+            particles, weights, injected, log_slow, log_fast = self._resample(
+                particles, weights, log_slow, log_fast, rng
+            )
+        new = AMCLState(particles, weights, odom.copy(), log_slow, log_fast, updates)
+        info = AMCLInfo(
+            True, beams_used, beams_skipped, marks_used, marks_skipped, injected,
+            particles.shape[0],
+        )  # fmt: skip
+        return new, info
+
+    def _scan_likelihood(
+        self, particles: np.ndarray, scan: ArrayLike
+    ) -> tuple[np.ndarray, int, int]:
+        if self.lidar is None:
+            raise ConfigError(
+                "a scan needs the lidar that took it: pass lidar= (and grid=) to AMCL"
+            )
+        ranges = np.asarray(scan, dtype=np.float64).reshape(-1)
+        if ranges.size != self.lidar.beams:
+            raise InputError(f"scan must have {self.lidar.beams} ranges (got {ranges.size})")
+        bad = ~np.isfinite(ranges) & ~np.isposinf(ranges) | (ranges < 0.0)
+        chosen = self._beam_index
+        r = ranges[chosen]
+        keep = np.isfinite(r) & (r >= 0.0) & (r < self.lidar.max_range)
+        if not keep.any():
+            return np.zeros(particles.shape[0]), 0, int(bad.sum())
+        angles = self.lidar.beam_angles[chosen][keep]
+        if self.sensor_model == "beam":
+            sensor = compose(particles, np.asarray(self.lidar.mount))
+            expected = scan_rays(
+                self.grid, sensor[:, :2], sensor[:, 2], angles, self.lidar.max_range
+            )
+            # a beam that expects no return (z* = max range) is scored as if at the limit
+            expected = np.minimum(expected, np.nextafter(self.lidar.max_range, 0.0))
+            density = self._beam_model.pdf(
+                np.broadcast_to(r[keep], expected.shape), expected, self.sigma_hit,
+                self.lidar.max_range,
+            )  # fmt: skip
+            log_p = np.log(np.maximum(density, 1e-300)).sum(axis=1)
+        else:
+            product = self.beam_combination == "product"
+            log_p = scan_log_likelihood(
+                self._log_field if product else self._field, self.grid, particles,
+                np.asarray(self.lidar.mount), r[keep], angles,
+                math.log(self._outside) if product else self._outside, product,
+            )  # fmt: skip
+        return log_p, int(keep.sum()), int(bad.sum())
+
+    def _landmark_likelihood(
+        self, particles: np.ndarray, ids: ArrayLike | None, z: ArrayLike | None
+    ) -> tuple[np.ndarray, int, int]:
+        if self.landmarks is None:
+            raise ConfigError("landmark measurements need landmarks=: pass them to AMCL")
+        if ids is None or z is None:
+            raise InputError("landmark_ids and landmark_z come together")
+        ids = np.asarray(ids).reshape(-1)
+        if ids.size and not np.issubdtype(ids.dtype, np.integer):
+            raise InputError(f"landmark_ids must be integers (got dtype {ids.dtype})")
+        z = np.asarray(z, dtype=np.float64).reshape(-1, 2)
+        if z.shape[0] != ids.size:
+            raise InputError(f"landmark_z must have shape ({ids.size}, 2) (got {z.shape})")
+        ok = (
+            (ids >= 0)
+            & (ids < self.landmarks.shape[0])
+            & np.isfinite(z).all(1)
+            & (np.nan_to_num(z[:, 0], nan=-1.0) >= 0.0)
+        )
+        if not ok.any():
+            return np.zeros(particles.shape[0]), 0, int(ids.size)
+        log_p = landmark_log_likelihood(
+            particles,
+            self.landmarks[ids[ok]],
+            z[ok],
+            self.landmark_range_std,
+            self.landmark_bearing_std,
+            1.0 - self.landmark_z_rand,
+            self.landmark_z_rand,
+            self.landmark_max_range,
+        )
+        return log_p, int(ok.sum()), int((~ok).sum())
+
+    def _resample(self, particles, weights, log_slow, log_fast, rng):
+        n = kld_particles(
+            particles, weights, self.bin_size, self.kld_err, self.kld_delta,
+            self.min_particles, self.max_particles,
+        )  # fmt: skip
+        new = particles[low_variance_resample(weights, n, rng)]
+        injected = 0
+        if self.recovery_alpha_slow > 0.0 and np.isfinite(log_slow) and self.grid is not None:
+            p_random = max(0.0, 1.0 - math.exp(log_fast - log_slow))
+            if p_random > 0.0:
+                swap = rng.random(n) < p_random
+                injected = int(swap.sum())
+                new[swap] = self.random_poses(injected, rng)
+        return new, np.full(n, 1.0 / n), injected, log_slow, log_fast
+
+    # ------------------------------------------------------------------ the answer
+    def estimate(self, state: AMCLState, ambiguity_weight: float = 0.1) -> PoseEstimate:
+        """The pose of the heaviest cluster of particles, and every cluster.
+
+        Parameters
+        ----------
+        state : AMCLState
+            The belief.
+        ambiguity_weight : float
+            Weight a second cluster must hold for the estimate to be ambiguous, in (0, 0.5].
+
+        Returns
+        -------
+        PoseEstimate
+        """
+        share = positive("ambiguity_weight", ambiguity_weight)
+        found = clusters(state.particles, state.weights, self.bin_size)
+        best = found[0]
+        ambiguous = len(found) > 1 and found[1].weight >= share
+        return PoseEstimate(best.mean.copy(), best.cov.copy(), found, ambiguous)
+
+
+def _average(log_old: float, log_new: float, rate: float) -> float:
+    """Exponential average of log-likelihoods, (1 − rate)·old + rate·new, started at new."""
+    if not np.isfinite(log_old):
+        return log_new
+    return (1.0 - rate) * log_old + rate * log_new
+
+
+def _ess_fraction(log_w: np.ndarray) -> float:
+    w = np.exp(log_w - log_w.max())
+    return float(w.sum() ** 2 / (w @ w) / w.size)
+
+
+def _tempering(log_prior: np.ndarray, log_lik: np.ndarray, rho: float) -> float:
+    """Largest β in [0, 1] with ESS(prior · lik^β) >= rho·P (bisection to 2⁻³⁰)."""
+    if _ess_fraction(log_prior + log_lik) >= rho:
+        return 1.0
+    lo, hi = 0.0, 1.0
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        if _ess_fraction(log_prior + mid * log_lik) >= rho:
+            lo = mid
+        else:
+            hi = mid
+    return lo

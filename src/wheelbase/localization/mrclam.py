@@ -1,0 +1,508 @@
+"""Localisation on real data: the UTIAS MRCLAM dataset (Leung, Halpern, Barfoot and Liu, IJRR 2011).
+
+One data set's folder holds, per robot N, ``RobotN_Odometry.dat`` (t, v, ω),
+``RobotN_Groundtruth.dat`` (t, x, y, θ from Vicon) and ``RobotN_Measurement.dat`` (t, barcode,
+range, bearing from its camera), plus ``Barcodes.dat`` (subject → barcode) and
+``Landmark_Groundtruth.dat`` (the 15 landmarks, subjects 6–20: x, y and their survey standard
+deviations). The file names may carry the data set's prefix (``Dataset6_Robot1_Odometry.dat``).
+
+The second column of a measurement is a *barcode*, although the file's header says "Subject #":
+it is mapped to a subject through the barcodes file. Sightings of subjects 1–5 are other robots,
+not landmarks, and are left out (counted); barcodes that belong to no subject are handed to the
+filter as unknown identities, which it skips and counts.
+
+:func:`localize` runs a filter over the whole recording, starting from the ground-truth pose at
+the first odometry sample with the covariance of :data:`MRCLAM_PARAMETERS`: between odometry
+samples it predicts with the logged (v, ω) held constant, and applies each measurement at its
+own time. The result compares the estimate with the ground truth at every odometry time, beside
+dead reckoning from the same start.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wheelbase._validate import check_choice
+from wheelbase.errors import ConfigError, DataError
+from wheelbase.geometry import compose, relative_pose, wrap_angle
+from wheelbase.localization.amcl import AMCL
+from wheelbase.localization.ekf import EKF
+from wheelbase.localization.kalman import KalmanFilter
+from wheelbase.localization.motion import OdometryMotion, VelocityMotion
+from wheelbase.localization.ukf import UKF
+from wheelbase.odometry.dead_reckoning import dead_reckon
+from wheelbase.odometry.mrclam import MrclamData, load_mrclam
+
+__all__ = [
+    "FILTERS",
+    "MRCLAM_PARAMETERS",
+    "LocalizationResult",
+    "MrclamLandmarks",
+    "MrclamMeasurements",
+    "find_mrclam_files",
+    "load_landmarks",
+    "load_measurements",
+    "localize",
+]
+
+FILTERS: tuple[str, ...] = ("ekf", "ukf", "pf")
+"""Filters :func:`localize` runs."""
+
+MRCLAM_PARAMETERS: dict[str, float] = {
+    # measurement noise: robot 1 of data set 6 against ground truth gives range residuals of
+    # σ ≈ 0.12 m (robust 0.08 m) and bearing residuals of σ ≈ 0.02 rad (robust 0.01 rad)
+    "range_std": 0.1,
+    "bearing_std": 0.02,
+    # motion noise, linear in the increments (VelocityMotion)
+    "distance_per_m": 2e-3,
+    "distance_per_rad": 1e-3,
+    "heading_per_m": 2e-3,
+    "heading_per_rad": 2e-2,
+    "distance_per_s": 1e-5,
+    "heading_per_s": 1e-4,
+    # the odometry leads the Vicon and camera clocks by about 0.2 s (yaw_rate_fit on robot 1
+    # of data set 6); its samples are applied this much later
+    "odometry_lag_s": 0.2,
+    "yaw_rate_scale": 1.0,
+    # χ² gate of the Kalman filters
+    "gate_probability": 0.999,
+    # initial standard deviations (the start is the ground truth)
+    "initial_xy_std": 0.05,
+    "initial_theta_std": 0.05,
+    # the particle filter
+    "particles": 2000,
+    "alpha1": 0.05,
+    "alpha2": 0.05,
+    "alpha3": 0.05,
+    "alpha4": 0.05,
+    "landmark_z_rand": 0.02,
+}
+"""The one parameter set used for every robot of every data set (see ``docs``)."""
+
+
+@dataclass(frozen=True)
+class MrclamLandmarks:
+    """The landmarks of a data set.
+
+    Attributes
+    ----------
+    subjects : numpy.ndarray, shape (L,)
+        Subject numbers (6–20).
+    xy : numpy.ndarray, shape (L, 2)
+        Positions [m] from the Vicon survey.
+    """
+
+    subjects: np.ndarray
+    xy: np.ndarray
+
+
+@dataclass(frozen=True)
+class MrclamMeasurements:
+    """One robot's landmark measurements, identities resolved.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (K,)
+        Times [s].
+    landmark : numpy.ndarray, shape (K,)
+        Row of the landmark array, or −1 for a barcode that names no subject.
+    z : numpy.ndarray, shape (K, 2)
+        (range [m], bearing [rad]).
+    robot_sightings : int
+        Measurements of other robots, left out.
+    """
+
+    t: np.ndarray
+    landmark: np.ndarray
+    z: np.ndarray
+    robot_sightings: int
+
+
+def _table(path: Path, columns: int, what: str) -> np.ndarray:
+    if not path.is_file():
+        raise DataError(f"{what} file not found: {path}")
+    try:
+        data = np.loadtxt(path, comments="#", ndmin=2)
+    except ValueError as error:
+        raise DataError(f"{what} file {path} is malformed: {error}") from None
+    if data.size == 0:
+        return np.zeros((0, columns))
+    if data.shape[1] != columns or not np.all(np.isfinite(data)):
+        raise DataError(f"{what} file {path} must hold {columns} finite columns (got {data.shape})")
+    return data
+
+
+def find_mrclam_files(data_dir: str | Path, robot: int) -> dict[str, Path]:
+    """The files of one robot in a data set's folder, with or without the data set's prefix.
+
+    Parameters
+    ----------
+    data_dir : str or Path
+        The folder.
+    robot : int
+        Robot number, 1–5.
+
+    Returns
+    -------
+    dict
+        Paths under the keys ``odometry``, ``groundtruth``, ``measurement``, ``barcodes``,
+        ``landmarks``.
+
+    Raises
+    ------
+    DataError
+        A missing folder or file, or two candidates for one file.
+    """
+    folder = Path(data_dir)
+    if not folder.is_dir():
+        raise DataError(f"MRCLAM folder not found: {folder}")
+    if isinstance(robot, bool) or not isinstance(robot, int | np.integer) or not 1 <= robot <= 5:
+        raise ConfigError(f"robot must be 1, 2, 3, 4 or 5 (got {robot!r})")
+    wanted = {
+        "odometry": f"Robot{robot}_Odometry.dat",
+        "groundtruth": f"Robot{robot}_Groundtruth.dat",
+        "measurement": f"Robot{robot}_Measurement.dat",
+        "barcodes": "Barcodes.dat",
+        "landmarks": "Landmark_Groundtruth.dat",
+    }
+    found = {}
+    for key, name in wanted.items():
+        matches = sorted(
+            p for p in folder.iterdir() if p.name == name or p.name.endswith("_" + name)
+        )
+        if not matches:
+            raise DataError(f"{folder} holds no {name} (nor *_{name}) for robot {robot}")
+        if len(matches) > 1:
+            names = ", ".join(p.name for p in matches)
+            raise DataError(f"{folder} holds several files for {name}: {names}")
+        found[key] = matches[0]
+    return found
+
+
+def load_landmarks(path: str | Path) -> MrclamLandmarks:
+    """Read ``Landmark_Groundtruth.dat``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: subject, x [m], y [m], σ_x [m], σ_y [m].
+
+    Returns
+    -------
+    MrclamLandmarks
+    """
+    data = _table(Path(path), 5, "landmark")
+    if data.shape[0] == 0:
+        raise DataError(f"landmark file {path} holds no landmark")
+    return MrclamLandmarks(data[:, 0].astype(np.int64), data[:, 1:3].copy())
+
+
+def load_measurements(
+    measurement_path: str | Path, barcodes_path: str | Path, landmarks: MrclamLandmarks
+) -> MrclamMeasurements:
+    """Read a robot's measurements and resolve their barcodes to landmark rows.
+
+    Parameters
+    ----------
+    measurement_path : str or Path
+        ``RobotN_Measurement.dat``: time [s], barcode, range [m], bearing [rad].
+    barcodes_path : str or Path
+        ``Barcodes.dat``: subject, barcode.
+    landmarks : MrclamLandmarks
+        The landmarks (subjects 6–20).
+
+    Returns
+    -------
+    MrclamMeasurements
+        Sorted by time; other robots' sightings removed and counted.
+    """
+    data = _table(Path(measurement_path), 4, "measurement")
+    codes = _table(Path(barcodes_path), 2, "barcode").astype(np.int64)
+    subject_of = {int(code): int(subject) for subject, code in codes}
+    row_of = {int(s): i for i, s in enumerate(landmarks.subjects)}
+    subjects = np.array([subject_of.get(round(b), -1) for b in data[:, 1]], dtype=np.int64)
+    robots = (subjects >= 1) & (subjects <= 5)
+    data, subjects = data[~robots], subjects[~robots]
+    rows = np.array([row_of.get(int(s), -1) for s in subjects], dtype=np.int64)
+    order = np.argsort(data[:, 0], kind="stable")
+    return MrclamMeasurements(
+        data[order, 0], rows[order], data[order][:, 2:4].copy(), int(robots.sum())
+    )
+
+
+@dataclass(frozen=True)
+class LocalizationResult:
+    """A filter's run over a recording, beside the ground truth.
+
+    Attributes
+    ----------
+    filter : str
+        ``ekf``, ``ukf`` or ``pf``.
+    t : numpy.ndarray, shape (T,)
+        Odometry times [s] since the start.
+    estimate : numpy.ndarray, shape (T, 3)
+        Filter estimate at those times.
+    cov : numpy.ndarray, shape (T, 3, 3)
+        Its covariance (for the particle filter: of the particles at the last update).
+    truth : numpy.ndarray, shape (T, 3)
+        Ground truth.
+    dead_reckoning : numpy.ndarray, shape (T, 3)
+        Odometry alone from the same start.
+    landmarks : numpy.ndarray, shape (L, 2)
+        Landmark positions [m].
+    used, gated, invalid, robot_sightings : int
+        Measurements applied, rejected by the gate (or, for the particle filter, 0), skipped as
+        unknown or malformed, and other robots' sightings left out.
+    parameters : dict
+        The parameters of the run.
+    """
+
+    filter: str
+    t: np.ndarray
+    estimate: np.ndarray
+    cov: np.ndarray
+    truth: np.ndarray
+    dead_reckoning: np.ndarray
+    landmarks: np.ndarray
+    used: int
+    gated: int
+    invalid: int
+    robot_sightings: int
+    parameters: dict = field(default_factory=dict)
+
+    def metrics(self) -> dict[str, float | int | str]:
+        """The figures of ``metrics.json``.
+
+        Returns
+        -------
+        dict
+            ``position_rmse_m``, ``position_max_m``, ``heading_rmse_deg``,
+            ``dead_reckoning_rmse_m``, ``duration_s``, ``measurements_used``,
+            ``measurements_rejected`` (gated + invalid), ``measurements_gated``,
+            ``measurements_invalid``, ``robot_sightings_skipped``, ``filter``.
+        """
+        error = np.hypot(*(self.estimate[:, :2] - self.truth[:, :2]).T)
+        heading = wrap_angle(self.estimate[:, 2] - self.truth[:, 2])
+        drift = np.hypot(*(self.dead_reckoning[:, :2] - self.truth[:, :2]).T)
+        return {
+            "filter": self.filter,
+            "position_rmse_m": float(np.sqrt(np.mean(error**2))),
+            "position_max_m": float(error.max()),
+            "heading_rmse_deg": float(np.degrees(np.sqrt(np.mean(heading**2)))),
+            "dead_reckoning_rmse_m": float(np.sqrt(np.mean(drift**2))),
+            "duration_s": float(self.t[-1] - self.t[0]),
+            "measurements_used": self.used,
+            "measurements_rejected": self.gated + self.invalid,
+            "measurements_gated": self.gated,
+            "measurements_invalid": self.invalid,
+            "robot_sightings_skipped": self.robot_sightings,
+        }
+
+
+def _kalman(kind: str, landmarks: np.ndarray, p: dict) -> KalmanFilter:
+    motion = VelocityMotion(
+        p["distance_per_m"],
+        p["distance_per_rad"],
+        p["heading_per_m"],
+        p["heading_per_rad"],
+        p["distance_per_s"],
+        p["heading_per_s"],
+    )
+    cls = EKF if kind == "ekf" else UKF
+    return cls(landmarks, motion, p["range_std"], p["bearing_std"], p["gate_probability"])
+
+
+def _initial_cov(p: dict) -> np.ndarray:
+    return np.diag(
+        [p["initial_xy_std"] ** 2, p["initial_xy_std"] ** 2, p["initial_theta_std"] ** 2]
+    )
+
+
+def _run_kalman(kind, data, meas, landmarks, p):
+    """Predict through the odometry samples, stopping at each measurement time to update; the
+    estimate at an odometry time is the one before the measurements of that same instant."""
+    f = _kalman(kind, landmarks, p)
+    mean, cov = data.true_pose[0].copy(), _initial_cov(p)
+    t, n = data.t, data.t.size
+    controls = np.column_stack([data.v, data.omega])
+    est = np.empty((n, 3))
+    covs = np.empty((n, 3, 3))
+    est[0], covs[0] = mean, cov
+    used = gated = invalid = 0
+    k, t_now = 0, t[0]  # (v_k, ω_k) holds from t_k, and t_k <= t_now < t_{k+1}
+
+    def advance(j, mean, cov):
+        # predict from t_now through the odometry times t_{k+1} .. t_j
+        dts = np.diff(np.concatenate([[t_now], t[k + 1 : j + 1]]))
+        means, cvs = f.predict_sequence(mean, cov, controls[k:j], dts)
+        est[k + 1 : j + 1], covs[k + 1 : j + 1] = means, cvs
+        return means[-1], cvs[-1]
+
+    groups = np.flatnonzero(np.concatenate([[True], np.diff(meas.t) > 0]))
+    for first, last in zip(groups, np.append(groups[1:], meas.t.size), strict=True):
+        tm = meas.t[first]
+        j = int(np.searchsorted(t, tm, side="right")) - 1
+        if j > k:
+            mean, cov = advance(j, mean, cov)
+            k, t_now = j, t[j]
+        if tm > t_now:
+            mean, cov = f.predict(mean, cov, controls[k], tm - t_now)
+            t_now = tm
+        mean, cov, info = f.update(mean, cov, meas.landmark[first:last], meas.z[first:last])
+        used += int(info.accepted.sum())
+        gated += int(info.gated.sum())
+        invalid += int(info.invalid.sum())
+    if k < n - 1:
+        advance(n - 1, mean, cov)
+    return est, covs, used, gated, invalid
+
+
+def _run_pf(data, meas, landmarks, p, odom, rng):
+    pf = AMCL(
+        landmarks=landmarks,
+        motion=OdometryMotion(p["alpha1"], p["alpha2"], p["alpha3"], p["alpha4"]),
+        min_particles=int(p["particles"]),
+        max_particles=int(p["particles"]),
+        landmark_range_std=p["range_std"],
+        landmark_bearing_std=p["bearing_std"],
+        landmark_z_rand=p["landmark_z_rand"],
+        recovery_alpha_slow=0.0,
+        recovery_alpha_fast=0.0,
+        update_min_d=0.0,
+        update_min_a=0.0,
+    )
+    state = pf.initial_state(data.true_pose[0], _initial_cov(p), odom[0], rng)
+    n = data.t.size
+    # odometry poses at the measurement times (interpolating the dead reckoning on its arc)
+    index = np.clip(np.searchsorted(data.t, meas.t, side="right") - 1, 0, n - 1)
+    dt = meas.t - data.t[index]
+    inc = np.column_stack([data.v[index] * dt, data.omega[index] * dt])
+    from wheelbase.localization.motion import arc_move
+
+    odom_meas = arc_move(odom[index], inc)
+    est = np.empty((n, 3))
+    covs = np.empty((n, 3, 3))
+    anchor_odom, anchor_est = odom[0], data.true_pose[0].copy()
+    anchor_cov = _initial_cov(p)
+    used = invalid = 0
+    k_meas = 0
+    for k in range(n):
+        while k_meas < meas.t.size and meas.t[k_meas] <= data.t[k]:
+            if meas.t[k_meas] < data.t[0]:
+                k_meas += 1
+                continue
+            same = k_meas
+            while same < meas.t.size and meas.t[same] == meas.t[k_meas]:
+                same += 1
+            state, info = pf.update(
+                state,
+                odom_meas[k_meas],
+                rng,
+                landmark_ids=meas.landmark[k_meas:same],
+                landmark_z=meas.z[k_meas:same],
+                force=True,
+            )
+            used += info.landmarks_used
+            invalid += info.landmarks_skipped
+            w = state.weights
+            theta = math.atan2(w @ np.sin(state.particles[:, 2]), w @ np.cos(state.particles[:, 2]))
+            anchor_est = np.array([w @ state.particles[:, 0], w @ state.particles[:, 1], theta])
+            dev = state.particles - anchor_est
+            dev[:, 2] = wrap_angle(dev[:, 2])
+            anchor_cov = (dev * w[:, None]).T @ dev
+            anchor_odom = odom_meas[k_meas]
+            k_meas = same
+        est[k] = compose(anchor_est, relative_pose(anchor_odom, odom[k]))
+        covs[k] = anchor_cov
+    return est, covs, used, 0, invalid
+
+
+def _delay_odometry(data: MrclamData, groundtruth: Path, lag: float) -> MrclamData:
+    """The odometry with its time stamps moved ``lag`` seconds later, the ground truth
+    interpolated to the new times (samples outside the ground truth dropped)."""
+    truth = _table(Path(groundtruth), 4, "ground-truth")
+    truth = truth[np.argsort(truth[:, 0], kind="stable")]
+    t = data.t + lag
+    keep = (t >= truth[0, 0]) & (t <= truth[-1, 0])
+    t = t[keep]
+    pose = np.column_stack(
+        [
+            np.interp(t, truth[:, 0], truth[:, 1]),
+            np.interp(t, truth[:, 0], truth[:, 2]),
+            wrap_angle(np.interp(t, truth[:, 0], np.unwrap(truth[:, 3]))),
+        ]
+    )
+    return MrclamData(t, data.v[keep], data.omega[keep], pose)
+
+
+def localize(
+    data_dir: str | Path,
+    robot: int = 1,
+    filter: str = "ekf",
+    parameters: dict[str, float] | None = None,
+    seed: int = 0,
+) -> LocalizationResult:
+    """Run a filter over one MRCLAM robot's whole recording (module docstring).
+
+    Parameters
+    ----------
+    data_dir : str or Path
+        Folder of one data set (:func:`find_mrclam_files`).
+    robot : int
+        Robot number, 1–5.
+    filter : {"ekf", "ukf", "pf"}
+        Extended or unscented Kalman filter, or the particle filter (:class:`AMCL` with the
+        landmark likelihood).
+    parameters : dict or None
+        Overrides of :data:`MRCLAM_PARAMETERS` (for experiments; the documented figures use
+        none).
+    seed : int
+        Seed of the particle filter.
+
+    Returns
+    -------
+    LocalizationResult
+    """
+    check_choice("filter", filter, FILTERS)
+    p = dict(MRCLAM_PARAMETERS)
+    unknown = sorted(set(parameters or {}) - set(p))
+    if unknown:
+        raise ConfigError(f"unknown parameter {unknown[0]!r}; allowed: {', '.join(sorted(p))}")
+    p.update(parameters or {})
+    files = find_mrclam_files(data_dir, robot)
+    data: MrclamData = load_mrclam(files["odometry"], files["groundtruth"])
+    if p.get("yaw_rate_scale", 1.0) != 1.0:
+        data = MrclamData(data.t, data.v, data.omega * p["yaw_rate_scale"], data.true_pose)
+    if p["odometry_lag_s"] != 0.0:
+        data = _delay_odometry(data, files["groundtruth"], p["odometry_lag_s"])
+    landmarks = load_landmarks(files["landmarks"])
+    meas = load_measurements(files["measurement"], files["barcodes"], landmarks)
+    inside = (meas.t >= data.t[0]) & (meas.t <= data.t[-1])
+    meas = MrclamMeasurements(
+        meas.t[inside], meas.landmark[inside], meas.z[inside], meas.robot_sightings
+    )
+    odom = dead_reckon(data.t, data.v, data.omega, data.true_pose[0])
+    if filter == "pf":
+        est, covs, used, gated, invalid = _run_pf(
+            data, meas, landmarks.xy, p, odom, np.random.default_rng(seed)
+        )
+    else:
+        est, covs, used, gated, invalid = _run_kalman(filter, data, meas, landmarks.xy, p)
+    return LocalizationResult(
+        filter=filter,
+        t=data.t - data.t[0],
+        estimate=est,
+        cov=covs,
+        truth=data.true_pose,
+        dead_reckoning=odom,
+        landmarks=landmarks.xy,
+        used=used,
+        gated=gated,
+        invalid=invalid,
+        robot_sightings=meas.robot_sightings,
+        parameters=p,
+    )

@@ -1,0 +1,230 @@
+"""Simulated runs for testing localisation without the closed loop: a wandering robot, its
+odometry, and a driver that feeds a lidar and :class:`~wheelbase.localization.AMCL`.
+
+:func:`wander` drives a point robot straight ahead at ``step`` metres per tick, turning in place
+away from anything its lidar sees within ``clearance`` in front; the heading takes a small random
+walk so that routes differ between seeds. :func:`noisy_odometry` integrates the true motion with
+multiplicative errors on each tick's distance and turn and an additive turn error, as wheel
+odometry drifts. :func:`run_amcl` replays a route: the filter updates whenever the odometry
+has moved enough, with a scan taken at the true pose, and the error of the estimate is recorded.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wheelbase._validate import as_rng, positive
+from wheelbase.geometry import wrap_angle
+from wheelbase.localization.amcl import AMCL, AMCLState
+from wheelbase.planning import OccupancyGrid
+from wheelbase.sensors import Lidar
+
+__all__ = ["AMCLRun", "noisy_odometry", "run_amcl", "wander"]
+
+
+def wander(
+    grid: OccupancyGrid,
+    distance: float,
+    rng: np.random.Generator | int | None = None,
+    *,
+    start: np.ndarray | None = None,
+    step: float = 0.05,
+    clearance: float = 0.8,
+    turn_step: float = 0.15,
+) -> np.ndarray:
+    """True poses of a robot wandering through the free space.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map.
+    distance : float
+        Distance to travel [m], > 0.
+    rng : numpy.random.Generator, int or None
+        Randomness of the start (when not given) and of the heading's random walk.
+    start : numpy.ndarray or None
+        Start pose; default a random pose at least 0.6 m from obstacles.
+    step : float
+        Distance per tick [m].
+    clearance : float
+        Turn in place when an obstacle is this close ahead [m].
+    turn_step : float
+        Turn per tick while turning [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 3)
+        One pose per tick.
+    """
+    rng = as_rng(rng)
+    distance = positive("distance", distance, "m")
+    if start is None:
+        cells = np.argwhere(grid.distance_field > 0.6)
+        pose = np.array([*grid.cell_to_world(cells[rng.integers(len(cells))]), 0.0])
+        pose[2] = rng.uniform(-math.pi, math.pi)
+    else:
+        pose = np.array(start, dtype=np.float64)
+    probe = Lidar(beams=9, fov=math.radians(60.0), max_range=3.0)
+    poses = [pose.copy()]
+    travelled, turn = 0.0, 0.0
+    while travelled < distance:
+        if probe.scan(grid, pose, noise=False).min() < clearance:
+            turn = turn or float(rng.choice([-1.0, 1.0]))
+            pose[2] = wrap_angle(pose[2] + turn * turn_step)
+        else:
+            turn = 0.0
+            pose[0] += step * math.cos(pose[2])
+            pose[1] += step * math.sin(pose[2])
+            pose[2] = wrap_angle(pose[2] + rng.normal(0.0, 0.02))
+            travelled += step
+        poses.append(pose.copy())
+    return np.array(poses)
+
+
+def noisy_odometry(
+    truth: np.ndarray,
+    rng: np.random.Generator | int | None = None,
+    *,
+    distance_error: float = 0.02,
+    turn_error: float = 0.02,
+    turn_noise: float = 0.002,
+) -> np.ndarray:
+    """Odometry poses that drift from a true route, starting at the origin.
+
+    Parameters
+    ----------
+    truth : numpy.ndarray, shape (T, 3)
+        True poses, one per tick.
+    rng : numpy.random.Generator, int or None
+        Randomness of the errors.
+    distance_error : float
+        Standard deviation of the relative error of each tick's distance.
+    turn_error : float
+        Standard deviation of the relative error of each tick's turn.
+    turn_noise : float
+        Standard deviation of an additive turn error per tick [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 3)
+        Odometry poses in the odometry frame (the first is (0, 0, 0)).
+    """
+    rng = as_rng(rng)
+    step = np.diff(truth, axis=0)
+    dist = np.hypot(step[:, 0], step[:, 1]) * (1.0 + rng.normal(0.0, distance_error, len(step)))
+    turn = wrap_angle(step[:, 2]) * (1.0 + rng.normal(0.0, turn_error, len(step)))
+    turn += rng.normal(0.0, turn_noise, len(step))
+    heading = np.concatenate([[0.0], np.cumsum(turn)])
+    mid = heading[:-1] + 0.5 * turn
+    x = np.concatenate([[0.0], np.cumsum(dist * np.cos(mid))])
+    y = np.concatenate([[0.0], np.cumsum(dist * np.sin(mid))])
+    return np.column_stack([x, y, wrap_angle(heading)])
+
+
+@dataclass(frozen=True)
+class AMCLRun:
+    """Errors of :func:`run_amcl` at each filter update.
+
+    Attributes
+    ----------
+    travelled : numpy.ndarray, shape (U,)
+        Distance driven [m] at each update.
+    error : numpy.ndarray, shape (U,)
+        Position error [m] of the estimate.
+    heading_error : numpy.ndarray, shape (U,)
+        Heading error [rad].
+    clusters : numpy.ndarray, shape (U,)
+        Clusters of particles.
+    particles : numpy.ndarray, shape (U,)
+        Particles after the update.
+    injected : numpy.ndarray, shape (U,)
+        Random particles injected by recovery.
+    tick : numpy.ndarray, shape (U,)
+        Tick of the route at each update.
+    state : AMCLState
+        The final belief.
+    """
+
+    travelled: np.ndarray
+    error: np.ndarray
+    heading_error: np.ndarray
+    clusters: np.ndarray
+    particles: np.ndarray
+    injected: np.ndarray
+    tick: np.ndarray
+    state: AMCLState
+
+    def converged_after(self, tolerance: float = 0.2) -> float:
+        """Distance [m] driven before the error stayed below ``tolerance`` to the end.
+
+        Parameters
+        ----------
+        tolerance : float
+            Position error [m].
+
+        Returns
+        -------
+        float
+            ``inf`` if the last error is above it.
+        """
+        above = np.flatnonzero(self.error >= tolerance)
+        if above.size == 0:
+            return float(self.travelled[0]) if self.travelled.size else math.inf
+        if above[-1] == self.error.size - 1:
+            return math.inf
+        return float(self.travelled[above[-1] + 1])
+
+
+def run_amcl(
+    amcl: AMCL,
+    lidar: Lidar,
+    truth: np.ndarray,
+    odometry: np.ndarray,
+    state: AMCLState,
+    rng: np.random.Generator | int | None = None,
+    *,
+    start: int = 0,
+) -> AMCLRun:
+    """Replay a route through the filter (module docstring).
+
+    Parameters
+    ----------
+    amcl : AMCL
+        The filter (its grid is the world the scans are taken in).
+    lidar : Lidar
+        The simulated lidar.
+    truth : numpy.ndarray, shape (T, 3)
+        True poses.
+    odometry : numpy.ndarray, shape (T, 3)
+        Odometry poses at the same ticks.
+    state : AMCLState
+        Initial belief.
+    rng : numpy.random.Generator, int or None
+        Randomness of the scans and of the filter.
+    start : int
+        First tick to replay.
+
+    Returns
+    -------
+    AMCLRun
+    """
+    rng = as_rng(rng)
+    assert amcl.grid is not None
+    travelled, records = 0.0, []
+    for k in range(start + 1, truth.shape[0]):
+        travelled += float(np.hypot(*(truth[k, :2] - truth[k - 1, :2])))
+        if not amcl.needs_update(state, odometry[k]):
+            continue
+        scan = lidar.scan(amcl.grid, truth[k], rng)
+        state, info = amcl.update(state, odometry[k], rng, scan=scan)
+        estimate = amcl.estimate(state)
+        error = float(np.hypot(*(estimate.pose[:2] - truth[k, :2])))
+        heading = float(abs(wrap_angle(estimate.pose[2] - truth[k, 2])))
+        records.append(
+            (travelled, error, heading, len(estimate.clusters), info.particles, info.injected, k)
+        )
+    table = np.array(records, dtype=np.float64).reshape(-1, 7)
+    return AMCLRun(*table.T, state=state)

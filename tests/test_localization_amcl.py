@@ -1,0 +1,235 @@
+"""AMCL: resampling, KLD bound, clusters, likelihoods, tracking, global localisation, kidnapping."""
+
+import math
+
+import numpy as np
+import pytest
+
+from wheelbase.errors import ConfigError, InputError, MapError
+from wheelbase.geometry import compose
+from wheelbase.localization import (
+    AMCL,
+    OdometryMotion,
+    kld_particles,
+    low_variance_resample,
+    noisy_odometry,
+    odometry_delta,
+    run_amcl,
+    wander,
+)
+from wheelbase.localization.likelihood import scan_log_likelihood, square_distance
+from wheelbase.localization.particles import _kld_bound, clusters
+from wheelbase.planning import OccupancyGrid, load_map
+from wheelbase.sensors import Lidar
+
+BINS = (0.5, 0.5, math.radians(10))
+
+
+def test_low_variance_resampling_is_proportional_to_the_weights():
+    rng = np.random.default_rng(0)
+    w = rng.random(50)
+    w /= w.sum()
+    idx = low_variance_resample(w, 1000, rng)
+    counts = np.bincount(idx, minlength=50)
+    # systematic resampling: each count is floor or ceil of n·w
+    assert np.all(np.abs(counts - 1000 * w) < 1.0 + 1e-9)
+    np.testing.assert_array_equal(low_variance_resample(np.full(7, 1 / 7), 7, rng), np.arange(7))
+
+
+def test_kld_bound_grows_with_the_occupied_bins():
+    rng = np.random.default_rng(1)
+    one = np.tile([1.2, 3.4, 0.5], (1000, 1))
+    assert kld_particles(one, np.full(1000, 1e-3), BINS, 0.05, 0.01, 100, 5000) == 100
+    # 200 equally weighted, well separated bins: the expected bins of n draws are almost all
+    # 200, so the answer is the bound for k ≈ 200: 1990·(1 − 2/1791 + √(2/1791)·2.33)³ ≈ 2,483
+    spread = np.column_stack([np.arange(200) * 1.0 + 0.25, np.full(200, 0.25), np.zeros(200)])
+    n = kld_particles(spread, np.full(200, 1 / 200), BINS, 0.05, 0.01, 10, 100000)
+    expected_bins = 200 * (1 - (1 - 1 / 200) ** n)
+    assert n == pytest.approx(float(_kld_bound(expected_bins, 0.05, 2.3263478740408408)), abs=1)
+    assert 2470 < n < 2500
+    assert kld_particles(spread, np.full(200, 1 / 200), BINS, 0.05, 0.01, 10, 2000) == 2000
+    # more bins → more particles
+    wide = np.column_stack(
+        [rng.uniform(0, 50, 3000), rng.uniform(0, 50, 3000), rng.uniform(-3, 3, 3000)]
+    )
+    assert kld_particles(wide, np.full(3000, 1 / 3000), BINS, 0.05, 0.01, 10, 10**6) > n
+
+
+def test_clusters_split_separate_groups_and_join_across_the_angle_cut():
+    rng = np.random.default_rng(2)
+    a = np.column_stack(
+        [rng.normal(1.0, 0.05, 300), rng.normal(1.0, 0.05, 300), rng.normal(math.pi, 0.03, 300)]
+    )
+    a[:, 2] = np.arctan2(np.sin(a[:, 2]), np.cos(a[:, 2]))  # straddles ±π
+    b = np.column_stack(
+        [rng.normal(6.0, 0.05, 100), rng.normal(2.0, 0.05, 100), rng.normal(0.0, 0.03, 100)]
+    )
+    found = clusters(np.vstack([a, b]), np.full(400, 1 / 400), BINS)
+    assert len(found) == 2
+    assert found[0].weight == pytest.approx(0.75) and found[0].count == 300
+    assert abs(abs(found[0].mean[2]) - math.pi) < 0.02
+    np.testing.assert_allclose(found[1].mean[:2], [6.0, 2.0], atol=0.02)
+    assert found[1].cov[0, 0] == pytest.approx(0.05**2, rel=0.3)
+
+
+def test_odometry_motion_noise_has_the_nav2_variances():
+    rng = np.random.default_rng(3)
+    particles = np.zeros((20000, 3))
+    delta = np.array([0.3, 1.0, -0.2])
+    exact = OdometryMotion(0.0, 0.0, 0.0, 0.0).sample(particles, delta, rng)
+    np.testing.assert_allclose(exact[0], [math.cos(0.3), math.sin(0.3), 0.1], atol=1e-12)
+    motion = OdometryMotion(0.1, 0.02, 0.05, 0.01)
+    moved = motion.sample(particles, delta, rng)
+    trans = np.hypot(moved[:, 0], moved[:, 1])  # |δtrans + noise| (δtrans = 1 >> noise)
+    expected = math.sqrt(0.05 * 1.0 + 0.01 * (0.09 + 0.04))
+    assert trans.std() == pytest.approx(expected, rel=0.03)
+    assert odometry_delta([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]).tolist() == [0.0, 1.0, 0.0]
+
+
+def test_likelihood_field_is_highest_at_the_true_pose():
+    grid = load_map("warehouse")
+    lidar = Lidar(beams=180, max_range=10.0)
+    truth = np.array([6.2, 6.0, 1.2])
+    scan = lidar.scan(grid, truth, noise=False)
+    amcl = AMCL(grid=grid, lidar=lidar)
+    offsets = np.array([[0, 0, 0], [0.2, 0, 0], [0, 0.3, 0], [0, 0, 0.1], [1.0, 1.0, 0.5]])
+    idx = amcl._beam_index
+    keep = scan[idx] < lidar.max_range
+    for product in (False, True):
+        log_p = scan_log_likelihood(
+            amcl._field, grid, truth + offsets, np.zeros(3), scan[idx][keep],
+            lidar.beam_angles[idx][keep], amcl._outside, product,
+        )  # fmt: skip
+        assert np.argmax(log_p) == 0 and np.all(np.diff(log_p[[0, 4]]) < 0)
+    # the distance to the nearest occupied square: half a cell next to a wall
+    d = square_distance(OccupancyGrid.from_array(np.eye(3, dtype=bool)[:, :1].repeat(3, 1).T, 1.0))
+    assert d[0, 1] == 0.5 and d[0, 2] == 1.5 and d[0, 0] == 0.0
+
+
+def tracking_setup(seed):
+    grid = load_map("warehouse")
+    lidar = Lidar(beams=180, max_range=10.0, range_std=0.02)
+    rng = np.random.default_rng(seed)
+    truth = wander(grid, 12.0, rng, start=np.array([3.0, 2.0, 0.0]))
+    odometry = noisy_odometry(truth, rng)
+    return grid, lidar, truth, odometry, rng
+
+
+@pytest.mark.parametrize("sensor_model", ["likelihood_field", "beam"])
+def test_tracking_from_a_known_pose_stays_within_ten_centimetres(sensor_model):
+    grid, lidar, truth, odometry, rng = tracking_setup(4)
+    amcl = AMCL(grid=grid, lidar=lidar, sensor_model=sensor_model, max_particles=1000,
+                min_particles=200)  # fmt: skip
+    state = amcl.initial_state(truth[0], np.diag([0.1, 0.1, 0.05]) ** 2, odometry[0], rng)
+    run = run_amcl(amcl, lidar, truth, odometry, state, rng)
+    assert run.error.size > 40
+    assert run.error.max() < 0.15 and np.sqrt(np.mean(run.error**2)) < 0.08
+    drift = np.hypot(*(odometry[-1, :2] - odometry[0, :2] - (truth[-1, :2] - truth[0, :2])))
+    assert drift > 0.1  # the odometry alone would have drifted
+    assert run.particles[-1] < 1000  # KLD shrank the set once it had converged
+
+
+GLOBAL = {
+    "sensor_model": "beam",
+    "max_particles": 5000,
+    "min_ess": 0.3,
+    "z_hit": 0.9,
+    "z_short": 0.05,
+    "z_rand": 0.05,
+    "lambda_short": 0.5,
+    "recovery_alpha_slow": 0.001,
+    "recovery_alpha_fast": 0.1,
+}
+
+
+def test_global_localisation_on_the_maze_converges_within_ten_metres():
+    # The 20-seed figure is a benchmark key (benchmarks/sensors.py, global_localization); two
+    # routes here.
+    grid = load_map("maze")
+    lidar = Lidar(beams=360, max_range=30.0, range_std=0.02)
+    amcl = AMCL(grid=grid, lidar=lidar, **GLOBAL)
+    for seed in (0, 6):
+        rng = np.random.default_rng(seed)
+        truth = wander(grid, 10.0, rng)
+        odometry = noisy_odometry(truth, rng)
+        state = amcl.global_state(odometry[0], rng)
+        assert len(amcl.estimate(state).clusters) > 100  # spread over the free space
+        run = run_amcl(amcl, lidar, truth, odometry, state, rng)
+        assert run.converged_after(0.2) <= 10.0, seed
+        assert run.heading_error[-1] < math.radians(5)
+
+
+def test_kidnapped_robot_recovers():
+    grid = load_map("maze")
+    lidar = Lidar(beams=360, max_range=30.0, range_std=0.02)
+    amcl = AMCL(grid=grid, lidar=lidar, **GLOBAL)
+    rng = np.random.default_rng(5)
+    before = wander(grid, 4.0, rng, start=np.array([2.0, 2.0, 0.0]))
+    state = amcl.initial_state(before[0], np.diag([0.1, 0.1, 0.05]) ** 2, (0, 0, 0), rng)
+    run = run_amcl(amcl, lidar, before, noisy_odometry(before, rng), state, rng)
+    assert run.error[-1] < 0.1
+    # teleport the robot to another corridor; its odometry notices nothing
+    after = wander(grid, 15.0, rng, start=np.array([15.0, 14.0, math.pi]))
+    odometry = compose(run.state.odom, noisy_odometry(after, rng))
+    kidnapped = run_amcl(amcl, lidar, after, odometry, run.state, rng)
+    assert kidnapped.error[0] > 5.0
+    assert kidnapped.injected.sum() > 0  # augmented MCL noticed and brought in fresh guesses
+    # recovered within 30 s (ticks of 0.1 s: 0.5 m/s when driving)
+    recovered = kidnapped.converged_after(0.2)
+    assert recovered < np.inf
+    tick = kidnapped.tick[np.searchsorted(kidnapped.travelled, recovered)]
+    assert tick * 0.1 <= 30.0
+
+
+def test_an_ambiguous_map_gives_several_clusters_not_a_confident_wrong_pose():
+    # Six identical racks: from the middle of an aisle with a 3 m lidar every aisle looks alike.
+    grid = load_map("warehouse")
+    lidar = Lidar(beams=360, max_range=3.0, range_std=0.02)
+    amcl = AMCL(grid=grid, lidar=lidar, **GLOBAL)
+    rng = np.random.default_rng(7)
+    truth = np.array([[9.8, 8.0 + 0.05 * k, math.pi / 2] for k in range(41)])
+    odometry = truth - truth[0]
+    state = amcl.global_state(odometry[0], rng)
+    run = run_amcl(amcl, lidar, truth, odometry, state, rng)
+    estimate = amcl.estimate(run.state)
+    assert estimate.ambiguous
+    assert sum(c.weight >= 0.1 for c in estimate.clusters) >= 2
+
+
+def test_update_rules_and_bad_input():
+    grid = load_map("maze")
+    lidar = Lidar(beams=36, max_range=10.0)
+    amcl = AMCL(grid=grid, lidar=lidar, max_particles=300, min_particles=100)
+    state = amcl.initial_state([2.0, 2.0, 0.0], np.eye(3) * 1e-4, (0, 0, 0), 0)
+    scan = lidar.scan(grid, [2.0, 2.0, 0.0], noise=False)
+    same, info = amcl.update(state, [0.1, 0.0, 0.0], 0, scan=scan)
+    assert same is state and not info.updated  # 0.1 m < update_min_d
+    scan[:5] = np.nan
+    scan[5] = -1.0
+    _, info = amcl.update(state, [0.3, 0.0, 0.0], 0, scan=scan)
+    assert info.updated and info.beams_skipped == 6 and info.beams_used > 0
+    with pytest.raises(ConfigError, match="max_particles"):
+        AMCL(grid=grid, max_particles=0)
+    with pytest.raises(ConfigError, match="min_particles"):
+        AMCL(grid=grid, min_particles=10, max_particles=5)
+    with pytest.raises(ConfigError, match="sigma_hit"):
+        AMCL(grid=grid, sigma_hit=-1.0)
+    with pytest.raises(ConfigError, match="sensor_model"):
+        AMCL(grid=grid, lidar=lidar, sensor_model="sonar")
+    with pytest.raises(ConfigError, match="lidar needs a grid"):
+        AMCL(lidar=lidar)
+    with pytest.raises(MapError, match="no free cell"):
+        AMCL(grid=OccupancyGrid.from_array(np.ones((4, 4), bool), 1.0)).global_state()
+    with pytest.raises(InputError, match="scan must have 36"):
+        amcl.update(state, [1.0, 0, 0], 0, scan=np.ones(10))
+    marks = AMCL(landmarks=[[1.0, 0.0]], max_particles=100, min_particles=100)
+    s0 = marks.initial_state([0, 0, 0], np.eye(3) * 1e-3, (0, 0, 0), 0)
+    _, info = marks.update(
+        s0,
+        [0, 0, 0],
+        0,
+        landmark_ids=[0, 7, 0],
+        landmark_z=[[1.0, 0.0], [1.0, 0.0], [np.nan, 0.0]],
+        force=True,
+    )
+    assert info.landmarks_used == 1 and info.landmarks_skipped == 2
