@@ -6,74 +6,157 @@ Plotting lives in ``wheelbase.plot`` and is not imported here, so ``import wheel
 load matplotlib.
 """
 
-from wheelbase.control import (
-    MPPI,
-    PID,
-    Aicardi,
-    ComputedTorquePID,
-    GoToGoal,
-    GoToPoint,
-    Kanayama,
-    LineArc,
-    LinearTracker,
-    PolarPose,
-    Polyline,
-    PurePursuit,
-    RearWheelFeedback,
-    SegmentFollower,
-    Stanley,
-    SteeringLimits,
-    TorqueGains,
-    VelocityLimits,
-    ViaDirection,
-    ViaPoint,
-)
-from wheelbase.dynamics import RM100, DiffDriveDynamics, RigidBody, simulate_dynamics
-from wheelbase.errors import (
-    ConfigError,
-    DataError,
-    DependencyError,
-    InputError,
-    MapError,
-    PlanningError,
-    ScenarioError,
-    WheelbaseError,
-)
-from wheelbase.geometry import wrap_angle
-from wheelbase.integrate import METHODS, SimResult, simulate
-from wheelbase.models import (
-    Ackermann,
-    Bicycle,
-    BodyTwist,
-    DiffDrive,
-    KinematicModel,
-    PathReference,
-    RearWheelBicycle,
-    Unicycle,
-    Wheel,
-    WheeledBase,
-    mecanum4,
-    omni3,
-    pure_motions,
-    reference_from_derivatives,
-    reference_from_xy,
-)
-from wheelbase.odometry import Encoder, WheelOdometry, dead_reckon, load_mrclam
-from wheelbase.planning import (
-    Footprint,
-    HybridAStar,
-    OccupancyGrid,
-    astar,
-    dijkstra,
-    dubins_length,
-    load_map,
-    reeds_shepp_length,
-)
-from wheelbase.planning import Path as PlannedPath
-from wheelbase.runner import RunResult, run
-from wheelbase.scenario import Scenario, load_scenario
-from wheelbase.timing import SpeedLimits, time_parametrize
-from wheelbase.trajectory import PoseTrajectory, Trajectory, feasible_trajectory, trapezoidal
+from typing import TYPE_CHECKING
+
+from wheelbase._lazy import attach
+
+if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.control import (
+        MPPI,
+        PID,
+        Aicardi,
+        ComputedTorquePID,
+        GoToGoal,
+        GoToPoint,
+        Kanayama,
+        LineArc,
+        LinearTracker,
+        PolarPose,
+        Polyline,
+        PurePursuit,
+        RearWheelFeedback,
+        SegmentFollower,
+        Stanley,
+        SteeringLimits,
+        TorqueGains,
+        VelocityLimits,
+        ViaDirection,
+        ViaPoint,
+    )
+    from wheelbase.dynamics import RM100, DiffDriveDynamics, RigidBody, simulate_dynamics
+    from wheelbase.errors import (
+        ConfigError,
+        DataError,
+        DependencyError,
+        InputError,
+        MapError,
+        PlanningError,
+        ScenarioError,
+        WheelbaseError,
+    )
+    from wheelbase.geometry import wrap_angle
+    from wheelbase.integrate import METHODS, SimResult, simulate
+    from wheelbase.models import (
+        Ackermann,
+        Bicycle,
+        BodyTwist,
+        DiffDrive,
+        KinematicModel,
+        PathReference,
+        RearWheelBicycle,
+        Unicycle,
+        Wheel,
+        WheeledBase,
+        mecanum4,
+        omni3,
+        pure_motions,
+        reference_from_derivatives,
+        reference_from_xy,
+    )
+    from wheelbase.odometry import Encoder, WheelOdometry, dead_reckon, load_mrclam
+    from wheelbase.planning import (
+        Footprint,
+        HybridAStar,
+        OccupancyGrid,
+        astar,
+        dijkstra,
+        dubins_length,
+        load_map,
+        reeds_shepp_length,
+    )
+    from wheelbase.planning import Path as PlannedPath
+    from wheelbase.runner import RunResult, run
+    from wheelbase.scenario import Scenario, load_scenario
+    from wheelbase.timing import SpeedLimits, time_parametrize
+    from wheelbase.trajectory import PoseTrajectory, Trajectory, feasible_trajectory, trapezoidal
+
+_EXPORTS = {
+    "MPPI": "wheelbase.control",
+    "PID": "wheelbase.control",
+    "Aicardi": "wheelbase.control",
+    "ComputedTorquePID": "wheelbase.control",
+    "GoToGoal": "wheelbase.control",
+    "GoToPoint": "wheelbase.control",
+    "Kanayama": "wheelbase.control",
+    "LineArc": "wheelbase.control",
+    "LinearTracker": "wheelbase.control",
+    "PolarPose": "wheelbase.control",
+    "Polyline": "wheelbase.control",
+    "PurePursuit": "wheelbase.control",
+    "RearWheelFeedback": "wheelbase.control",
+    "SegmentFollower": "wheelbase.control",
+    "Stanley": "wheelbase.control",
+    "SteeringLimits": "wheelbase.control",
+    "TorqueGains": "wheelbase.control",
+    "VelocityLimits": "wheelbase.control",
+    "ViaDirection": "wheelbase.control",
+    "ViaPoint": "wheelbase.control",
+    "RM100": "wheelbase.dynamics",
+    "DiffDriveDynamics": "wheelbase.dynamics",
+    "RigidBody": "wheelbase.dynamics",
+    "simulate_dynamics": "wheelbase.dynamics",
+    "ConfigError": "wheelbase.errors",
+    "DataError": "wheelbase.errors",
+    "DependencyError": "wheelbase.errors",
+    "InputError": "wheelbase.errors",
+    "MapError": "wheelbase.errors",
+    "PlanningError": "wheelbase.errors",
+    "ScenarioError": "wheelbase.errors",
+    "WheelbaseError": "wheelbase.errors",
+    "wrap_angle": "wheelbase.geometry",
+    "METHODS": "wheelbase.integrate",
+    "SimResult": "wheelbase.integrate",
+    "simulate": "wheelbase.integrate",
+    "Ackermann": "wheelbase.models",
+    "Bicycle": "wheelbase.models",
+    "BodyTwist": "wheelbase.models",
+    "DiffDrive": "wheelbase.models",
+    "KinematicModel": "wheelbase.models",
+    "PathReference": "wheelbase.models",
+    "RearWheelBicycle": "wheelbase.models",
+    "Unicycle": "wheelbase.models",
+    "Wheel": "wheelbase.models",
+    "WheeledBase": "wheelbase.models",
+    "mecanum4": "wheelbase.models",
+    "omni3": "wheelbase.models",
+    "pure_motions": "wheelbase.models",
+    "reference_from_derivatives": "wheelbase.models",
+    "reference_from_xy": "wheelbase.models",
+    "Encoder": "wheelbase.odometry",
+    "WheelOdometry": "wheelbase.odometry",
+    "dead_reckon": "wheelbase.odometry",
+    "load_mrclam": "wheelbase.odometry",
+    "Footprint": "wheelbase.planning",
+    "HybridAStar": "wheelbase.planning",
+    "OccupancyGrid": "wheelbase.planning",
+    "astar": "wheelbase.planning",
+    "dijkstra": "wheelbase.planning",
+    "dubins_length": "wheelbase.planning",
+    "load_map": "wheelbase.planning",
+    "reeds_shepp_length": "wheelbase.planning",
+    "PlannedPath": "wheelbase.planning:Path",
+    "RunResult": "wheelbase.runner",
+    "run": "wheelbase.runner",
+    "Scenario": "wheelbase.scenario",
+    "load_scenario": "wheelbase.scenario",
+    "SpeedLimits": "wheelbase.timing",
+    "time_parametrize": "wheelbase.timing",
+    "PoseTrajectory": "wheelbase.trajectory",
+    "Trajectory": "wheelbase.trajectory",
+    "feasible_trajectory": "wheelbase.trajectory",
+    "trapezoidal": "wheelbase.trajectory",
+}
+__getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 __version__ = "0.1.0"
 

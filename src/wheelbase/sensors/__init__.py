@@ -6,10 +6,28 @@ adds the beam model of Thrun, Burgard and Fox (§6.3); :class:`LandmarkSensor` m
 bearing to identified landmarks with noise, missed detections and clutter.
 """
 
-from wheelbase.sensors.beam_model import BeamModel
-from wheelbase.sensors.landmarks import LandmarkObservations, LandmarkSensor, range_bearing
-from wheelbase.sensors.lidar import Lidar
-from wheelbase.sensors.raycast import RAY_METHODS, cast_rays, gap_field, scan_rays
+from typing import TYPE_CHECKING
+
+from wheelbase._lazy import attach
+
+if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.sensors.beam_model import BeamModel
+    from wheelbase.sensors.landmarks import LandmarkObservations, LandmarkSensor, range_bearing
+    from wheelbase.sensors.lidar import Lidar
+    from wheelbase.sensors.raycast import RAY_METHODS, cast_rays, gap_field, scan_rays
+
+_EXPORTS = {
+    "BeamModel": "wheelbase.sensors.beam_model",
+    "LandmarkObservations": "wheelbase.sensors.landmarks",
+    "LandmarkSensor": "wheelbase.sensors.landmarks",
+    "range_bearing": "wheelbase.sensors.landmarks",
+    "Lidar": "wheelbase.sensors.lidar",
+    "RAY_METHODS": "wheelbase.sensors.raycast",
+    "cast_rays": "wheelbase.sensors.raycast",
+    "gap_field": "wheelbase.sensors.raycast",
+    "scan_rays": "wheelbase.sensors.raycast",
+}
+__getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 __all__ = [
     "RAY_METHODS",

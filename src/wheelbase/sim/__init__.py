@@ -7,10 +7,31 @@
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.
 """
 
-from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
-from wheelbase.sim.log import STATUSES, Log, status_code
-from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
-from wheelbase.sim.sensing import EncoderOdometry, PerfectState
+from typing import TYPE_CHECKING
+
+from wheelbase._lazy import attach
+
+if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
+    from wheelbase.sim.log import STATUSES, Log, status_code
+    from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
+    from wheelbase.sim.sensing import EncoderOdometry, PerfectState
+
+_EXPORTS = {
+    "Arrival": "wheelbase.sim.engine",
+    "Engine": "wheelbase.sim.engine",
+    "EngineState": "wheelbase.sim.engine",
+    "closed_loop": "wheelbase.sim.engine",
+    "STATUSES": "wheelbase.sim.log",
+    "Log": "wheelbase.sim.log",
+    "status_code": "wheelbase.sim.log",
+    "DynamicPlant": "wheelbase.sim.plants",
+    "KinematicPlant": "wheelbase.sim.plants",
+    "WheelAxle": "wheelbase.sim.plants",
+    "EncoderOdometry": "wheelbase.sim.sensing",
+    "PerfectState": "wheelbase.sim.sensing",
+}
+__getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 __all__ = [
     "STATUSES",
