@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import inspect
 import io
+import json
 import math
 import signal
 import tempfile
@@ -488,10 +489,66 @@ def _scen(draw) -> tuple[str, bytes, dict[str, bytes]]:
 
 
 @st.composite
+def _world(draw) -> tuple[str, bytes, dict[str, bytes]]:
+    """A polygon world (YAML or GeoJSON): bounds, polygons with holes, discs, odd numbers."""
+    number = st.one_of(
+        st.floats(min_value=-5.0, max_value=25.0),
+        st.sampled_from([math.nan, math.inf, -math.inf, 1e300, 1e-300, 0.0, 1e10, "a", None]),
+    )
+    ring = st.lists(st.lists(number, min_size=2, max_size=3), min_size=0, max_size=6)
+    fields: dict[str, Any] = {"bounds": [0.0, 20.0, 0.0, 20.0], "resolution": 0.5}
+    for key in draw(
+        st.lists(
+            st.sampled_from(["bounds", "resolution", "polygons", "discs", "grid", "extra"]),
+            max_size=4,
+        )
+    ):
+        fields[key] = draw(
+            st.one_of(
+                st.sampled_from(HOSTILE),
+                st.lists(number, min_size=0, max_size=5),
+                st.lists(ring, max_size=3),
+                st.lists(
+                    st.fixed_dictionaries({"exterior": ring, "holes": st.lists(ring, max_size=2)}),
+                    max_size=2,
+                ),
+                st.lists(st.lists(number, min_size=2, max_size=4), max_size=3),
+                st.sampled_from(["maze", "missing.map", "m.pgm", "world.yaml", 1e-4]),
+            )
+        )
+    if draw(st.booleans()):
+        return ".yaml", _damage(draw, yaml.safe_dump(fields).encode()), {}
+    features = [
+        {
+            "type": "Feature",
+            "properties": {"radius": draw(number)},
+            "geometry": {
+                "type": draw(
+                    st.sampled_from(["Point", "Polygon", "MultiPolygon", "LineString", "Bogus"])
+                ),
+                "coordinates": draw(
+                    st.one_of(ring, st.lists(ring, max_size=2), st.lists(number, max_size=3))
+                ),
+            },
+        }
+        for _ in range(draw(st.integers(0, 3)))
+    ]
+    collection = {
+        "type": draw(st.sampled_from(["FeatureCollection", "Feature", "Polygon", 3])),
+        "features": features,
+        "bbox": fields.get("bounds"),
+        "resolution": fields.get("resolution"),
+    }
+    text = json.dumps(collection, allow_nan=True).encode()
+    return draw(st.sampled_from([".geojson", ".json"])), _damage(draw, text), {}
+
+
+@st.composite
 def map_file_cases(draw) -> tuple[str, bytes, dict[str, bytes]]:
     """(suffix, bytes, side files) of a map file of any format, possibly damaged."""
     return draw(
         st.one_of(
+            _world(),
             _ros_yaml(),
             _movingai(),
             _scen(),

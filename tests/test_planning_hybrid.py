@@ -400,3 +400,17 @@ def test_xy_resolution_larger_than_the_map():
     planner = HybridAStar(grid, (0.4, 0.3), 0.5, xy_resolution=1834191526.0, time_limit=1.0)
     path = planner.plan((1.0, 1.0, 0.0), (3.0, 2.0, 1.0))
     assert path.success  # one bin: the analytic shot from the start
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"curvatures": 34247999}, r"68495998 motion primitives .* more than 1e\+07"),
+        ({"collision_step": 1e-9}, r"samples: more than 1e\+07; use fewer curvatures or a larger"),
+    ],
+)
+def test_primitive_table_is_bounded(options, match):
+    # curvatures = 3.4e7 hung in the constructor (found by tests/test_fuzz.py)
+    grid = OccupancyGrid.from_array(np.zeros((40, 40), bool), 0.1)
+    with pytest.raises(ConfigError, match=match):
+        HybridAStar(grid, (0.4, 0.3), 0.5, **options)

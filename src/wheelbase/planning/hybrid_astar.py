@@ -61,6 +61,7 @@ from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["HybridAStar"]
 
+MAX_PRIMITIVE_SAMPLES = 10_000_000  # collision samples in the motion-primitive table (240 MB)
 _FINITE = 1.0e300  # below this a cost is finite: the kernels compare with it, never with inf
 _OCTILE_RATIO = math.sqrt(4.0 - 2.0 * math.sqrt(2.0))
 """Largest ratio of the 8-connected (octile) distance to the straight-line one (at 22.5°)."""
@@ -304,6 +305,16 @@ class HybridAStar:
         ds = self.primitive_length
         rows: list[tuple[np.ndarray, int, float, float, float]] = []
         dirs = (1, -1) if self.reverse else (1,)
+        # Every primitive is sampled every collision_step and tried at every expansion: refuse
+        # a table that would not fit (curvatures=3e7 hung, collision_step=1e-9 m alike).
+        arcs = len(dirs) * (self.curvatures if self.turning_radius > 0 else 1)
+        samples = arcs * max(1, math.ceil(min(ds / step, 1e15)))
+        if samples > MAX_PRIMITIVE_SAMPLES:
+            raise ConfigError(
+                f"{arcs} motion primitives of {ds:.3g} m sampled every {step:.3g} m need "
+                f"{samples:.3g} samples: more than {MAX_PRIMITIVE_SAMPLES:g}; use fewer "
+                "curvatures or a larger collision_step"
+            )
         if self.turning_radius > 0:
             kmax = 1.0 / self.turning_radius
             kappas = np.linspace(-kmax, kmax, self.curvatures)
