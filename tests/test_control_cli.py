@@ -73,3 +73,11 @@ def test_bad_cli_input(tmp_path):
     result = runner.invoke(app, ["control", "--out", str(tmp_path)])
     assert isinstance(result.exception, ConfigError)
     assert "--start" in str(result.exception)
+
+
+def test_step_count_is_bounded(tmp_path):
+    # --dt 1e-300 looped for 5e300 steps (found by tests/test_fuzz.py): one clear error instead
+    result = runner.invoke(app, ["control", "--start", "1", "1", "0", "--dt", "1e-300",
+                                 "--t-end", "5", "--out", str(tmp_path / "o")])  # fmt: skip
+    assert isinstance(result.exception, ConfigError)
+    assert "t_end / dt = 5e+300 steps: more than max_steps" in str(result.exception)

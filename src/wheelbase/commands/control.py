@@ -125,10 +125,12 @@ def control_run_to_files(
     FileExistsError
         If a file exists and ``force`` is false.
     """
+    from wheelbase.integrate import time_grid
     from wheelbase.models import Unicycle
 
     if math.hypot(*(np.asarray(start[:2]) - np.asarray(goal[:2]))) < 1e-9:
         raise InputError("goal equals the start position; give a goal elsewhere")
+    time_grid(t_end, dt)  # t_end / dt within max_steps: an error, not 5e300 steps of a loop
     limits = VelocityLimits(
         positive("max_speed", max_speed, "m/s"), positive("max_yaw_rate", max_yaw_rate, "rad/s")
     )
