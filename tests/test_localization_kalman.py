@@ -183,3 +183,34 @@ def test_bad_input_and_broken_beliefs_raise_clear_errors():
     broken = EKF(LANDMARKS, VelocityMotion(distance_per_m=np.finfo(float).max))
     with pytest.raises(EstimationError, match="EKF: the covariance of robot 0"):
         broken.predict([0.0, 0.0, 0.0], np.eye(3), [1e10, 0.0], 1.0)
+
+
+@pytest.mark.parametrize("cls", [EKF, UKF])
+def test_predict_sequence_equals_repeated_predictions(cls):
+    f = cls(LANDMARKS, MOTION)
+    rng = np.random.default_rng(5)
+    mean = np.array([[0.5, 1.0, 3.0], [-1.0, 0.2, -2.0]])
+    cov = np.tile(np.diag([1e-3, 2e-3, 1e-4]), (2, 1, 1))
+    controls = np.column_stack([rng.uniform(-0.5, 1.0, 40), rng.uniform(-1, 1, 40)])
+    dts = rng.uniform(0.005, 0.05, 40)
+    means, covs = f.predict_sequence(mean, cov, controls, dts)
+    m, p = mean, cov
+    for k in range(40):
+        m, p = f.predict(m, p, controls[k], dts[k])
+        np.testing.assert_allclose(means[k], m, atol=1e-12)
+        np.testing.assert_allclose(covs[k], p, atol=1e-15, rtol=1e-10)
+    single_m, single_p = f.predict_sequence(mean[0], cov[0], controls, dts)
+    np.testing.assert_allclose(single_m, means[:, 0], atol=1e-12)
+
+
+def test_relative_motion_sampling_is_exact_without_noise_and_has_the_arc_variance():
+    from wheelbase.geometry import compose
+
+    rng = np.random.default_rng(6)
+    poses = np.column_stack([rng.uniform(-3, 3, (5, 2)), rng.uniform(-3, 3, 5)])
+    relative = np.array([0.4, 0.05, 0.3])
+    quiet = VelocityMotion(0, 0, 0, 0).sample_relative(poses, relative, 0.5, rng)
+    np.testing.assert_allclose(quiet, compose(poses, relative), atol=1e-12)
+    model = VelocityMotion(0.0, 0.0, 0.0, 0.0, 0.0, heading_per_s=0.01)
+    moved = model.sample_relative(np.zeros((20000, 3)), [0.0, 0.0, 0.0], 2.0, rng)
+    assert moved[:, 2].std() == pytest.approx(math.sqrt(0.02), rel=0.03)

@@ -59,13 +59,13 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, as_rng, check_choice, nonnegative, positive
 from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
-from wheelbase.geometry import compose
+from wheelbase.geometry import compose, relative_pose
 from wheelbase.localization.likelihood import (
     field_table,
     landmark_log_likelihood,
     scan_log_likelihood,
 )
-from wheelbase.localization.motion import OdometryMotion, odometry_delta
+from wheelbase.localization.motion import OdometryMotion, VelocityMotion, odometry_delta
 from wheelbase.localization.particles import (
     Cluster,
     clusters,
@@ -99,6 +99,8 @@ class AMCLState:
         Logarithms of the long- and short-term likelihood averages (−inf: not started).
     updates : int
         Filter updates so far.
+    time : float
+        Time [s] of the last update, when the caller gives times (NaN otherwise).
     """
 
     particles: np.ndarray
@@ -107,6 +109,7 @@ class AMCLState:
     log_w_slow: float = -math.inf
     log_w_fast: float = -math.inf
     updates: int = 0
+    time: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -182,8 +185,10 @@ class AMCL:
         The lidar whose scans are given (beam angles, range limits, mount).
     landmarks : array_like or None, shape (L, 2)
         Known landmark positions [m] for range–bearing measurements.
-    motion : OdometryMotion
-        Odometry noise (Nav2 ``alpha1``–``alpha4``).
+    motion : OdometryMotion or VelocityMotion
+        Odometry noise: Nav2's ``alpha1``–``alpha4``, or noise linear in the odometry's arc
+        (Δs, Δθ) between updates, as the Kalman filters' (for frequent updates, where the
+        quadratic α terms vanish).
     min_particles, max_particles : int
         Limits of the KLD-adapted particle count (Nav2 500 and 2,000).
     kld_err : float
@@ -271,9 +276,10 @@ class AMCL:
         if self.landmarks is not None:
             marks = as_float_array("landmarks", self.landmarks, 2, min_ndim=2, max_ndim=2)
             object.__setattr__(self, "landmarks", marks)
-        if not isinstance(self.motion, OdometryMotion):
+        if not isinstance(self.motion, OdometryMotion | VelocityMotion):
             raise ConfigError(
-                f"motion must be an OdometryMotion (got {type(self.motion).__name__})"
+                "motion must be an OdometryMotion or a VelocityMotion "
+                f"(got {type(self.motion).__name__})"
             )
         lo = _count("min_particles", self.min_particles)
         hi = _count("max_particles", self.max_particles)
@@ -471,6 +477,7 @@ class AMCL:
         landmark_ids: ArrayLike | None = None,
         landmark_z: ArrayLike | None = None,
         force: bool = False,
+        time: float | None = None,
     ) -> tuple[AMCLState, AMCLInfo]:
         """One filter update from the odometry pose and the measurements taken there.
 
@@ -490,6 +497,9 @@ class AMCL:
             Their (range [m], bearing [rad]).
         force : bool
             Update even if the robot has not moved ``update_min_d`` / ``update_min_a``.
+        time : float or None
+            Time [s] now: with a :class:`VelocityMotion`, its per-second noise grows over the
+            time since the last update.
 
         Returns
         -------
@@ -503,7 +513,14 @@ class AMCL:
             return state, AMCLInfo(updated=False, particles=state.particles.shape[0])
         delta = odometry_delta(state.odom, odom)
         rng = as_rng(rng)
-        particles = self.motion.sample(state.particles, delta, rng)
+        if isinstance(self.motion, VelocityMotion):
+            elapsed = 0.0 if time is None or not np.isfinite(state.time) else time - state.time
+            relative = relative_pose(state.odom, odom)
+            particles = self.motion.sample_relative(
+                state.particles, relative, max(elapsed, 0.0), rng
+            )
+        else:
+            particles = self.motion.sample(state.particles, delta, rng)
         log_lik = np.zeros(particles.shape[0])
         beams_used = beams_skipped = marks_used = marks_skipped = 0
         if scan is not None:
@@ -540,7 +557,8 @@ class AMCL:
             particles, weights, injected, log_slow, log_fast = self._resample(
                 particles, weights, log_slow, log_fast, rng
             )
-        new = AMCLState(particles, weights, odom.copy(), log_slow, log_fast, updates)
+        stamp = math.nan if time is None else float(time)
+        new = AMCLState(particles, weights, odom.copy(), log_slow, log_fast, updates, stamp)
         info = AMCLInfo(
             True, beams_used, beams_skipped, marks_used, marks_skipped, injected,
             particles.shape[0],

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, nonnegative, positive
-from wheelbase.geometry import se2_exp, wrap_angle
+from wheelbase.geometry import compose, se2_exp, wrap_angle
 
 __all__ = ["OdometryMotion", "VelocityMotion", "arc_move", "odometry_delta"]
 
@@ -227,13 +227,74 @@ class VelocityMotion:
         -------
         numpy.ndarray, shape (..., 3)
         """
+        return self.perturb(poses, self.increments(control, dt), dt, rng)
+
+    def perturb(
+        self, poses: ArrayLike, increments: ArrayLike, dt: float, rng: np.random.Generator
+    ) -> np.ndarray:
+        """Move poses by increments (Δs, Δθ) plus independent errors of
+        :meth:`increment_covariance` (each pose its own draw).
+
+        Parameters
+        ----------
+        poses : array_like, shape (..., 3)
+            Poses before the step.
+        increments : array_like, shape (..., 2)
+            (Δs [m], Δθ [rad]).
+        dt : float
+            Duration of the step [s], >= 0 (for the per-second terms).
+        rng : numpy.random.Generator
+            Source of randomness.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 3)
+        """
         poses = as_float_array("poses", poses, 3)
-        inc = self.increments(control, dt)
-        cov = self.covariance(control, dt)
+        inc = as_float_array("increments", increments, 2)
+        cov = self.increment_covariance(inc, nonnegative("dt", dt, "s"))
         shape = np.broadcast_shapes(poses.shape[:-1], inc.shape[:-1])
         std = np.sqrt(np.stack([cov[..., 0, 0], cov[..., 1, 1]], -1))
         noisy = inc + np.broadcast_to(std, (*shape, 2)) * rng.standard_normal((*shape, 2))
         return arc_move(poses, noisy)
+
+    def sample_relative(
+        self, poses: ArrayLike, relative: ArrayLike, dt: float, rng: np.random.Generator
+    ) -> np.ndarray:
+        """Move poses by an odometry relative pose, with the noise of the arc it amounts to.
+
+        Each pose is composed with ``relative`` (exact, whatever path the odometry took) and
+        perturbed by V·ε, ε ~ N(0, :meth:`increment_covariance`) for the increments
+        (Δs, Δθ) of the arc with the same chord and turn, V = ∂pose'/∂(Δs, Δθ) of that arc.
+
+        Parameters
+        ----------
+        poses : array_like, shape (P, 3)
+            Poses before the motion.
+        relative : array_like, shape (3,)
+            The motion in the frame of the old pose (x forward [m], y left [m], θ [rad]).
+        dt : float
+            Duration of the motion [s], >= 0 (for the per-second terms).
+        rng : numpy.random.Generator
+            Source of randomness.
+
+        Returns
+        -------
+        numpy.ndarray, shape (P, 3)
+        """
+        poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
+        rel = as_float_array("relative", relative, 3, max_ndim=1)
+        turn = float(rel[2])
+        chord = math.hypot(rel[0], rel[1])
+        s, _ = _sinc_half(np.array(turn))
+        forward = math.cos(math.atan2(rel[1], rel[0]) - 0.5 * turn) if chord > 0 else 1.0
+        inc = np.array([math.copysign(chord / float(s), forward), turn])
+        cov = self.increment_covariance(inc, nonnegative("dt", dt, "s"))
+        eps = rng.standard_normal((poses.shape[0], 2)) * np.sqrt([cov[0, 0], cov[1, 1]])
+        _, v = self.jacobians(poses, inc)
+        moved = compose(poses, rel) + np.einsum("pij,pj->pi", v, eps)
+        moved[:, 2] = wrap_angle(moved[:, 2])
+        return moved
 
 
 def odometry_delta(old: ArrayLike, new: ArrayLike) -> np.ndarray:

@@ -1,0 +1,131 @@
+"""Localisation on real data: UTIAS MRCLAM data set 6, robot 1 (camera landmarks vs Vicon)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from wheelbase.cli import app
+from wheelbase.errors import ConfigError, DataError
+from wheelbase.localization.mrclam import (
+    find_mrclam_files,
+    load_landmarks,
+    load_measurements,
+    localize,
+)
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"
+needs_data = pytest.mark.skipif(
+    not (DATA / "Dataset6_Robot1_Measurement.dat").is_file(),
+    reason=f"MRCLAM data not found in {DATA} (see ../shared/data/README.md)",
+)
+NAMES = ("Odometry", "Groundtruth", "Measurement")
+
+
+@pytest.fixture(scope="module")
+def first_five_minutes(tmp_path_factory):
+    """The first 300 s of robot 1, under the original release's file names."""
+    folder = tmp_path_factory.mktemp("mrclam")
+    start = None
+    for name in NAMES:
+        lines = (DATA / f"Dataset6_Robot1_{name}.dat").read_text().splitlines()
+        rows = [line for line in lines if line.strip() and not line.startswith("#")]
+        start = start or float(rows[0].split()[0])
+        keep = [r for r in rows if float(r.split()[0]) < start + 300.0]
+        (folder / f"Robot1_{name}.dat").write_text("# cut\n" + "\n".join(keep) + "\n")
+    for name in ("Barcodes", "Landmark_Groundtruth"):
+        (folder / f"{name}.dat").write_text((DATA / f"Dataset6_{name}.dat").read_text())
+    return folder
+
+
+@needs_data
+def test_files_are_found_with_or_without_the_data_set_prefix(first_five_minutes):
+    prefixed = find_mrclam_files(DATA, 1)
+    assert prefixed["odometry"].name == "Dataset6_Robot1_Odometry.dat"
+    assert find_mrclam_files(first_five_minutes, 1)["barcodes"].name == "Barcodes.dat"
+    with pytest.raises(DataError, match="Robot2_Odometry"):
+        find_mrclam_files(DATA, 2)
+    with pytest.raises(ConfigError, match="robot"):
+        find_mrclam_files(DATA, 6)
+
+
+@needs_data
+def test_barcodes_are_resolved_and_robot_sightings_left_out():
+    files = find_mrclam_files(DATA, 1)
+    landmarks = load_landmarks(files["landmarks"])
+    assert landmarks.subjects.tolist() == list(range(6, 21))
+    meas = load_measurements(files["measurement"], files["barcodes"], landmarks)
+    raw = np.loadtxt(files["measurement"], comments="#")
+    assert meas.t.size + meas.robot_sightings == raw.shape[0] == 1942
+    assert 300 < meas.robot_sightings < 500  # about a fifth of the rows
+    assert np.all(np.diff(meas.t) >= 0)
+    assert set(np.unique(meas.landmark)) <= set(range(-1, 15))
+    # barcode 63 is subject 6, the first landmark
+    codes = dict(np.loadtxt(files["barcodes"], comments="#").astype(int)[:, ::-1])
+    first = np.flatnonzero(raw[:, 1] == 63)[0]
+    assert codes[63] == 6
+    row = np.flatnonzero(np.isclose(meas.t, raw[first, 0]) & (meas.landmark == 0))
+    assert row.size >= 1
+
+
+@needs_data
+@pytest.mark.parametrize("kind", ["ekf", "ukf", "pf"])
+def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_five_minutes, kind):
+    result = localize(first_five_minutes, 1, kind)
+    m = result.metrics()
+    assert m["duration_s"] > 100
+    assert m["position_rmse_m"] < 0.25 and m["position_max_m"] < 0.7
+    assert m["position_rmse_m"] < 0.3 * m["dead_reckoning_rmse_m"]
+    assert m["measurements_used"] > 200
+    assert m["robot_sightings_skipped"] > 0
+    # the 3σ bound of the Kalman filters covers the error most of the time
+    if kind != "pf":
+        error = np.hypot(*(result.estimate[:, :2] - result.truth[:, :2]).T)
+        bound = 3 * np.sqrt(result.cov[:, 0, 0] + result.cov[:, 1, 1])
+        assert np.mean(error <= bound) > 0.9
+
+
+@needs_data
+def test_cli_writes_metrics_and_figures(first_five_minutes, tmp_path):
+    out = tmp_path / "out"
+    runner = CliRunner()
+    args = [
+        "localize",
+        str(first_five_minutes),
+        "--robot",
+        "1",
+        "--filter",
+        "ukf",
+        "--out",
+        str(out),
+    ]
+    done = runner.invoke(app, args)
+    assert done.exit_code == 0, done.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    for key in (
+        "position_rmse_m",
+        "position_max_m",
+        "heading_rmse_deg",
+        "dead_reckoning_rmse_m",
+        "duration_s",
+        "measurements_used",
+        "measurements_rejected",
+    ):
+        assert key in metrics
+    assert metrics["parameters"]["range_std"] > 0
+    assert (out / "paths.png").stat().st_size > 10000 and (out / "error.png").is_file()
+    again = runner.invoke(app, args)
+    assert again.exit_code == 2 and "--force" in again.output
+    bad = runner.invoke(
+        app, ["localize", str(first_five_minutes), "--filter", "kf", "--out", str(out)]
+    )
+    assert bad.exit_code == 2 and "filter" in bad.output
+
+
+def test_missing_folder_is_a_clear_error(tmp_path):
+    with pytest.raises(DataError, match="not found"):
+        localize(tmp_path / "nowhere", 1, "ekf")
+    with pytest.raises(ConfigError, match="filter"):
+        localize(tmp_path, 1, "kalman")
