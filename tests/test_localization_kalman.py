@@ -201,6 +201,7 @@ def test_predict_sequence_equals_repeated_predictions(cls):
         np.testing.assert_allclose(covs[k], p, atol=1e-15, rtol=1e-10)
     single_m, single_p = f.predict_sequence(mean[0], cov[0], controls, dts)
     np.testing.assert_allclose(single_m, means[:, 0], atol=1e-12)
+    np.testing.assert_allclose(single_p, covs[:, 0], atol=1e-15)
 
 
 def test_relative_motion_sampling_is_exact_without_noise_and_has_the_arc_variance():
