@@ -9,6 +9,7 @@ from wheelbase.errors import ConfigError, InputError, MapError
 from wheelbase.geometry import compose
 from wheelbase.localization import (
     AMCL,
+    GLOBAL_LOCALIZATION,
     OdometryMotion,
     kld_particles,
     low_variance_resample,
@@ -129,17 +130,7 @@ def test_tracking_from_a_known_pose_stays_within_ten_centimetres(sensor_model):
     assert run.particles[-1] < 1000  # KLD shrank the set once it had converged
 
 
-GLOBAL = {
-    "sensor_model": "beam",
-    "max_particles": 5000,
-    "min_ess": 0.3,
-    "z_hit": 0.9,
-    "z_short": 0.05,
-    "z_rand": 0.05,
-    "lambda_short": 0.5,
-    "recovery_alpha_slow": 0.001,
-    "recovery_alpha_fast": 0.1,
-}
+GLOBAL = GLOBAL_LOCALIZATION
 
 
 def test_global_localisation_on_the_maze_converges_within_ten_metres():

@@ -1,6 +1,12 @@
 """Localisation: EKF and UKF with known landmarks, and AMCL (a particle filter as Nav2's)."""
 
-from wheelbase.localization.amcl import AMCL, AMCLInfo, AMCLState, PoseEstimate
+from wheelbase.localization.amcl import (
+    AMCL,
+    GLOBAL_LOCALIZATION,
+    AMCLInfo,
+    AMCLState,
+    PoseEstimate,
+)
 from wheelbase.localization.ekf import EKF
 from wheelbase.localization.kalman import KalmanFilter, UpdateInfo, chi2_gate
 from wheelbase.localization.motion import OdometryMotion, VelocityMotion, arc_move, odometry_delta
@@ -11,6 +17,7 @@ from wheelbase.localization.ukf import UKF
 __all__ = [
     "AMCL",
     "EKF",
+    "GLOBAL_LOCALIZATION",
     "UKF",
     "AMCLInfo",
     "AMCLRun",

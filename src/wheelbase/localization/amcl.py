@@ -45,7 +45,7 @@ For global localisation and the kidnapped robot use
 ``sensor_model="beam"`` (the ray-cast beam model of Thrun et al. §6.3, which also penalises
 beams that pass through walls: the likelihood field ignores them, and the maze's corridors,
 4 m apart, then look alike), ``min_ess`` about 0.3, and recovery rates such as 0.001 and 0.1
-(Thrun's): the tests and ``benchmarks/sensors.py`` do.
+(Thrun's): :data:`GLOBAL_LOCALIZATION`.
 """
 
 from __future__ import annotations
@@ -57,7 +57,14 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, as_rng, check_choice, nonnegative, positive
+from wheelbase._validate import (
+    as_float_array,
+    as_rng,
+    check_choice,
+    integer,
+    nonnegative,
+    positive,
+)
 from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.localization.likelihood import (
@@ -75,12 +82,34 @@ from wheelbase.localization.particles import (
 from wheelbase.planning import OccupancyGrid
 from wheelbase.sensors import BeamModel, Lidar, scan_rays
 
-__all__ = ["AMCL", "BEAM_COMBINATIONS", "SENSOR_MODELS", "AMCLInfo", "AMCLState", "PoseEstimate"]
+__all__ = [
+    "AMCL",
+    "BEAM_COMBINATIONS",
+    "GLOBAL_LOCALIZATION",
+    "SENSOR_MODELS",
+    "AMCLInfo",
+    "AMCLState",
+    "PoseEstimate",
+]
 
 SENSOR_MODELS: tuple[str, ...] = ("likelihood_field", "beam")
 """Lidar models of :class:`AMCL` (its docstring)."""
-BEAM_COMBINATIONS: tuple[str, ...] = ("cubes", "product")
-"""How the likelihood field combines beams: Nav2's 1 + Σ p³ or the book's Π p."""
+BEAM_COMBINATIONS: tuple[str, ...] = ("product", "cubes")
+"""How the likelihood field combines beams: the book's Π p or Nav2's 1 + Σ p³."""
+GLOBAL_LOCALIZATION: dict[str, object] = {
+    "sensor_model": "beam",
+    "max_particles": 5000,
+    "min_ess": 0.3,
+    "z_hit": 0.9,
+    "z_short": 0.05,
+    "z_rand": 0.05,
+    "lambda_short": 0.5,
+    "recovery_alpha_slow": 0.001,
+    "recovery_alpha_fast": 0.1,
+}
+"""Options of :class:`AMCL` for global localisation and the kidnapped robot (module
+docstring), as the tests and ``benchmarks/sensors.py`` use them: ``AMCL(grid=..., lidar=...,
+**GLOBAL_LOCALIZATION)``."""
 
 
 @dataclass(frozen=True)
@@ -164,12 +193,6 @@ class PoseEstimate:
     cov: np.ndarray
     clusters: list[Cluster]
     ambiguous: bool
-
-
-def _count(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name} must be an integer >= 1 (got {value!r})")
-    return int(value)
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,8 +304,8 @@ class AMCL:
                 "motion must be an OdometryMotion or a VelocityMotion "
                 f"(got {type(self.motion).__name__})"
             )
-        lo = _count("min_particles", self.min_particles)
-        hi = _count("max_particles", self.max_particles)
+        lo = integer("min_particles", self.min_particles, minimum=1)
+        hi = integer("max_particles", self.max_particles, minimum=1)
         if lo > hi:
             raise ConfigError(f"min_particles must be <= max_particles = {hi} (got {lo})")
         positive("kld_err", self.kld_err)
@@ -293,8 +316,8 @@ class AMCL:
         if np.any(size <= 0):
             raise ConfigError(f"bin_size must be > 0 (x [m], y [m], θ [rad]) (got {size})")
         object.__setattr__(self, "bin_size", tuple(float(v) for v in size))
-        _count("max_beams", self.max_beams)
-        _count("resample_interval", self.resample_interval)
+        integer("max_beams", self.max_beams, minimum=1)
+        integer("resample_interval", self.resample_interval, minimum=1)
         for name in ("z_hit", "landmark_range_std", "landmark_bearing_std", "sigma_hit",
                      "likelihood_max_dist", "landmark_max_range"):  # fmt: skip
             positive(name, getattr(self, name))

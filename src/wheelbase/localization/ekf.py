@@ -16,10 +16,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array
-from wheelbase.errors import ConfigError, InputError
 from wheelbase.localization.kalman import KalmanFilter
 from wheelbase.localization.motion import arc_move
 from wheelbase.odometry.dead_reckoning import integrate_increments
@@ -54,53 +51,18 @@ class EKF(KalmanFilter):
         new_cov = g @ cov @ gt + v @ m @ np.swapaxes(v, -1, -2)
         return new_mean, 0.5 * (new_cov + np.swapaxes(new_cov, -1, -2))
 
-    def predict_sequence(
-        self, mean: ArrayLike, cov: ArrayLike, controls: ArrayLike, dts: ArrayLike
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Several predictions in a row, as :meth:`KalmanFilter.predict_sequence`.
-
-        Without measurements the EKF's mean is dead reckoning, so the means and Jacobians of
-        all steps are computed at once and only the covariance recursion
-        P ← G P Gᵀ + V M Vᵀ runs step by step (compiled).
-
-        Parameters
-        ----------
-        mean : array_like, shape (3,) or (N, 3)
-            Pose means at the start.
-        cov : array_like, shape (3, 3) or (N, 3, 3)
-            Their covariances.
-        controls : array_like, shape (T, 2) or (T, N, 2)
-            (v [m/s], ω [rad/s]) of each step.
-        dts : array_like, shape (T,)
-            Step lengths [s], > 0.
-
-        Returns
-        -------
-        means, covs : numpy.ndarray
-            Shape (T, 3) and (T, 3, 3), or (T, N, 3) and (T, N, 3, 3).
-        """
-        mean_b, cov_b, single = self._belief(mean, cov)
-        dts = as_float_array("dts", dts, min_ndim=1, max_ndim=1)
-        if np.any(dts <= 0.0):
-            raise ConfigError(f"dts must be > 0 s (got {dts.min():g})")
-        controls = as_float_array("controls", controls, 2, min_ndim=2, max_ndim=3)
-        if controls.shape[0] != dts.size:
-            raise InputError(
-                f"controls must have one row per step: {dts.size} (got {controls.shape[0]})"
-            )
-        shape = (dts.size, *mean_b.shape[:-1], 2)
-        controls = np.broadcast_to(controls.reshape(dts.size, -1, 2), shape)
-        with np.errstate(all="ignore"):
-            inc = controls * dts[:, None, None]
-            poses = integrate_increments(mean_b, inc[..., 0], inc[..., 1])  # (T + 1, N, 3)
-            g, v = self.motion.jacobians(poses[:-1], inc)
-            m = self.motion.increment_covariance(inc, dts[:, None])
-            q = v @ m @ np.swapaxes(v, -1, -2)
-            covs = np.empty((dts.size, *cov_b.shape))
-            _propagate(np.ascontiguousarray(g), np.ascontiguousarray(q), cov_b, covs)
-        means = poses[1:]
-        self._check(means[-1], covs[-1], "prediction")
-        return (means[:, 0], covs[:, 0]) if single else (means, covs)
+    def _predict_sequence(self, mean, cov, controls, dts):
+        """Without measurements the EKF's mean is dead reckoning: the means and Jacobians of
+        all steps are computed at once and only P ← G P Gᵀ + V M Vᵀ runs step by step
+        (compiled). The same as the loop of :meth:`KalmanFilter._predict_sequence`."""
+        inc = controls * dts[:, None, None]
+        poses = integrate_increments(mean, inc[..., 0], inc[..., 1])  # (T + 1, N, 3)
+        g, v = self.motion.jacobians(poses[:-1], inc)
+        m = self.motion.increment_covariance(inc, dts[:, None])
+        q = v @ m @ np.swapaxes(v, -1, -2)
+        covs = np.empty((dts.size, *cov.shape))
+        _propagate(np.ascontiguousarray(g), np.ascontiguousarray(q), cov, covs)
+        return poses[1:], covs
 
     def _moments(self, mean, cov, landmarks, r_mat):
         z_hat = range_bearing(mean, landmarks)

@@ -212,14 +212,21 @@ class KalmanFilter:
         controls = np.broadcast_to(
             controls.reshape(dts.size, -1, 2), (dts.size, *mean_b.shape[:-1], 2)
         )
-        means = np.empty((dts.size, *mean_b.shape))
-        covs = np.empty((dts.size, *cov_b.shape))
-        with np.errstate(all="ignore"):
-            for k in range(dts.size):
-                mean_b, cov_b = self._predict(mean_b, cov_b, controls[k], float(dts[k]))
-                means[k], covs[k] = mean_b, cov_b
-        self._check(mean_b, cov_b, "prediction")
+        with np.errstate(all="ignore"):  # an overflow shows as a non-finite belief: checked
+            means, covs = self._predict_sequence(mean_b, cov_b, controls, dts)
+        self._check(means[-1], covs[-1], "prediction")
         return (means[:, 0], covs[:, 0]) if single else (means, covs)
+
+    def _predict_sequence(
+        self, mean: np.ndarray, cov: np.ndarray, controls: np.ndarray, dts: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Beliefs after each step, ``(T, N, 3)`` and ``(T, N, 3, 3)``; inputs checked."""
+        means = np.empty((dts.size, *mean.shape))
+        covs = np.empty((dts.size, *cov.shape))
+        for k in range(dts.size):
+            mean, cov = self._predict(mean, cov, controls[k], float(dts[k]))
+            means[k], covs[k] = mean, cov
+        return means, covs
 
     def update(
         self, mean: ArrayLike, cov: ArrayLike, ids: ArrayLike, z: ArrayLike

@@ -19,6 +19,14 @@ def _pyplot() -> Any:
     return plt
 
 
+def _save(plt: Any, fig: Any, path: str | Path) -> Path:
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def plot_paths(result: Any, path: str | Path, title: str = "") -> Path:
     """The true path, the estimate and dead reckoning on the landmark map.
 
@@ -49,11 +57,7 @@ def plot_paths(result: Any, path: str | Path, title: str = "") -> Path:
     ax.set_ylabel("y [m]")
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_error(result: Any, path: str | Path, title: str = "") -> Path:
@@ -84,8 +88,4 @@ def plot_error(result: Any, path: str | Path, title: str = "") -> Path:
     ax.grid(True, alpha=0.3)
     ax.set_title(title)
     ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
