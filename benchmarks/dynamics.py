@@ -20,8 +20,9 @@ import time
 
 import numpy as np
 
-from wheelbase.control.torque import ComputedTorquePID, track_trajectory
+from wheelbase.control.torque import ComputedTorquePID
 from wheelbase.dynamics import RM100, _roll_final, simulate_dynamics
+from wheelbase.sim import track_trajectory
 from wheelbase.trajectory import feasible_trajectory
 
 
@@ -65,7 +66,7 @@ def main() -> dict:
         "batch_rk4_robot_steps_per_s": n_robots * batch_steps / batch_time,
         "closed_loop_s": loop,
         "closed_loop_steps": int(holder["run"].t.size - 1),
-        "closed_loop_metrics": holder["run"].metrics(),
+        "closed_loop_metrics": holder["run"].metrics()[0],
         "cpu_count": os.cpu_count(),
         "machine": platform.machine(),
     }

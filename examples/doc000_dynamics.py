@@ -26,9 +26,10 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from wheelbase.control.torque import ComputedTorquePID, track_trajectory
+from wheelbase.control.torque import ComputedTorquePID
 from wheelbase.dynamics import RM100, inverse_dynamics, simulate_dynamics
 from wheelbase.dynamics_plot import plot_inverse_dynamics, plot_tracking
+from wheelbase.sim import track_trajectory
 from wheelbase.trajectory import feasible_trajectory, heading_from_velocity, trapezoidal
 
 CASES = [(0.01, 0.01), (0.01, 0.012), (0.01, 0.0), (0.01, -0.01)]
@@ -75,7 +76,7 @@ def main(out: Path) -> None:
         out / "doc000_open_loop.png", dpi=100
     )
     plot_tracking([runs[n] for n in names[3:]], names[3:]).savefig(out / "doc000_pid.png", dpi=100)
-    print(json.dumps({name: run.metrics() for name, run in runs.items()}, indent=2))
+    print(json.dumps({name: run.metrics()[0] for name, run in runs.items()}, indent=2))
 
 
 if __name__ == "__main__":

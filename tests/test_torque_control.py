@@ -6,14 +6,10 @@ import numpy as np
 import pytest
 
 from wheelbase.control.pid import PID
-from wheelbase.control.torque import (
-    ComputedTorquePID,
-    TorqueGains,
-    track_trajectory,
-    tune_computed_torque,
-)
+from wheelbase.control.torque import ComputedTorquePID, TorqueGains
 from wheelbase.dynamics import RM100, _step, inverse_dynamics
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.sim import track_trajectory, tune_computed_torque
 from wheelbase.trajectory import feasible_trajectory, heading_from_velocity, trapezoidal
 
 DOC = [[0, 0], [10, 10], [20, 0], [30, 0]]
@@ -89,13 +85,14 @@ def test_compiled_loop_matches_step_by_step_calls():
     ctrl = ComputedTorquePID(model, derivative_filter=0.05, max_torque=0.02)
     fast = track_trajectory(RM100, REF, ctrl, dt=0.05, t_end=40.0)
     ctrl.reset()
-    state = fast.states[0].copy()
+    states = np.concatenate([fast.true_pose[0], fast.twist[0]], axis=-1)
+    state = states[0].copy()
     work = [np.empty(6) for _ in range(5)]
     for k in range(40):
-        tau = ctrl(fast.t[k], state, REF, dt=0.05)
-        np.testing.assert_allclose(tau, fast.torques[k], atol=1e-12)
+        tau = ctrl(fast.t[k], state, REF)  # dt: the time since the previous call, as in a loop
+        np.testing.assert_allclose(tau, fast.torques[0, k], atol=1e-12)
         _step(state, tau[0], tau[1], RM100.params, 0.05, 1, *work)
-        np.testing.assert_allclose(state, fast.states[k + 1], atol=1e-12)
+        np.testing.assert_allclose(state, states[k + 1], atol=1e-12)
 
 
 def test_along_track_error_decays_with_the_placed_triple_pole():
@@ -105,28 +102,32 @@ def test_along_track_error_decays_with_the_placed_triple_pole():
     run = track_trajectory(RM100, ref, ctrl, dt=0.002, state0=[-e0, 0, 0, 0, 0, 0], t_end=15.0)
     t = run.t
     expected = e0 * (1 + w * t - (w * t) ** 2) * np.exp(-w * t)  # (s + ω)³, z = ∫e
-    np.testing.assert_allclose(run.reference[:, 0] - run.states[:, 0], expected, atol=2e-5)
-    np.testing.assert_allclose(run.states[:, 1:3], 0.0, atol=1e-12)
+    error = run.reference_pose[0, :, 0] - run.true_pose[0, :, 0]
+    np.testing.assert_allclose(error, expected, atol=2e-5)
+    np.testing.assert_allclose(run.true_pose[0, :, 1:3], 0.0, atol=1e-12)
 
 
 def test_issue_targets_on_the_feasible_document_trajectory():
     """Table of the issue: open loop vs PID, exact model and ±20 % mass and inertia."""
-    exact = track_trajectory(RM100, REF, ComputedTorquePID(RM100)).metrics()
-    assert exact["max_position_error_m"] < 0.01 and exact["rms_heading_error_deg"] < 0.5
+    exact = track_trajectory(RM100, REF, ComputedTorquePID(RM100)).metrics()[0]
+    assert exact["tracking_max_position_error_m"] < 0.01
+    assert exact["tracking_rms_heading_error_deg"] < 0.5
     for factor in (0.8, 1.2):
         wrong = RM100.with_body(RM100.body.scaled(factor, factor))
-        pid = track_trajectory(RM100, REF, ComputedTorquePID(wrong)).metrics()
-        assert pid["max_position_error_m"] < 0.05
-        open_loop = track_trajectory(RM100, REF, model=wrong).metrics()
-        assert open_loop["max_position_error_m"] > 100 * pid["max_position_error_m"]
+        pid = track_trajectory(RM100, REF, ComputedTorquePID(wrong)).metrics()[0]
+        assert pid["tracking_max_position_error_m"] < 0.05
+        open_loop = track_trajectory(RM100, REF, model=wrong).metrics()[0]
+        assert (
+            open_loop["tracking_max_position_error_m"] > 100 * pid["tracking_max_position_error_m"]
+        )
 
 
 def test_open_loop_on_the_documents_heading_jumps_misses_by_metres():
     doc = heading_from_velocity(trapezoidal(DOC, (0.1, 0.1)))
     run = track_trajectory(RM100, doc)
-    assert run.mode == "open_loop" and run.metrics()["max_position_error_m"] > 10.0
+    assert run.metrics()[0]["tracking_max_position_error_m"] > 10.0
     # the robot never turns: it drives on along 45° (the torques have no yaw moment)
-    np.testing.assert_allclose(run.states[:, 2], math.pi / 4, atol=1e-12)
+    np.testing.assert_allclose(run.true_pose[0, :, 2], math.pi / 4, atol=1e-12)
 
 
 def test_anti_windup_limits_overshoot_under_torque_saturation():
@@ -140,7 +141,7 @@ def test_anti_windup_limits_overshoot_under_torque_saturation():
         for aw in (True, False)
     ]
     assert all(np.abs(r.torques).max() <= 0.05 + 1e-15 for r in runs)
-    overshoot = [-(r.reference[:, 0] - r.states[:, 0]).min() for r in runs]
+    overshoot = [-(r.reference_pose[0, :, 0] - r.true_pose[0, :, 0]).min() for r in runs]
     assert overshoot[0] < 0.5 * overshoot[1]
 
 
@@ -148,8 +149,8 @@ def test_tuning_does_not_do_worse_than_its_start():
     model = RM100.with_body(RM100.body.scaled(1.2, 1.2))
     gains = tune_computed_torque(RM100, REF, model=model, horizon=20.0, dt=0.02)
     assert isinstance(gains, TorqueGains)
-    run = track_trajectory(RM100, REF, ComputedTorquePID(model, gains)).metrics()
-    assert run["max_position_error_m"] < 0.01
+    run = track_trajectory(RM100, REF, ComputedTorquePID(model, gains)).metrics()[0]
+    assert run["tracking_max_position_error_m"] < 0.01
 
 
 def test_bad_controller_input():
@@ -200,8 +201,12 @@ def test_track_waypoints_command_writes_metrics_matching_the_api(tmp_path):
     model = RM100.with_body(RM100.body.scaled(1.2, 1.2))
     gains = TorqueGains.pole_placement(1.0, speed=float(ref.twist[:, 0].max()))
     run = track_trajectory(RM100, ref, ComputedTorquePID(model, gains), dt=0.02)
-    for key in ("max_position_error_m", "rms_position_error_m", "rms_heading_error_deg"):
-        assert metrics["pid"][key] == pytest.approx(run.metrics()[key], rel=1e-9)
+    for key in (
+        "tracking_max_position_error_m",
+        "tracking_rms_position_error_m",
+        "tracking_rms_heading_error_deg",
+    ):
+        assert metrics["pid"][key] == pytest.approx(run.metrics()[0][key], rel=1e-9)
         assert key in metrics["open_loop"]
     rows = np.loadtxt(out / "tracking.csv", delimiter=",", skiprows=1)
     assert rows.shape[0] == run.t.size

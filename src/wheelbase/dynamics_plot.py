@@ -11,9 +11,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from wheelbase.control.torque import TrackingResult
 from wheelbase.dynamics import DynamicsResult, InverseDynamicsResult
 from wheelbase.errors import InputError
+from wheelbase.geometry import wrap_angle
+from wheelbase.sim.log import Log
 from wheelbase.trajectory import PoseTrajectory
 
 __all__ = ["plot_forward_cases", "plot_inverse_dynamics", "plot_tracking"]
@@ -98,15 +99,15 @@ def plot_inverse_dynamics(reference: PoseTrajectory, inverse: InverseDynamicsRes
     return fig
 
 
-def plot_tracking(runs: Sequence[TrackingResult], labels: Sequence[str] | None = None) -> Figure:
+def plot_tracking(runs: Sequence[Log], labels: Sequence[str] | None = None) -> Figure:
     """Desired vs actual path and the errors over time (document 000 figures 5.13 and 5.16).
 
     Parameters
     ----------
-    runs : sequence of TrackingResult
-        Runs on the same reference (open loop, PID …).
+    runs : sequence of Log
+        Runs on the same reference (open loop, PID …), robot 0 of each.
     labels : sequence of str, optional
-        One label per run; by default their ``mode``.
+        One label per run (default: run 1, run 2, …).
 
     Returns
     -------
@@ -114,7 +115,7 @@ def plot_tracking(runs: Sequence[TrackingResult], labels: Sequence[str] | None =
     """
     if not runs:
         raise InputError("plot_tracking needs at least one run")
-    labels = [r.mode for r in runs] if labels is None else list(labels)
+    labels = [f"run {k + 1}" for k in range(len(runs))] if labels is None else list(labels)
     if len(labels) != len(runs):
         raise InputError(f"labels must have {len(runs)} entries (got {len(labels)})")
     fig = Figure(figsize=(12.0, 5.0), layout="constrained")
@@ -123,12 +124,16 @@ def plot_tracking(runs: Sequence[TrackingResult], labels: Sequence[str] | None =
         fig.add_subplot(2, 2, 2),
         fig.add_subplot(2, 2, 4),
     )
-    ref = runs[0].reference
+    ref = runs[0].reference_pose[0]
     path_ax.plot(ref[:, 0], ref[:, 1], "k--", lw=2.0, label="desired")
     for run, label in zip(runs, labels, strict=True):
-        path_ax.plot(run.states[:, 0], run.states[:, 1], lw=1.2, label=f"actual, {label}")
-        pos_ax.semilogy(run.t, np.maximum(run.position_error, 1e-12), label=label)
-        head_ax.plot(run.t, np.degrees(run.heading_error), label=label)
+        n = int(run.length[0])
+        actual, desired = run.true_pose[0, :n], run.reference_pose[0, :n]
+        position_error = np.hypot(*(desired[:, :2] - actual[:, :2]).T)
+        heading_error = wrap_angle(desired[:, 2] - actual[:, 2])
+        path_ax.plot(actual[:, 0], actual[:, 1], lw=1.2, label=f"actual, {label}")
+        pos_ax.semilogy(run.t[:n], np.maximum(position_error, 1e-12), label=label)
+        head_ax.plot(run.t[:n], np.degrees(heading_error), label=label)
     path_ax.set_xlabel("x [m]")
     path_ax.set_ylabel("y [m]")
     path_ax.set_title("desired vs actual position")

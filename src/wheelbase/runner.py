@@ -688,8 +688,6 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
-        metrics["max_wheel_torque_nm"] = float(np.max(np.abs(one.torques[0])))
-        metrics["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(one.torques[0] ** 2)))
     every = max(1, len(one.t) // 400)
     clearance = _min_clearance(prepared.grid, _footprint(prepared.robot), true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle

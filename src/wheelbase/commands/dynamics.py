@@ -10,8 +10,9 @@ turns in place, or ``--reference document`` for document 000's heading jumps), c
 inverse dynamics, runs the open loop and (unless ``--no-pid``) the computed-torque PID, and
 writes ``reference.csv``, ``tracking.csv``, ``reference.png`` (figures 5.8–5.11),
 ``tracking.png`` (figures 5.13/5.16), ``animation.gif`` and ``metrics.json`` (keys
-``open_loop`` and ``pid``, each with ``max_position_error_m``, ``rms_position_error_m`` and
-``rms_heading_error_deg``); it prints the error table.
+``open_loop`` and ``pid``, each the run's :meth:`wheelbase.sim.Log.metrics`:
+``tracking_max_position_error_m``, ``tracking_rms_position_error_m``,
+``tracking_rms_heading_error_deg``, the wheel torques …); it prints the error table.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Annotated, Any
 
 import numpy as np
@@ -199,15 +201,11 @@ def register(app: typer.Typer) -> None:
         from rich.table import Table
 
         from wheelbase.cli import parse_angle
-        from wheelbase.control.torque import (
-            ComputedTorquePID,
-            TorqueGains,
-            track_trajectory,
-            tune_computed_torque,
-        )
+        from wheelbase.control.torque import ComputedTorquePID, TorqueGains
         from wheelbase.dynamics import inverse_dynamics
         from wheelbase.dynamics_plot import plot_inverse_dynamics, plot_tracking
         from wheelbase.plot import animate
+        from wheelbase.sim import track_trajectory, tune_computed_torque
         from wheelbase.trajectory import feasible_trajectory, heading_from_velocity, trapezoidal
 
         robot = _preset(preset)
@@ -246,13 +244,14 @@ def register(app: typer.Typer) -> None:
         columns["tau_left"], columns["tau_right"] = inverse.torques.T
         _write_csv(paths["reference.csv"], columns)
         last = runs.get("pid", runs["open_loop"])
-        _write_csv(paths["tracking.csv"], last.columns())
+        last.to_csv(paths["tracking.csv"], overwrite=True)
         _save(plot_inverse_dynamics(ref, inverse), paths["reference.png"])
         _save(plot_tracking(list(runs.values()), list(runs)), paths["tracking.png"])
         if gif:
-            animate(last, paths["animation.gif"], footprint=_FOOTPRINT, overwrite=True,
-                    title=last.mode)  # fmt: skip
-        metrics: dict[str, Any] = {name: run.metrics() for name, run in runs.items()}
+            trace = SimpleNamespace(t=last.t, poses=last.true_pose[0])
+            animate(trace, paths["animation.gif"], footprint=_FOOTPRINT, overwrite=True,
+                    title="pid" if pid else "open_loop")  # fmt: skip
+        metrics: dict[str, Any] = {name: run.metrics()[0] for name, run in runs.items()}
         metrics["settings"] = {
             "preset": preset,
             "reference": reference_kind,
@@ -269,13 +268,14 @@ def register(app: typer.Typer) -> None:
         table = Table(title=f"tracking errors ({reference_kind} reference, {preset})")
         for column in ("run", "max position [m]", "RMS position [m]", "RMS heading [deg]"):
             table.add_column(column, justify="right")
-        for name, run in runs.items():
-            m = run.metrics()
+        for name, m in metrics.items():
+            if name == "settings":
+                continue
             table.add_row(
                 name,
-                f"{m['max_position_error_m']:.3g}",
-                f"{m['rms_position_error_m']:.3g}",
-                f"{m['rms_heading_error_deg']:.3g}",
+                f"{m['tracking_max_position_error_m']:.3g}",
+                f"{m['tracking_rms_position_error_m']:.3g}",
+                f"{m['tracking_rms_heading_error_deg']:.3g}",
             )
         Console(highlight=False).print(table)
         written = [p for name, p in paths.items() if gif or name != "animation.gif"]

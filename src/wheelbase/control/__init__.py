@@ -50,11 +50,9 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     )
     from wheelbase.control.torque import (
         ComputedTorquePID,
+        InverseDynamicsTorques,
         TorqueGains,
-        TrackingResult,
         TwistTorqueLoop,
-        track_trajectory,
-        tune_computed_torque,
     )
     from wheelbase.control.tracking import Kanayama, LinearTracker
 
@@ -99,10 +97,8 @@ _EXPORTS = {
     "make_pose_law": "wheelbase.control.pose",
     "ComputedTorquePID": "wheelbase.control.torque",
     "TorqueGains": "wheelbase.control.torque",
-    "TrackingResult": "wheelbase.control.torque",
+    "InverseDynamicsTorques": "wheelbase.control.torque",
     "TwistTorqueLoop": "wheelbase.control.torque",
-    "track_trajectory": "wheelbase.control.torque",
-    "tune_computed_torque": "wheelbase.control.torque",
     "Kanayama": "wheelbase.control.tracking",
     "LinearTracker": "wheelbase.control.tracking",
 }
@@ -125,6 +121,7 @@ __all__: list[str] = [
     "GoToGoalLog",
     "GoToPoint",
     "GoalController",
+    "InverseDynamicsTorques",
     "Kanayama",
     "LineArc",
     "LinearTracker",
@@ -139,7 +136,6 @@ __all__: list[str] = [
     "Stanley",
     "SteeringLimits",
     "TorqueGains",
-    "TrackingResult",
     "TwistTorqueLoop",
     "VelocityLimits",
     "ViaDirection",
@@ -151,8 +147,6 @@ __all__: list[str] = [
     "saturate_steering",
     "saturate_velocity",
     "steering_to_velocity",
-    "track_trajectory",
-    "tune_computed_torque",
     "velocity_to_steering",
     "velocity_to_wheel_speeds",
 ]

@@ -40,22 +40,18 @@ from typing import Any, ClassVar
 import numba
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import minimize
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
-from wheelbase.dynamics import DiffDriveDynamics, _step, inverse_dynamics
+from wheelbase.dynamics import DiffDriveDynamics
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.geometry import wrap_angle
-from wheelbase.integrate import time_grid
 from wheelbase.trajectory import PoseTrajectory
 
 __all__ = [
     "ComputedTorquePID",
+    "InverseDynamicsTorques",
+    "TimedRows",
     "TorqueGains",
-    "TrackingResult",
     "TwistTorqueLoop",
-    "track_trajectory",
-    "tune_computed_torque",
     "velocity_torques",
 ]
 
@@ -173,21 +169,65 @@ def _control(ref, s, mp, g, tf, max_torque, ff, clamp, cst, dt):
     return tl, tr
 
 
-@numba.njit(cache=True)
-def _closed_loop(refs, times, s0, plant, mp, g, tf, max_torque, ff, clamp, states, torques):
-    cst = np.zeros(7)
-    s = s0.copy()
-    k1, k2, k3, k4, tmp = np.empty(6), np.empty(6), np.empty(6), np.empty(6), np.empty(6)
-    n = times.shape[0]
-    for k in range(n):
-        for j in range(6):
-            states[k, j] = s[j]
-        h = times[k + 1] - times[k] if k + 1 < n else times[k] - times[k - 1]
-        tl, tr = _control(refs[k], s, mp, g, tf, max_torque, ff, clamp, cst, h)
-        torques[k, 0], torques[k, 1] = tl, tr
-        if k + 1 < n:
-            _step(s, tl, tr, plant, h, 1, k1, k2, k3, k4, tmp)
-            s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
+# --------------------------------------------------------------------------- reference rows
+class TimedRows:
+    """A reference as rows (x, y, ψ, u, v, r, u̇, v̇, ṙ) at sample times, for the PID.
+
+    :meth:`at` interpolates linearly between samples (the heading unwrapped, then wrapped
+    again) and holds the ends, which is exact at the sample times: a loop whose control times
+    are the samples gets the trajectory's own rows without evaluating it at every step.
+
+    Parameters
+    ----------
+    times : array_like, shape (T,)
+        Increasing sample times [s].
+    rows : array_like, shape (T, 9)
+        The rows at those times [m, m, rad, m/s, m/s, rad/s, m/s², m/s², rad/s²].
+    """
+
+    def __init__(self, times: ArrayLike, rows: ArrayLike) -> None:
+        self.times = as_float_array("times", times, min_ndim=1, max_ndim=1)
+        table = as_float_array("rows", rows, 9, min_ndim=2, max_ndim=2).copy()
+        if table.shape[0] != self.times.size or self.times.size == 0:
+            raise InputError(f"rows must have one row per time (got {table.shape[0]} rows "
+                             f"for {self.times.size} times)")  # fmt: skip
+        if np.any(np.diff(self.times) <= 0):
+            raise InputError("times must increase")
+        table[:, 2] = np.unwrap(table[:, 2])
+        self.rows = table
+
+    @classmethod
+    def from_pose_trajectory(cls, trajectory: PoseTrajectory, times: ArrayLike) -> TimedRows:
+        """The trajectory's exact rows at ``times`` [s].
+
+        Parameters
+        ----------
+        trajectory : PoseTrajectory
+            The reference.
+        times : array_like, shape (T,)
+            Sample times [s].
+        """
+        times = as_float_array("times", times, min_ndim=1, max_ndim=1)
+        return cls(times, trajectory.at(times).reference())
+
+    def at(self, t: float) -> np.ndarray:
+        """The row ``(9,)`` at time ``t`` [s].
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        """
+        index = int(np.searchsorted(self.times, t, side="right")) - 1
+        if index < 0:
+            row = self.rows[0].copy()
+        elif index >= self.times.size - 1:
+            row = self.rows[-1].copy()
+        else:
+            weight = (t - self.times[index]) / (self.times[index + 1] - self.times[index])
+            row = (1.0 - weight) * self.rows[index] + weight * self.rows[index + 1]
+        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
+        return row
 
 
 # --------------------------------------------------------------------------- controller
@@ -199,8 +239,10 @@ class ComputedTorquePID:
     model : DiffDriveDynamics
         The controller's model of the robot (mass, inertia, CG offset, wheels); give a
         perturbed one to study model error.
-    gains : TorqueGains, optional
-        Channel gains; default ``TorqueGains.pole_placement(1.0, speed=0.1)``.
+    gains : TorqueGains or sequence of TorqueGains, optional
+        Channel gains; default ``TorqueGains.pole_placement(1.0, speed=0.1)``. A sequence
+        gives robot ``i`` of a batch the gains ``gains[i]`` (as :func:`tune_computed_torque`
+        runs its candidates).
     max_torque : float
         Wheel-torque saturation [N·m], > 0 (inf: none).
     derivative_filter : float
@@ -236,10 +278,14 @@ class ComputedTorquePID:
             raise ConfigError(f"model must be a DiffDriveDynamics (got {type(model).__name__})")
         if gains is None:
             gains = TorqueGains.pole_placement(1.0, speed=0.1)
-        if not isinstance(gains, TorqueGains):
-            raise ConfigError(f"gains must be TorqueGains (got {type(gains).__name__})")
+        many = gains if isinstance(gains, (list, tuple)) else [gains]
+        if not many or not all(isinstance(g, TorqueGains) for g in many):
+            raise ConfigError(
+                f"gains must be TorqueGains or a non-empty sequence of them (got {gains!r})"
+            )
         self.model = model
         self.gains = gains
+        self._gain_matrices = np.stack([g.matrix() for g in many])
         if max_torque != math.inf:
             max_torque = positive("max_torque", max_torque, "N·m")
         self.max_torque = float(max_torque)
@@ -256,7 +302,7 @@ class ComputedTorquePID:
     def _kernel_args(self) -> tuple:
         return (
             self.model._params,
-            self.gains.matrix(),
+            self._gain_matrices,
             self.derivative_filter,
             self.max_torque,
             1.0 if self.feedforward else 0.0,
@@ -279,9 +325,9 @@ class ComputedTorquePID:
             Time [s].
         pose : array_like, shape (..., 3) or (..., 6)
             Measured poses (x, y, ψ), or full states (x, y, ψ, u, v, r).
-        reference : PoseTrajectory or array_like, shape (9,) or (..., 9)
-            The trajectory, or its row (x, y, ψ, u, v, r, u̇, v̇, ṙ) at ``t`` (one for all
-            robots, or one per robot).
+        reference : PoseTrajectory, TimedRows or array_like, shape (9,) or (..., 9)
+            The trajectory (or its sampled rows), or its row (x, y, ψ, u, v, r, u̇, v̇, ṙ) at
+            ``t`` (one for all robots, or one per robot).
         twist : array_like, shape (..., 3), optional
             Measured body twists (u, v, r) when ``pose`` has 3 columns.
         dt : float, optional
@@ -303,11 +349,14 @@ class ComputedTorquePID:
         elif state.shape[-1] != 6:
             raise InputError(f"pose must have 3 or 6 columns (got shape {state.shape})")
         flat = np.ascontiguousarray(state.reshape(-1, 6))
-        if isinstance(reference, PoseTrajectory):
+        if isinstance(reference, TimedRows):
+            row = reference.at(t)
+        elif isinstance(reference, PoseTrajectory):
             row = reference.at([t]).reference()[0]
         else:
             row = as_float_array("reference", reference, 9)
-        rows = np.ascontiguousarray(np.broadcast_to(row.reshape(-1, 9), (flat.shape[0], 9)))
+        # writable and contiguous: Numba dispatches read-only views through a slow path
+        rows = np.array(np.broadcast_to(row.reshape(-1, 9), (flat.shape[0], 9)))
         if dt is None:
             dt = 0.0 if self._last_t is None else t - self._last_t
         else:
@@ -315,6 +364,10 @@ class ComputedTorquePID:
         self._last_t = t
         if self._state.shape[0] != flat.shape[0]:
             self._state = np.zeros((flat.shape[0], 7))
+        if self._gain_matrices.shape[0] not in (1, flat.shape[0]):
+            raise ConfigError(
+                f"{self._gain_matrices.shape[0]} gain sets for {flat.shape[0]} robots"
+            )
         out = np.empty((flat.shape[0], 2))
         _control_many(rows, flat, *self._kernel_args(), self._state, max(dt, 0.0), out)
         return out.reshape((*state.shape[:-1], 2))
@@ -322,10 +375,12 @@ class ComputedTorquePID:
 
 @numba.njit(cache=True)
 def _control_many(refs, states, mp, g, tf, max_torque, ff, clamp, cst, dt, out):
-    """:func:`_control` for every robot (rows of ``states``), torques into ``out`` (N, 2)."""
+    """:func:`_control` for every robot (rows of ``states``), torques into ``out`` (N, 2);
+    gains ``g`` (1 or N, 3, 3): shared or per robot."""
     for i in range(states.shape[0]):
+        gains = g[i] if g.shape[0] > 1 else g[0]
         out[i, 0], out[i, 1] = _control(
-            refs[i], states[i], mp, g, tf, max_torque, ff, clamp, cst[i], dt
+            refs[i], states[i], mp, gains, tf, max_torque, ff, clamp, cst[i], dt
         )
 
 
@@ -477,217 +532,42 @@ class TwistTorqueLoop:
         return velocity_torques(self.model, state, command, gains, self.max_torque)
 
 
-@dataclass(frozen=True)
-class TrackingResult:
-    """Reference and actual motion of a tracking run (open loop or closed loop).
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-        Control times [s].
-    reference : numpy.ndarray, shape (T, 9)
-        Reference rows (x, y, ψ, u, v, r, u̇, v̇, ṙ).
-    states : numpy.ndarray, shape (T, 6)
-        Robot states (x, y, ψ, u, v, r).
-    torques : numpy.ndarray, shape (T, 2)
-        Wheel torques applied (left, right) [N·m].
-    mode : str
-        ``"open_loop"`` or ``"pid"``.
-    """
-
-    t: np.ndarray
-    reference: np.ndarray
-    states: np.ndarray
-    torques: np.ndarray
-    mode: str
-
-    @property
-    def poses(self) -> np.ndarray:
-        """Actual poses (x, y, ψ) ``(T, 3)`` (for :func:`wheelbase.plot.animate`)."""
-        return self.states[:, :3]
-
-    @property
-    def position_error(self) -> np.ndarray:
-        """Distance between reference and actual position [m], shape (T,)."""
-        return np.hypot(*(self.reference[:, :2] - self.states[:, :2]).T)
-
-    @property
-    def heading_error(self) -> np.ndarray:
-        """wrap(ψ_ref − ψ) [rad], shape (T,)."""
-        return wrap_angle(self.reference[:, 2] - self.states[:, 2])
-
-    def metrics(self) -> dict[str, float]:
-        """Max and RMS position error [m] and RMS heading error [deg] (metrics.json keys)."""
-        pos, head = self.position_error, self.heading_error
-        return {
-            "max_position_error_m": float(pos.max()),
-            "rms_position_error_m": float(np.sqrt(np.mean(pos**2))),
-            "rms_heading_error_deg": float(np.degrees(np.sqrt(np.mean(head**2)))),
-            "max_wheel_torque_nm": float(np.abs(self.torques).max()),
-        }
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """Named columns for CSV export."""
-        names = ("x_ref", "y_ref", "psi_ref", "u_ref", "v_ref", "r_ref")
-        out = {"t": self.t}
-        out.update({n: self.reference[:, i] for i, n in enumerate(names)})
-        out.update({n: self.states[:, i] for i, n in enumerate(("x", "y", "psi", "u", "v", "r"))})
-        out["tau_left"], out["tau_right"] = self.torques[:, 0], self.torques[:, 1]
-        out["position_error"], out["heading_error"] = self.position_error, self.heading_error
-        return out
-
-
-def track_trajectory(
-    plant: DiffDriveDynamics,
-    reference: PoseTrajectory,
-    controller: ComputedTorquePID | None = None,
-    *,
-    model: DiffDriveDynamics | None = None,
-    dt: float = 0.01,
-    state0: ArrayLike | None = None,
-    t_end: float | None = None,
-) -> TrackingResult:
-    """Drive ``plant`` along ``reference``: open loop (document 000 §5.3.1) or with a controller.
+class InverseDynamicsTorques:
+    """The open-loop "controller" of document 000 §5.3.1: the inverse-dynamics wheel torques of
+    a model along the reference at time t, whatever the robot does.
 
     Parameters
     ----------
-    plant : DiffDriveDynamics
-        The true robot.
-    reference : PoseTrajectory
-        The trajectory, e.g. from :func:`~wheelbase.trajectory.feasible_trajectory`.
-    controller : ComputedTorquePID, optional
-        None: the inverse-dynamics torques of ``model`` are fed open loop (figure 5.12/5.13).
-    model : DiffDriveDynamics, optional
-        The model of the open-loop inverse dynamics (default ``plant``); the controller carries
-        its own.
-    dt : float
-        Control period [s]: torques are held over it (zero-order hold), the plant is integrated
-        by RK4 with the same step.
-    state0 : array_like, shape (6,), optional
-        Initial state; default the reference's first pose and twist.
-    t_end : float, optional
-        Stop after this time [s]; default the reference's duration.
-
-    Returns
-    -------
-    TrackingResult
+    model : DiffDriveDynamics
+        The model whose inverse dynamics give the torques (the plant, or a wrong one).
     """
-    if not isinstance(plant, DiffDriveDynamics):
-        raise ConfigError(f"plant must be a DiffDriveDynamics (got {type(plant).__name__})")
-    if not isinstance(reference, PoseTrajectory):
-        raise InputError("reference must be a PoseTrajectory")
-    times = time_grid(reference.duration if t_end is None else t_end, dt)
-    refs = np.ascontiguousarray(reference.at(times).reference())
-    if state0 is None:
-        s0 = refs[0, :6].copy()
-        if plant.constrained:
-            s0[4] = 0.0
-    else:
-        s0 = as_float_array("state0", state0, 6, max_ndim=1).copy()
-    states = np.empty((times.size, 6))
-    torques = np.empty((times.size, 2))
-    if controller is None:
-        model = plant if model is None else model
-        torques[:] = inverse_dynamics(model, reference.at(times)).torques
-        k = [np.empty(6) for _ in range(5)]
-        s = s0.copy()
-        states[0] = s
-        for i in range(times.size - 1):
-            _step(s, torques[i, 0], torques[i, 1], plant._params, times[i + 1] - times[i], 1, *k)
-            s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
-            states[i + 1] = s
-        mode = "open_loop"
-    else:
-        if not isinstance(controller, ComputedTorquePID):
-            raise ConfigError("controller must be a ComputedTorquePID")
-        mp, g, tf, mt, ff, clamp = controller._kernel_args()
-        _closed_loop(refs, times, s0, plant._params, mp, g, tf, mt, ff, clamp, states, torques)
-        mode = "pid"
-    if not np.all(np.isfinite(states)):
-        raise InputError("the tracking run diverged (non-finite states); lower the gains or dt")
-    return TrackingResult(times, refs, states, torques, mode)
 
+    command_names: ClassVar[tuple[str, ...]] = ("tau_left", "tau_right")
 
-def tune_computed_torque(
-    plant: DiffDriveDynamics,
-    reference: PoseTrajectory,
-    *,
-    model: DiffDriveDynamics | None = None,
-    dt: float = 0.01,
-    heading_weight: float = 1.0,
-    effort_weight: float = 0.02,
-    max_torque: float = math.inf,
-    initial_bandwidth: float = 1.0,
-    initial_offset: tuple[float, float, float] = (0.05, 0.05, 0.05),
-    horizon: float = 60.0,
-) -> TorqueGains:
-    """Tune the pole-placement bandwidths by minimising the integrated squared error.
+    def __init__(self, model: DiffDriveDynamics) -> None:
+        if not isinstance(model, DiffDriveDynamics):
+            raise ConfigError(f"model must be a DiffDriveDynamics (got {type(model).__name__})")
+        self.model = model
 
-    J = ∫ (|p_ref − p|² + w_ψ·e_ψ² + w_τ·|τ − τ_ff|²) dt over the first ``horizon`` seconds of
-    the closed loop started off the reference by ``initial_offset``, minimised over log ω_x and
-    log ω_ψ by Nelder–Mead (``scipy.optimize.minimize``). Along a smooth reference the error
-    falls as 1/ω² for ever; the recovery from the initial offset costs feedback torque
-    (τ − τ_ff, growing as ω²), which is what makes the optimum finite.
+    def reset(self) -> None:
+        """Nothing to forget."""
 
-    Parameters
-    ----------
-    plant : DiffDriveDynamics
-        The true robot.
-    reference : PoseTrajectory
-        The trajectory to tune on.
-    model : DiffDriveDynamics, optional
-        The controller's model (default ``plant``).
-    dt : float
-        Control period [s].
-    heading_weight : float
-        w_ψ [m²/rad²], ≥ 0.
-    effort_weight : float
-        w_τ [m²/(N·m)²], ≥ 0.
-    max_torque : float
-        Wheel-torque saturation of the controller [N·m].
-    initial_bandwidth : float
-        Starting ω of both loops [rad/s].
-    initial_offset : tuple of float
-        Start error (Δx [m], Δy [m], Δψ [rad]) added to the reference's first pose.
-    horizon : float
-        Duration of the tuning runs [s] (at most the reference's).
+    def __call__(
+        self, t: float, state: ArrayLike, reference: PoseTrajectory | TimedRows
+    ) -> np.ndarray:
+        """Wheel torques ``(..., 2)`` [N·m] of the reference at ``t``, for every robot.
 
-    Returns
-    -------
-    TorqueGains
-    """
-    model = plant if model is None else model
-    w_h = nonnegative("heading_weight", heading_weight, "m²/rad²")
-    w_t = nonnegative("effort_weight", effort_weight, "m²/(N·m)²")
-    w0 = positive("initial_bandwidth", initial_bandwidth, "rad/s")
-    speed = max(float(np.abs(reference.twist[:, 0]).max()), 1e-3)
-    t_end = min(positive("horizon", horizon, "s"), reference.duration)
-    times = time_grid(t_end, dt)
-    ff = inverse_dynamics(model, reference.at(times)).torques
-    offset = as_float_array("initial_offset", initial_offset, 3, max_ndim=1)
-    state0 = reference.at([0.0]).reference()[0, :6]
-    state0[:3] += offset
-    if plant.constrained:
-        state0[4] = 0.0
-
-    def cost(log_w: np.ndarray) -> float:
-        wx, wy = np.exp(np.clip(log_w, -5.0, 4.0))
-        gains = TorqueGains.pole_placement(wx, wy, speed=speed)
-        ctrl = ComputedTorquePID(model, gains, max_torque=max_torque)
-        try:
-            run = track_trajectory(plant, reference, ctrl, dt=dt, state0=state0, t_end=t_end)
-        except InputError:
-            return 1e12
-        integrand = run.position_error**2 + w_h * run.heading_error**2
-        integrand = integrand + w_t * np.sum((run.torques - ff) ** 2, -1)
-        value = float(np.sum(integrand[:-1] * np.diff(run.t)))
-        return value if math.isfinite(value) else 1e12
-
-    best = minimize(
-        cost,
-        np.log([w0, w0]),
-        method="Nelder-Mead",
-        options={"xatol": 1e-2, "fatol": 1e-12, "maxiter": 60},
-    )
-    wx, wy = np.exp(np.clip(best.x, -5.0, 4.0))
-    return TorqueGains.pole_placement(float(wx), float(wy), speed=speed)
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        state : array_like, shape (..., 6)
+            Measured states (unused: open loop).
+        reference : PoseTrajectory or TimedRows
+            The trajectory, or its sampled rows.
+        """
+        row = reference.at(t) if isinstance(reference, TimedRows) else None
+        if row is None:
+            row = reference.at([t]).reference()[0]
+        _force, torques = self.model.inverse(row[3:6], row[6:9])
+        return np.broadcast_to(torques, (*np.shape(state)[:-1], 2)).copy()

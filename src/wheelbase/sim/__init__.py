@@ -16,6 +16,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.sim.log import STATUSES, Log, status_code
     from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
+    from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
 
 _EXPORTS = {
     "Arrival": "wheelbase.sim.engine",
@@ -30,6 +31,8 @@ _EXPORTS = {
     "WheelAxle": "wheelbase.sim.plants",
     "EncoderOdometry": "wheelbase.sim.sensing",
     "PerfectState": "wheelbase.sim.sensing",
+    "track_trajectory": "wheelbase.sim.tracking",
+    "tune_computed_torque": "wheelbase.sim.tracking",
 }
 __getattr__, __dir__ = attach(__name__, _EXPORTS)
 
@@ -46,4 +49,6 @@ __all__ = [
     "WheelAxle",
     "closed_loop",
     "status_code",
+    "track_trajectory",
+    "tune_computed_torque",
 ]

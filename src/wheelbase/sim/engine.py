@@ -260,8 +260,13 @@ class Engine:
         """Largest number of steps of a run."""
         return math.ceil(self.duration / self.dt - 1e-9)
 
-    def reset(self, poses: ArrayLike, seeds: ArrayLike | int | None = None) -> EngineState:
-        """The state at t = 0: robots at ``poses``, at rest, estimates exact.
+    def reset(
+        self,
+        poses: ArrayLike,
+        seeds: ArrayLike | int | None = None,
+        twists: ArrayLike | None = None,
+    ) -> EngineState:
+        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact.
 
         Parameters
         ----------
@@ -270,11 +275,21 @@ class Engine:
         seeds : int or array_like of int, shape (N,), optional
             Seeds of each robot's random encoder errors (default 0, 1, …, N − 1; an int s
             gives s, s + 1, …).
+        twists : array_like, shape (3,) or (N, 3), optional
+            Start body twists (u, v, r) of a dynamic plant [m/s, m/s, rad/s] (default: rest).
         """
         start = as_float_array("poses", poses, 3, min_ndim=1, max_ndim=2).reshape(-1, 3)
         n = start.shape[0]
         if n == 0:
             raise InputError("give at least one robot (poses has shape (0, 3))")
+        twist = np.zeros((n, 3))
+        if twists is not None:
+            given = as_float_array("twists", twists, 3, min_ndim=1, max_ndim=2).reshape(-1, 3)
+            if given.shape[0] not in (1, n):
+                raise InputError(f"twists has {given.shape[0]} rows for {n} robots")
+            if not self.plant.dynamic and np.any(given != 0):
+                raise ConfigError("a kinematic plant starts at rest: give twists to a dynamic one")
+            twist = np.broadcast_to(given, (n, 3)).copy()
         seeds = _seeds(seeds, n)
         start = start.copy()
         start[:, 2] = wrap_angle(start[:, 2])
@@ -298,9 +313,9 @@ class Engine:
         return EngineState(
             step=0,
             pose=start,
-            twist=np.zeros((n, 3)),
+            twist=twist,
             estimate=start.copy(),
-            estimated_twist=np.zeros((n, 3)),
+            estimated_twist=twist.copy(),
             wheel_angle=np.zeros((n, 2)),
             ticks=np.zeros((n, 2), dtype=np.int64),
             status=np.zeros(n, dtype=np.int8),
@@ -446,7 +461,12 @@ class Engine:
         )
         return new_state, row
 
-    def run(self, poses: ArrayLike, seeds: ArrayLike | int | None = None) -> Log:
+    def run(
+        self,
+        poses: ArrayLike,
+        seeds: ArrayLike | int | None = None,
+        twists: ArrayLike | None = None,
+    ) -> Log:
         """Run every robot from its start pose until it finishes; record everything.
 
         Parameters
@@ -455,13 +475,15 @@ class Engine:
             Start poses [m, m, rad].
         seeds : int or array_like of int, optional
             Seeds of each robot's random encoder errors (see :meth:`reset`).
+        twists : array_like, shape (3,) or (N, 3), optional
+            Start twists of a dynamic plant (see :meth:`reset`).
 
         Returns
         -------
         Log
             The batch's record, one row per step until the last robot finished.
         """
-        state = self.reset(poses, seeds)
+        state = self.reset(poses, seeds, twists)
         n = state.pose.shape[0]
         rows: list[_Row] = []
         last_row = np.zeros(n, dtype=np.int64)

@@ -203,7 +203,7 @@ class Log:
         list of dict
             ``status``, ``collision``, ``duration_s``, ``distance_travelled_m``,
             ``reversals`` (changes of the direction of travel; speeds under 1e-6 m/s do not
-            count as a direction), tracking
+            count as a direction), the largest and RMS wheel torque on a dynamic plant, tracking
             errors against the reference (RMS and max of the position error, RMS heading error
             in degrees), the final pose errors of the true and the estimated pose against the
             goal (when there is one), and the odometry drift at the end (|true − estimated|) and
@@ -241,6 +241,10 @@ class Log:
                     final_position_error_estimated_m=float(np.hypot(*(est[-1, :2] - goal[:2]))),
                 )
             row["reversals"] = _reversals(self.twist[i, : max(n - 1, 0), 0])
+            if self.torques is not None:
+                torques = self.torques[i, :n]
+                row["max_wheel_torque_nm"] = float(np.max(np.abs(torques)))
+                row["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(torques**2)))
             row["odometry_drift_m"] = drift
             row["odometry_drift_per_m"] = drift / travelled if travelled > 0 else 0.0
             counts = self.controller_status_counts(i)

@@ -232,6 +232,8 @@ class DynamicPlant:
         if self.axle is None:
             axle = WheelAxle(self.dynamics.wheel_radius, self.dynamics.half_track)
             object.__setattr__(self, "axle", axle)
+        params = np.array(self.dynamics._params)  # writable: Numba's fast dispatch path
+        object.__setattr__(self, "_params", params)
 
     def command_names(self, controller_names: tuple[str, ...]) -> tuple[str, ...]:
         """The plant takes wheel torques: the controller must give (τ_L, τ_R).
@@ -284,6 +286,10 @@ class DynamicPlant:
         -------
         pose, twist, wheel_rates_end
         """
-        state = self.dynamics.step(np.concatenate([pose, twist], axis=-1), command, dt)
+        from wheelbase.dynamics import _step_many
+
+        # the engine has checked the shapes and values: the compiled step directly
+        state = np.concatenate([pose, twist], axis=-1)
+        _step_many(state, np.ascontiguousarray(command, dtype=np.float64), self._params, dt)
         new_twist = state[:, 3:]
         return state[:, :3], new_twist, self.axle.wheel_rates(new_twist)
