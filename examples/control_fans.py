@@ -1,11 +1,13 @@
-"""Fan figures of the pose laws 1–6 (issue 5): 128 starts on a 2 m circle, one figure.
+"""
+Fan figures of the pose laws 1–6 (issue 5): 128 starts on a 2 m circle, one figure
+==================================================================================
 
 Usage::
 
     python examples/control_fans.py [OUT_DIR]      # default: examples/out/
 
-Writes ``control_fans.png`` — for each law the paths of a unicycle (|v| ≤ 0.5 m/s,
-|ω| ≤ 1.5 rad/s) from 16 bearings × 8 headings to the goal at the origin facing +x (blue:
+Writes ``control_fans.png`` — for each law the paths of a unicycle (abs(v) ≤ 0.5 m/s,
+abs(ω) ≤ 1.5 rad/s) from 16 bearings × 8 headings to the goal at the origin facing +x (blue:
 reached within 1 cm and 1°, red: not) — and prints the benchmark table as JSON.
 """
 
@@ -21,8 +23,10 @@ from matplotlib.figure import Figure
 from wheelbase.control import POSE_LAWS
 from wheelbase.sim import Log, status_code
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from control_cases import pose_benchmark
+# sphinx-gallery runs the examples without __file__, from their own folder
+HERE = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+sys.path.insert(0, str(HERE.parent / "benchmarks"))
+from control_cases import pose_benchmark  # noqa: E402
 
 
 def plot_fan(log: Log, title: str, ax) -> None:

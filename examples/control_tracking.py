@@ -1,4 +1,6 @@
-"""Path following and trajectory tracking (issue 5, laws 7–8): error against time and paths.
+"""
+Path following and trajectory tracking (issue 5, laws 7–8): error against time and paths
+========================================================================================
 
 Usage::
 
@@ -7,7 +9,7 @@ Usage::
 Writes ``control_tracking_errors.png`` (lateral error against time for every law, plant and
 reference of the tracking benchmark) and ``control_cusp_paths.png`` (the three-point-turn path
 with reverse section, and the paths the four followers drive on the rear-wheel bicycle, L = 0.5 m,
-|δ| ≤ 35°), and prints the tracking table as JSON.
+abs(δ) ≤ 35°), and prints the tracking table as JSON.
 """
 
 from __future__ import annotations
@@ -25,8 +27,10 @@ from wheelbase.control.path import PurePursuit, RearWheelFeedback, SegmentFollow
 from wheelbase.models import RearWheelBicycle
 from wheelbase.sim import closed_loop
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from control_cases import three_point_turn_path, tracking_benchmark
+# sphinx-gallery runs the examples without __file__, from their own folder
+HERE = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+sys.path.insert(0, str(HERE.parent / "benchmarks"))
+from control_cases import three_point_turn_path, tracking_benchmark  # noqa: E402
 
 
 def plot_tracking_errors(traces: dict) -> Figure:

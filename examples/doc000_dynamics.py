@@ -1,5 +1,6 @@
-"""Document 000 chapter 5 with the RM100 (issue 3): forward cases, inverse dynamics, open loop vs
-computed-torque PID.
+"""
+Document 000 chapter 5 with the RM100: forward, inverse, open loop vs computed-torque PID
+=========================================================================================
 
 Usage::
 

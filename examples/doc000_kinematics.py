@@ -1,4 +1,6 @@
-"""Reproduce document 000 §3.2: the two MATLAB kinematics programs, with plots and animations.
+"""
+Reproduce document 000 §3.2: the two MATLAB kinematics programs, with plots and animations
+==========================================================================================
 
 Document 000 (``000_da8bbdc5a43f14d5.txt``) §3.2 integrates η̇ = J(ψ)·ζ with Euler steps of
 dt = 0.1 s from η0 = (0, 0, π/2):
@@ -160,4 +162,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()

@@ -1,4 +1,6 @@
-"""Document 001, Table I: the trajectory model evaluated with Simpson's 1/3 rule, reproduced.
+"""
+Document 001, Table I: the trajectory model evaluated with Simpson's 1/3 rule, reproduced
+=========================================================================================
 
 Run ``python examples/doc001_table1.py [--out doc001_table1.csv] [--overwrite]``: prints the
 table (rich) and writes it to CSV, one row per initial heading and variable.
@@ -44,11 +46,12 @@ Why our errors differ from the printed ones
   rounding), as the document finds.
 - Simpson: for x = ∫ v cos θ(t) dt with θ(t) = θ₀ + ωt exact, f⁗ = ω⁴f, and Simpson's error
   formula gives the end-point error S − I ≈ (h_s⁴/180)·ω⁴·(Δx, Δy) with node spacing h_s, bounded
-  by T·h_s⁴·|v|·ω⁴/180 per coordinate. Our ``simpson`` puts the nodes at the start, middle and end
-  of each step (h_s = H/2): bound T·H⁴·|v|·ω⁴/2880 = 4.7e-7 m (7.6e-6 m for nodes every H = 0.5 s).
+  by T·h_s⁴·abs(v)·ω⁴/180 per coordinate. Our ``simpson`` puts the nodes at the start, middle and
+  end of each step (h_s = H/2): bound T·H⁴·abs(v)·ω⁴/2880 = 4.7e-7 m (7.6e-6 m for nodes every
+  H = 0.5 s).
   We measure at most 4.4e-7 m. (For constant inputs ``rk4`` equals ``simpson``: its two middle
   stages coincide and its heading stages are exact.) The printed 0.29–0.49 m are six orders of
-  magnitude larger: for smooth motion Simpson's rule would need |ω|·h_s ≈ 1.4 rad, a step longer
+  magnitude larger: for smooth motion Simpson's rule would need abs(ω)·h_s ≈ 1.4 rad, a step longer
   than the whole run.
 - The printed errors are instead consistent with headings sampled at the wrong time within each
   step. The exact arc advances each step along a chord at the mid-step heading; the printed "Actual"
@@ -347,7 +350,7 @@ def print_table(rows: list[Row]) -> None:
 
 def main(argv: list[str] | None = None) -> list[Row]:
     """Print Table I, write it to CSV and return its rows."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description="Document 001, Table I, reproduced")
     parser.add_argument("--out", type=Path, default=Path("doc001_table1.csv"), help="CSV file")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing CSV")
     args = parser.parse_args(argv)

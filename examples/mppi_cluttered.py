@@ -1,4 +1,6 @@
-"""MPPI on the bundled cluttered map (issue 9): clearance where pure pursuit collides.
+"""
+MPPI on the bundled cluttered map (issue 9): clearance where pure pursuit collides
+==================================================================================
 
 Usage::
 

@@ -1,4 +1,6 @@
-"""Drift of the three dead-reckoning updates on a long curvy drive, at 10, 50 and 100 Hz.
+"""
+Drift of the three dead-reckoning updates on a long curvy drive, at 10, 50 and 100 Hz
+=====================================================================================
 
 Run ``python examples/odometry_drift.py [OUT_DIR]`` (default ``examples/out/``): prints the
 table of :func:`wheelbase.odometry.drift_table` (300 s, 120 m of S-curves; wheel angles read

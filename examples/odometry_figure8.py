@@ -1,4 +1,6 @@
-"""Document 003 Fig. 8: go-to-goal to the four quadrants through the whole loop.
+"""
+Document 003 Fig. 8: go-to-goal to the four quadrants through the whole loop
+============================================================================
 
 Run ``python examples/odometry_figure8.py [OUT_DIR]`` (default ``examples/out/``).
 

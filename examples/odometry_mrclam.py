@@ -1,4 +1,6 @@
-"""Dead reckoning on real data: UTIAS MRCLAM dataset 6, robot 1, against Vicon ground truth.
+"""
+Dead reckoning on real data: UTIAS MRCLAM dataset 6, robot 1, against Vicon ground truth
+========================================================================================
 
 Run ``python examples/odometry_mrclam.py [OUT_DIR]`` (default ``examples/out/``). It needs
 ``../shared/data/mrclam/`` beside the project (see ``../shared/data/README.md``) and
@@ -34,14 +36,16 @@ from wheelbase.odometry import (
     yaw_rate_fit,
 )
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"
+# sphinx-gallery runs the examples without __file__, from their own folder
+HERE = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+DATA = HERE.parents[1] / "shared" / "data" / "mrclam"
 
 
 def main(out_dir: Path) -> None:
     odometry = DATA / "Dataset6_Robot1_Odometry.dat"
     truth = DATA / "Dataset6_Robot1_Groundtruth.dat"
     if not odometry.is_file():
-        sys.exit(f"MRCLAM data not found in {DATA}; see ../shared/data/README.md")
+        raise FileNotFoundError(f"MRCLAM data not found in {DATA}; see ../shared/data/README.md")
     data = load_mrclam(odometry, truth)
     print(f"{data.t.size} odometry samples over {data.duration:.0f} s")
     records = dead_reckoning_errors(data, horizons=(10.0, 60.0, 300.0), n_starts=8)

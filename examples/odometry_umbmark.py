@@ -1,4 +1,6 @@
-"""UMBmark (Borenstein & Feng 1996) on a simulated robot with E_d = 1.005 and E_b = 1.02.
+"""
+UMBmark (Borenstein & Feng 1996) on a simulated robot with E_d = 1.005 and E_b = 1.02
+=====================================================================================
 
 Run ``python examples/odometry_umbmark.py``: prints E_max,syst before and after the correction
 (one round, as in the paper, and two rounds), the estimated E_d and E_b and the corrected track

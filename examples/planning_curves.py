@@ -1,4 +1,6 @@
-"""Reeds–Shepp and Dubins shortest paths between the same poses, and A* on a Moving AI map.
+"""
+Reeds–Shepp and Dubins shortest paths between the same poses, and A* on a Moving AI map
+=======================================================================================
 
 Usage::
 
@@ -33,7 +35,9 @@ from wheelbase.planning import (
 from wheelbase.planning.plot import plot_grid, plot_path
 
 GOALS = [(-3.0, 1.0, 0.0), (0.5, 2.0, math.pi), (4.0, -2.0, math.pi / 2), (-1.0, -1.5, -2.5)]
-ARENA = Path(__file__).resolve().parents[2] / "shared" / "data" / "movingai" / "arena.map"
+# sphinx-gallery runs the examples without __file__, from their own folder
+HERE = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+ARENA = HERE.parents[1] / "shared" / "data" / "movingai" / "arena.map"
 
 
 def main(out: Path) -> None:

@@ -5,7 +5,7 @@ Model
 Body frame B at the centroid (x forward, y left), moving with the body twist V = (u, v, r):
 forward and lateral speed [m/s] and yaw rate [rad/s]. The centre of gravity C lies at
 (x_bc, y_bc) in B; ``inertia`` is I_z about C. The Lagrange–Euler equations in the body frame
-are (document 000 §3.3, re-derived here)
+are (document 000 §3.3, re-derived here)::
 
     M·V̇ + C(V)·V = τ,   τ = (F_x, F_y, M_z)  (body-frame force at B [N] and moment about B [N·m])
 

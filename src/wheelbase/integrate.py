@@ -4,16 +4,16 @@ Every kinematic model maps its inputs to a body twist ζ = (u, v, r) that does n
 pose, so the pose obeys η̇ = J(θ)·ζ(t). The integrators below advance a pose over one step of
 length h from the twist at the start (ζ₀), the middle (ζₘ) and the end (ζ₁) of the step:
 
-============  =======================================================================  =====
-method        update                                                                   order
-============  =======================================================================  =====
-``euler``     η += h·J(θ)ζ₀ (document 002 eq. 6/7; document 000's MATLAB loop)          1
-``midpoint``  heading at mid-step: x += h·R(θ + h·rₘ/2)(uₘ, vₘ) (doc 002 eq. 8)         2
-``rk4``       classical Runge–Kutta on η̇ = J(θ)ζ(t)                                    4
-``exact``     closed-form arc (SE(2) exponential) of ζₘ held over the step              2*
-``simpson``   θ(t) integrated exactly for a quadratic yaw rate, x = ∫u cos θ − v sin θ  4
+============  =========================================================================  =====
+method        update                                                                     order
+============  =========================================================================  =====
+``euler``     η += h·J(θ)ζ₀ (document 002 eq. 6/7; document 000's MATLAB loop)            1
+``midpoint``  heading at mid-step: x += h·R(θ + h·rₘ/2)(uₘ, vₘ) (doc 002 eq. 8)           2
+``rk4``       classical Runge–Kutta on η̇ = J(θ)ζ(t)                                       4
+``exact``     closed-form arc (SE(2) exponential) of ζₘ held over the step                2*
+``simpson``   θ(t) integrated exactly for a quadratic yaw rate, x = ∫u cos θ − v sin θ    4
               and y likewise by Simpson's 1/3 rule (document 001 §III/IV)
-============  =======================================================================  =====
+============  =========================================================================  =====
 
 (*) ``exact`` is exact (to rounding) whenever the inputs are constant over each step — constant
 inputs and sampled input arrays, which are zero-order holds — and second order for inputs that

@@ -4,25 +4,25 @@ and every logged signal, stamped with simulated time.
 What a file holds (one robot; with N robots each robot's topics and frames get a ``/robotI``
 prefix and ``robotI/`` frame names):
 
-========================  ==========================  ===========================================
-topic                     schema                      content
-========================  ==========================  ===========================================
-``/map``                  ``foxglove.Grid``           the occupancy grid (uint8 ``occupancy``:
-                                                      0 free, 100 occupied) in frame ``map``, t=0
-``/plan``                 ``foxglove.PosesInFrame``   the planned path in ``map``, t=0
-``/pose/true``            ``foxglove.PoseInFrame``    the true pose in ``map``, every row
-``/pose/estimated``       ``foxglove.PoseInFrame``    the estimator's pose in ``map``, every row
+========================  ============================  ===========================================
+topic                     schema                        content
+========================  ============================  ===========================================
+``/map``                  ``foxglove.Grid``             the occupancy grid (uint8 ``occupancy``:
+                                                        0 free, 100 occupied) in frame ``map``, t=0
+``/plan``                 ``foxglove.PosesInFrame``     the planned path in ``map``, t=0
+``/pose/true``            ``foxglove.PoseInFrame``      the true pose in ``map``, every row
+``/pose/estimated``       ``foxglove.PoseInFrame``      the estimator's pose in ``map``, every row
 ``/tf``                   ``foxglove.FrameTransforms``  ``map → odom`` (true ∘ estimate⁻¹: the
-                                                      odometry drift) and ``odom → base_link``
-                                                      (the estimate), every row
-``/markers``              ``foxglove.SceneUpdate``    the footprint (frame ``base_link``) and the
-                                                      goals (frame ``map``), t=0
-``/command``              JSON                        the command columns (``command_names``)
-``/twist``                JSON                        true body twist ``u``, ``v``, ``r``
-``/wheel_rates``          JSON                        ``left``, ``right`` [rad/s]
-``/torques``              JSON                        ``left``, ``right`` [N·m] (dynamic plant)
-``/metrics``              JSON                        the run's metrics, at its last row
-========================  ==========================  ===========================================
+                                                        odometry drift) and ``odom → base_link``
+                                                        (the estimate), every row
+``/markers``              ``foxglove.SceneUpdate``      the footprint (frame ``base_link``) and the
+                                                        goals (frame ``map``), t=0
+``/command``              JSON                          the command columns (``command_names``)
+``/twist``                JSON                          true body twist ``u``, ``v``, ``r``
+``/wheel_rates``          JSON                          ``left``, ``right`` [rad/s]
+``/torques``              JSON                          ``left``, ``right`` [N·m] (dynamic plant)
+``/metrics``              JSON                          the run's metrics, at its last row
+========================  ============================  ===========================================
 
 So ``map → odom → base_link`` composes to the true pose, and the odom frame moving against the
 map is the drift of the odometry. Times are simulated time from t = 0 (``log_time`` and every
