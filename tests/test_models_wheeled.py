@@ -215,3 +215,12 @@ def test_input_shape_is_checked():
         MECANUM.forward([1.0, 2.0, 3.0])
     with pytest.raises(InputError, match="finite"):
         OMNI.twist([1.0, np.nan, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("half_length", "wheel_radius"), [(8.988465674311581e306, 0.05), (0.2, 5e-324)]
+)
+def test_geometry_that_overflows_the_jacobian_is_a_config_error(half_length, wheel_radius):
+    # found by tests/test_fuzz.py: an overflow warning, then a Jacobian of inf
+    with pytest.raises(ConfigError, match="wheel Jacobian overflows"):
+        mecanum4(wheel_radius, half_length, 0.15)

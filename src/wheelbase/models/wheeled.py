@@ -168,9 +168,17 @@ class WheeledBase(ModelBase):
             raise ConfigError(f"wheel names must be unique (got {names})")
         object.__setattr__(self, "wheels", wheels)
 
-        jacobian = np.array([w.drive_row for w in wheels])
-        lateral = [w.lateral_row / w.radius for w in wheels if w.kind == "fixed"]
-        constraints = np.vstack([jacobian, *lateral]) if lateral else jacobian.copy()
+        with np.errstate(over="ignore", invalid="ignore"):
+            jacobian = np.array([w.drive_row for w in wheels])
+            lateral = [w.lateral_row / w.radius for w in wheels if w.kind == "fixed"]
+            constraints = np.vstack([jacobian, *lateral]) if lateral else jacobian.copy()
+        if not np.all(np.isfinite(constraints)):
+            extreme = max(wheels, key=lambda w: max(abs(w.x), abs(w.y)) / w.radius)
+            raise ConfigError(
+                "the wheel Jacobian overflows float64: a wheel at "
+                f"({extreme.x:g}, {extreme.y:g}) m with radius {extreme.radius:g} m gives "
+                "ω/v beyond 1e308 (bring the wheels nearer or make them larger)"
+            )
         singular = np.linalg.svd(constraints, compute_uv=False)
         rank = int(np.sum(singular > 1e-10 * singular[0]))
         if rank < 3:
