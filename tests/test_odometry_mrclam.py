@@ -1,15 +1,15 @@
 """Dead reckoning on real data: UTIAS MRCLAM dataset 6, robot 1 (odometry vs Vicon)."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from shared_data import DATA as SHARED_DATA
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.odometry import MrclamData, dead_reckoning_errors, load_mrclam, yaw_rate_fit
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"
+DATA = SHARED_DATA / "mrclam"
 ODOMETRY = DATA / "Dataset6_Robot1_Odometry.dat"
 TRUTH = DATA / "Dataset6_Robot1_Groundtruth.dat"
 needs_data = pytest.mark.skipif(

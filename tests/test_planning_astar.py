@@ -1,17 +1,17 @@
 """A* and Dijkstra: Moving AI optimal lengths, cross-checks, the turtlebot3 map."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from shared_data import DATA as SHARED_DATA
 from wheelbase.errors import ConfigError, InputError, PlanningError
 from wheelbase.planning import OccupancyGrid, astar, dijkstra, read_movingai_scenarios
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SHARED = SHARED_DATA
 ARENA = SHARED / "movingai" / "arena.map"
 TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
 

@@ -1,17 +1,17 @@
 """OccupancyGrid: loaders, writer, transforms, inflation, distance field, footprint checks."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from shared_data import DATA as SHARED_DATA
 from wheelbase.errors import ConfigError, DataError, InputError, MapError
 from wheelbase.planning import Footprint, OccupancyGrid
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SHARED = SHARED_DATA
 TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
 
 

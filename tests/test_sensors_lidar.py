@@ -2,7 +2,6 @@
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,11 +9,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate, stats
 
+from shared_data import DATA as SHARED_DATA
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.planning import BUNDLED_MAPS, OccupancyGrid, load_map
 from wheelbase.sensors import RAY_METHODS, BeamModel, Lidar, cast_rays, gap_field, scan_rays
 
-MAPS = Path(__file__).resolve().parents[2] / "shared" / "data" / "maps"
+MAPS = SHARED_DATA / "maps"
 TURTLEBOT = MAPS / "turtlebot3_world.yaml"
 
 
