@@ -10,8 +10,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["DATA"]
+__all__ = ["DATA", "absent"]
 
 DATA = Path(
     os.environ.get("WHEELBASE_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data"
 )
+
+
+def absent(path: Path) -> str:
+    """The skip reason for a missing data file."""
+    return f"{path} absent (set WHEELBASE_DATA; see the README, 'Tests and real data')"

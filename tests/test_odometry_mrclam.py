@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from shared_data import DATA as SHARED_DATA
+from shared_data import absent
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.odometry import MrclamData, dead_reckoning_errors, load_mrclam, yaw_rate_fit
 
@@ -14,7 +15,7 @@ ODOMETRY = DATA / "Dataset6_Robot1_Odometry.dat"
 TRUTH = DATA / "Dataset6_Robot1_Groundtruth.dat"
 needs_data = pytest.mark.skipif(
     not (ODOMETRY.is_file() and TRUTH.is_file()),
-    reason=f"MRCLAM data not found in {DATA} (see ../shared/data/README.md)",
+    reason=absent(DATA),
 )
 
 

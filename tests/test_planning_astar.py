@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared_data import DATA as SHARED_DATA
+from shared_data import absent
 from wheelbase.errors import ConfigError, InputError, PlanningError
 from wheelbase.planning import OccupancyGrid, astar, dijkstra, read_movingai_scenarios
 
@@ -16,7 +17,7 @@ ARENA = SHARED / "movingai" / "arena.map"
 TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
 
 
-@pytest.mark.skipif(not ARENA.exists(), reason="../shared/data/movingai/ (Moving AI) absent")
+@pytest.mark.skipif(not ARENA.exists(), reason=absent(ARENA))
 def test_movingai_arena_all_scenarios_optimal():
     grid = OccupancyGrid.from_movingai(ARENA)
     scenarios = read_movingai_scenarios(ARENA.with_name("arena.map.scen"))
@@ -81,7 +82,7 @@ def test_astar_errors():
         astar(grid, (0.5, 0), (4, 4))
 
 
-@pytest.mark.skipif(not TB3.exists(), reason="../shared/data/maps/turtlebot3_world.yaml absent")
+@pytest.mark.skipif(not TB3.exists(), reason=absent(TB3))
 def test_turtlebot3_world_plan_across():
     with pytest.warns(UserWarning):
         grid = OccupancyGrid.from_ros_yaml(TB3)

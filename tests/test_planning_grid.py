@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shared_data import DATA as SHARED_DATA
+from shared_data import absent
 from wheelbase.errors import ConfigError, DataError, InputError, MapError
 from wheelbase.planning import Footprint, OccupancyGrid
 
@@ -184,7 +185,7 @@ def test_thresholds_must_be_finite(tmp_path, threshold):
         OccupancyGrid.from_image(tmp_path / "m.png", 1.0, threshold=threshold)
 
 
-@pytest.mark.skipif(not TB3.exists(), reason="../shared/data/maps/turtlebot3_world.yaml absent")
+@pytest.mark.skipif(not TB3.exists(), reason=absent(TB3))
 def test_turtlebot3_pixels_follow_map_server_rules():
     with pytest.warns(UserWarning, match="not found"):  # its YAML names map.pgm
         grid = OccupancyGrid.from_ros_yaml(TB3)

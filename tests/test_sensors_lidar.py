@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from scipy import integrate, stats
 
 from shared_data import DATA as SHARED_DATA
+from shared_data import absent
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.planning import BUNDLED_MAPS, OccupancyGrid, load_map
 from wheelbase.sensors import RAY_METHODS, BeamModel, Lidar, cast_rays, gap_field, scan_rays
@@ -99,7 +100,7 @@ def map_cases():
 
 def _turtlebot():
     if not TURTLEBOT.is_file():
-        pytest.skip(f"turtlebot3 map not found in {MAPS} (see ../shared/data/README.md)")
+        pytest.skip(absent(MAPS / "turtlebot3_world.yaml"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the YAML names map.pgm; the loader finds the .pgm
         return load_map(TURTLEBOT)
