@@ -28,8 +28,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from wheelbase.control.goal import FIGURE8_GOALS, DriveTrain, run_go_to_goal
+from wheelbase.control.goal import FIGURE8_GOALS, DriveTrain
 from wheelbase.odometry import OdometryErrors
+from wheelbase.sim import run_go_to_goal
 
 
 def main(out_dir: Path) -> None:
@@ -40,19 +41,20 @@ def main(out_dir: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(12, 6))
     for ax, (name, drive) in zip(axes, robots.items(), strict=True):
         start = time.perf_counter()
-        logs = [run_go_to_goal(goal, drive=drive) for goal in FIGURE8_GOALS]
+        log = run_go_to_goal(FIGURE8_GOALS, drive=drive)  # the four goals as one batch
         elapsed = time.perf_counter() - start
         print(f"robot {name} ({elapsed:.2f} s for the four runs)")
-        for index, log in enumerate(logs):
+        for index, m in enumerate(log.metrics()):
             colour = f"C{index}"
+            n, goal = int(log.length[index]), log.goal[index, :2]
             print(
-                f"  goal ({log.goal[0]:+.0f}, {log.goal[1]:+.0f}) m: true final error "
-                f"{log.true_final_error * 100:.2f} cm, odometry final error "
-                f"{log.odometry_final_error * 100:.2f} cm, {log.t[-1]:.1f} s"
+                f"  goal ({goal[0]:+.0f}, {goal[1]:+.0f}) m: {m['status']}, true final error "
+                f"{m['final_position_error_true_m'] * 100:.2f} cm, odometry final error "
+                f"{m['final_position_error_estimated_m'] * 100:.2f} cm, {m['duration_s']:.1f} s"
             )
-            ax.plot(*log.true_pose[:, :2].T, color=colour, lw=2)
-            ax.plot(*log.estimated_pose[:, :2].T, "--", color=colour, lw=1)
-            ax.plot(*log.goal, "*", ms=12, color=colour)
+            ax.plot(*log.true_pose[index, :n, :2].T, color=colour, lw=2)
+            ax.plot(*log.estimated_pose[index, :n, :2].T, "--", color=colour, lw=1)
+            ax.plot(*goal, "*", ms=12, color=colour)
         ax.plot(0, 0, "ko")
         ax.set_aspect("equal")
         ax.grid(True, alpha=0.3)

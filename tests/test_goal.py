@@ -11,12 +11,12 @@ from wheelbase.control.goal import (
     FIGURE8_GOALS,
     DriveTrain,
     GoToGoal,
-    run_go_to_goal,
     saturate_keep_turn_rate,
 )
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.models import DiffDrive
 from wheelbase.odometry import OdometryErrors
+from wheelbase.sim import run_go_to_goal
 
 LAW = GoToGoal(kp=2.0, max_speed=0.2, slow_radius=0.3, tolerance=0.01)
 
@@ -76,30 +76,41 @@ def test_saturation_keeps_the_turning_rate(v, omega, limit):
 
 
 def test_figure8_goals_are_reached_through_the_full_loop():
-    logs = [run_go_to_goal(goal) for goal in FIGURE8_GOALS]
-    for goal, log in zip(FIGURE8_GOALS, logs, strict=True):
-        np.testing.assert_array_equal(log.goal, goal)
-        assert log.reached
-        assert log.odometry_final_error < 0.015  # the law stops within 1 cm, then coasts
-        assert log.true_final_error < 0.02
-        assert log.odometry_drift < 1e-3  # ideal geometry: only encoder quantisation
-        assert log.t[-1] < 20.0
-        assert np.all(np.abs(log.duty) <= 1.0)
+    log = run_go_to_goal(FIGURE8_GOALS)  # the four goals: four robots in one batch
+    metrics = log.metrics()
+    np.testing.assert_array_equal(log.goal[:, :2], FIGURE8_GOALS)
+    assert log.statuses == ["arrived"] * 4
+    for i, m in enumerate(metrics):
+        assert m["final_position_error_estimated_m"] < 0.015  # the law stops within 1 cm
+        assert m["final_position_error_true_m"] < 0.02
+        assert m["odometry_drift_m"] < 1e-3  # ideal geometry: only encoder quantisation
+        assert log.end_time[i] < 20.0
+        # at rest: the motors have stopped
+        assert np.all(np.abs(log.wheel_rates[i, log.length[i] - 1]) * 0.035 <= 0.01)
+    assert np.all(np.abs(log.extras["duty"]) <= 1.0)
+    assert log.extras["setpoint_rpm"].shape == (4, log.t.size, 2)
     # Fig. 8: the robot starts facing +x and arcs; goals in the left half plane need more turn.
-    first_heading_rate = [log.true_pose[5, 2] for log in logs]
+    first_heading_rate = log.true_pose[:, 5, 2]
     assert first_heading_rate[0] > 0 and first_heading_rate[3] < 0
     # Mirror symmetry y → −y (up to encoder quantisation).
-    np.testing.assert_allclose(
-        logs[3].true_pose[-1, :2], logs[0].true_pose[-1, :2] * [1, -1], atol=2e-3
-    )
+    np.testing.assert_allclose(log.final_pose[3, :2], log.final_pose[0, :2] * [1, -1], atol=2e-3)
+
+
+def test_a_batch_of_goals_equals_the_single_runs():
+    batch = run_go_to_goal(FIGURE8_GOALS[:2], seed=5)
+    for i in range(2):
+        alone = run_go_to_goal(FIGURE8_GOALS[i], seed=5 + i)
+        np.testing.assert_allclose(batch.robot(i).true_pose, alone.true_pose, atol=1e-12)
 
 
 def test_systematic_errors_make_odometry_lie():
     drive = DriveTrain(errors=OdometryErrors(diameter_ratio=1.03, track_ratio=1.05))
     log = run_go_to_goal((1.0, 1.0), drive=drive)
-    assert log.reached and log.odometry_final_error < 0.015
-    assert log.odometry_drift > 0.02  # the estimate says "there", the robot is not
-    assert log.true_final_error > log.odometry_final_error
+    m = log.metrics()[0]
+    assert log.statuses == ["missed_goal"]  # the estimate says "there", the robot is not
+    assert m["final_position_error_estimated_m"] < 0.015
+    assert m["odometry_drift_m"] > 0.02
+    assert m["final_position_error_true_m"] > m["final_position_error_estimated_m"]
 
 
 def test_bad_input():

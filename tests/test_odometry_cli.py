@@ -35,7 +35,8 @@ def test_goto_writes_files_and_metrics(tmp_path):
     for g in goals:
         assert g["true_final_error_m"] < 0.02 and g["odometry_final_error_m"] < 0.015
     header = (out / "log.csv").read_text().splitlines()[0].split(",")
-    assert header[:4] == ["goal_index", "goal_x", "goal_y", "t"]
+    assert header[:3] == ["robot", "t", "true_x"]
+    assert "setpoint_rpm_0" in header and "duty_1" in header
     # No overwrite without --force.
     again = runner.invoke(app, ["goto", "--goal", "1", "1", "--unit", "m", "--out", str(out)])
     assert again.exit_code != 0 and isinstance(again.exception, FileExistsError)

@@ -13,7 +13,6 @@ corrections).
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -29,6 +28,8 @@ from wheelbase.errors import ConfigError
 __all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
 
 GOTO_FILES: tuple[str, ...] = ("routes.png", "log.csv", "route.gif", "metrics.json")
+"""What ``wheelbase goto`` writes: ``log.csv`` is the engine's long format (a ``robot`` column,
+one robot per goal, with the speed loop's set-points, measured speeds and duty)."""
 CALIBRATE_FILES: tuple[str, ...] = ("before_after.png", "metrics.json")
 _UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 
@@ -74,20 +75,19 @@ def _goals(values: list[str] | None, extra: list[str], unit: str) -> list[tuple[
     return goals
 
 
-def _plot_routes(logs: list[Any], path: Path) -> None:
+def _plot_routes(log: Any, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.5, 6.0))
-    for index, log in enumerate(logs):
+    for index in range(log.n_robots):
         colour = f"C{index % 10}"
-        goal = log.goal
-        ax.plot(
-            *log.true_pose[:, :2].T, color=colour, lw=2, label=f"goal ({goal[0]:g}, {goal[1]:g}) m"
-        )
-        ax.plot(*log.estimated_pose[:, :2].T, color=colour, lw=1, ls="--")
+        n, goal = int(log.length[index]), log.goal[index, :2]
+        ax.plot(*log.true_pose[index, :n, :2].T, color=colour, lw=2,
+                label=f"goal ({goal[0]:g}, {goal[1]:g}) m")  # fmt: skip
+        ax.plot(*log.estimated_pose[index, :n, :2].T, color=colour, lw=1, ls="--")
         ax.plot(*goal, marker="*", ms=12, color=colour)
     ax.plot(0, 0, "ko")
     ax.plot([], [], "k--", lw=1, label="odometry estimate")
@@ -102,36 +102,11 @@ def _plot_routes(logs: list[Any], path: Path) -> None:
     plt.close(fig)
 
 
-def _write_log(logs: list[Any], path: Path) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        header = None
-        for index, log in enumerate(logs):
-            columns = log.columns()
-            if header is None:
-                header = ["goal_index", "goal_x", "goal_y", *columns]
-                writer.writerow(header)
-            table = np.column_stack(list(columns.values()))
-            for row in table:
-                writer.writerow(
-                    [index, repr(float(log.goal[0])), repr(float(log.goal[1]))]
-                    + [repr(float(v)) for v in row]
-                )
-
-
-def _animate(logs: list[Any], path: Path, overwrite: bool) -> None:
+def _animate(log: Any, path: Path, overwrite: bool) -> None:
     from wheelbase.plot import animate
 
-    length = max(log.t.size for log in logs)
-    longest = max(logs, key=lambda log: log.t.size)
-    poses = np.stack(
-        [
-            np.concatenate([log.true_pose, np.repeat(log.true_pose[-1:], length - log.t.size, 0)])
-            for log in logs
-        ],
-        axis=1,
-    )
-    result = SimpleNamespace(t=longest.t, poses=poses)
+    # every robot's poses (T, N, 3); a robot that has arrived stays where it stopped
+    result = SimpleNamespace(t=log.t, poses=np.swapaxes(log.true_pose, 0, 1))
     animate(result, path, footprint=(0.2, 0.17), overwrite=overwrite, max_frames=60, title="goto")
 
 
@@ -207,28 +182,29 @@ def register(app: typer.Typer) -> None:
         force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
     ) -> None:
         """Drive to goals with document 003's go-to-goal loop; write routes, log, GIF, metrics."""
-        from wheelbase.control.goal import DriveTrain, run_go_to_goal
+        from wheelbase.control.goal import DriveTrain
         from wheelbase.odometry.error_model import OdometryErrors
+        from wheelbase.sim import run_go_to_goal
 
         goals = _goals(goal, list(ctx.args), unit)
         seed = integer("seed", seed, minimum=0)
         drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
         paths = _prepare(out, GOTO_FILES, force)
-        logs = [run_go_to_goal(g, drive=drive, seed=seed) for g in goals]
-        _plot_routes(logs, paths["routes.png"])
-        _write_log(logs, paths["log.csv"])
-        _animate(logs, paths["route.gif"], overwrite=True)
+        log = run_go_to_goal(goals, drive=drive, seed=seed)  # every goal, one robot each
+        _plot_routes(log, paths["routes.png"])
+        log.to_csv(paths["log.csv"], overwrite=True)
+        _animate(log, paths["route.gif"], overwrite=True)
         metrics = {
             "goals": [
                 {
-                    "goal": [float(log.goal[0]), float(log.goal[1])],
-                    "true_final_error_m": log.true_final_error,
-                    "odometry_final_error_m": log.odometry_final_error,
-                    "odometry_drift_m": log.odometry_drift,
-                    "reached": log.reached,
-                    "time_s": float(log.t[-1]),
+                    "goal": [float(log.goal[i, 0]), float(log.goal[i, 1])],
+                    "status": row["status"],
+                    "true_final_error_m": row["final_position_error_true_m"],
+                    "odometry_final_error_m": row["final_position_error_estimated_m"],
+                    "odometry_drift_m": row["odometry_drift_m"],
+                    "time_s": row["duration_s"],
                 }
-                for log in logs
+                for i, row in enumerate(log.metrics())
             ],
             "robot": {
                 "wheel_radius_m": drive.model.wheel_radius,

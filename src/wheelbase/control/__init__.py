@@ -24,8 +24,6 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         FIGURE8_GOALS,
         DriveTrain,
         GoToGoal,
-        GoToGoalLog,
-        run_go_to_goal,
         saturate_keep_turn_rate,
     )
     from wheelbase.control.mppi import MPPI, MPPI_BACKENDS, MPPICritics, MPPIPlan
@@ -72,8 +70,6 @@ _EXPORTS = {
     "FIGURE8_GOALS": "wheelbase.control.goal",
     "DriveTrain": "wheelbase.control.goal",
     "GoToGoal": "wheelbase.control.goal",
-    "GoToGoalLog": "wheelbase.control.goal",
-    "run_go_to_goal": "wheelbase.control.goal",
     "saturate_keep_turn_rate": "wheelbase.control.goal",
     "MPPI": "wheelbase.control.mppi",
     "MPPI_BACKENDS": "wheelbase.control.mppi",
@@ -118,7 +114,6 @@ __all__: list[str] = [
     "Controller",
     "DriveTrain",
     "GoToGoal",
-    "GoToGoalLog",
     "GoToPoint",
     "GoalController",
     "InverseDynamicsTorques",
@@ -142,7 +137,6 @@ __all__: list[str] = [
     "ViaPoint",
     "command_to_inputs",
     "make_pose_law",
-    "run_go_to_goal",
     "saturate_keep_turn_rate",
     "saturate_steering",
     "saturate_velocity",

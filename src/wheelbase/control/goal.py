@@ -22,12 +22,10 @@ Stability: near the goal v = k_ρ·ρ with k_ρ = v_max/slow_radius, which is th
 of :mod:`wheelbase.control.point`; the robot orbits the goal unless K_p > (2/π)·k_ρ and spirals
 in unless K_p > k_ρ, so :class:`GoToGoal` refuses the first and warns on the second.
 
-:func:`run_go_to_goal` runs the loop of document 003 Fig. 1: goal → set-points in RPM (the
-microprocessor, every ``control_period``) → PI speed loop → PWM duty (the microcontroller, every
-``speed_loop.period``) → DC motor → wheel → encoder ticks → odometry → estimated pose → law.
-The true robot (with the :class:`~wheelbase.odometry.OdometryErrors` it may have) moves by the
-exact arc of each wheel-angle increment (:func:`wheelbase.integrate.integrate_step`,
-``method="exact"``); the law sees only the odometry estimate.
+:func:`wheelbase.sim.run_go_to_goal` runs the loop of document 003 Fig. 1 on the engine: goal →
+set-points in RPM (the microprocessor, every ``control_period``) → PI speed loop → PWM duty (the
+microcontroller, every ``speed_loop.period``) → DC motor → wheel → encoder ticks → odometry →
+estimated pose → law; :class:`DriveTrain` holds the hardware it runs on.
 """
 
 from __future__ import annotations
@@ -44,19 +42,16 @@ from wheelbase._validate import as_float_array, positive
 from wheelbase.control.base import VELOCITY_COMMAND
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
-from wheelbase.integrate import integrate_step
 from wheelbase.models.diffdrive import DiffDrive
 from wheelbase.motor import MOTOR_PRESETS, DCMotor, SpeedLoop
 from wheelbase.odometry.dead_reckoning import DEAD_RECKONING_METHODS, WheelOdometry
-from wheelbase.odometry.encoder import Encoder, unwrap_ticks
+from wheelbase.odometry.encoder import Encoder
 from wheelbase.odometry.error_model import OdometryErrors
 
 __all__ = [
     "FIGURE8_GOALS",
     "DriveTrain",
     "GoToGoal",
-    "GoToGoalLog",
-    "run_go_to_goal",
     "saturate_keep_turn_rate",
 ]
 
@@ -308,208 +303,3 @@ class DriveTrain:
             self.encoder.pulses_per_revolution,
             self.odometry_method,
         )
-
-
-@dataclass(frozen=True)
-class GoToGoalLog:
-    """Record of :func:`run_go_to_goal`, one row per control period.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-        Times [s].
-    true_pose : numpy.ndarray, shape (T, 3)
-        Pose of the real robot (x [m], y [m], θ [rad]).
-    estimated_pose : numpy.ndarray, shape (T, 3)
-        Odometry estimate, what the law saw.
-    setpoint_rpm : numpy.ndarray, shape (T, 2)
-        Wheel-speed set-points (left, right) [RPM] sent from then on.
-    measured_rpm : numpy.ndarray, shape (T, 2)
-        Wheel speeds measured by the speed loop over its last period [RPM].
-    duty : numpy.ndarray, shape (T, 2)
-        PWM duty in force [−1, 1].
-    ticks : numpy.ndarray of int64, shape (T, 2)
-        Raw encoder counter readings.
-    goal : numpy.ndarray, shape (2,)
-        The goal [m].
-    reached : bool
-        Whether the estimate came within the tolerance before the time limit.
-    """
-
-    t: np.ndarray
-    true_pose: np.ndarray
-    estimated_pose: np.ndarray
-    setpoint_rpm: np.ndarray
-    measured_rpm: np.ndarray
-    duty: np.ndarray
-    ticks: np.ndarray
-    goal: np.ndarray
-    reached: bool
-
-    @property
-    def true_final_error(self) -> float:
-        """Distance [m] from the real robot's final position to the goal."""
-        return float(np.hypot(*(self.true_pose[-1, :2] - self.goal)))
-
-    @property
-    def odometry_final_error(self) -> float:
-        """Distance [m] from the final odometry estimate to the goal."""
-        return float(np.hypot(*(self.estimated_pose[-1, :2] - self.goal)))
-
-    @property
-    def odometry_drift(self) -> float:
-        """Distance [m] between the final estimate and the real final position."""
-        return float(np.hypot(*(self.true_pose[-1, :2] - self.estimated_pose[-1, :2])))
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """The log as named columns (for CSV): t, true and estimated pose, rpm, duty, ticks."""
-        return {
-            "t": self.t,
-            "x": self.true_pose[:, 0],
-            "y": self.true_pose[:, 1],
-            "theta": self.true_pose[:, 2],
-            "x_est": self.estimated_pose[:, 0],
-            "y_est": self.estimated_pose[:, 1],
-            "theta_est": self.estimated_pose[:, 2],
-            "rpm_set_left": self.setpoint_rpm[:, 0],
-            "rpm_set_right": self.setpoint_rpm[:, 1],
-            "rpm_left": self.measured_rpm[:, 0],
-            "rpm_right": self.measured_rpm[:, 1],
-            "duty_left": self.duty[:, 0],
-            "duty_right": self.duty[:, 1],
-            "ticks_left": self.ticks[:, 0].astype(np.float64),
-            "ticks_right": self.ticks[:, 1].astype(np.float64),
-        }
-
-
-def run_go_to_goal(
-    goal: ArrayLike,
-    controller: GoToGoal | None = None,
-    drive: DriveTrain | None = None,
-    *,
-    pose0: ArrayLike = (0.0, 0.0, 0.0),
-    control_period: float = 0.05,
-    substeps: int = 5,
-    t_max: float = 60.0,
-    settle_time: float = 0.5,
-    seed: int | None = 0,
-) -> GoToGoalLog:
-    """Drive to ``goal`` through the full loop of document 003 (module docstring).
-
-    Parameters
-    ----------
-    goal : array_like, shape (2,)
-        Goal position (x, y) [m], finite.
-    controller : GoToGoal, optional
-        The law (default: ``GoToGoal()`` with the drive's geometry and 80 % of the motor's
-        no-load speed as wheel limit).
-    drive : DriveTrain, optional
-        Geometry, motors, encoders, speed loop and errors (default: ``DriveTrain()``).
-    pose0 : array_like, shape (3,)
-        Start pose (default: the origin facing +x, as in document 003 Fig. 8).
-    control_period : float
-        Period [s] of the law (the microprocessor); a whole multiple of the speed-loop period.
-    substeps : int
-        Plant steps per speed-loop period (the wheel speeds vary within a period).
-    t_max : float
-        Time limit [s], > 0.
-    settle_time : float
-        Time [s] simulated after arrival while the speed loop stops the wheels, >= 0.
-    seed : int or None
-        Seed of the random encoder errors and wheel slip.
-
-    Returns
-    -------
-    GoToGoalLog
-        The run, one row per control period.
-
-    Raises
-    ------
-    InputError
-        A goal that is not two finite numbers.
-    ConfigError
-        Periods that are not positive or not commensurate.
-    """
-    goal = as_float_array("goal", goal, 2, min_ndim=1, max_ndim=1)
-    pose0 = as_float_array("pose0", pose0, 3, min_ndim=1, max_ndim=1)
-    drive = drive if drive is not None else DriveTrain()
-    model, motor, encoder, loop = drive.model, drive.motor, drive.encoder, drive.speed_loop
-    assert loop is not None  # set in DriveTrain.__post_init__
-    if controller is None:
-        controller = GoToGoal(
-            wheel_radius=model.wheel_radius,
-            half_track=model.half_track,
-            max_wheel_speed=0.8 * motor.no_load_speed,
-        )
-    control_period = positive("control_period", control_period, "s")
-    t_max = positive("t_max", t_max, "s")
-    settle_time = positive("settle_time", settle_time, "s") if settle_time else 0.0
-    ratio = control_period / loop.period
-    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
-        raise ConfigError(
-            f"control_period must be a whole multiple of the speed-loop period {loop.period:g} s "
-            f"(got {control_period:g} s)"
-        )
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-        raise ConfigError(f"substeps must be an integer >= 1 (got {substeps!r})")
-    loops_per_control = round(ratio)
-    h = loop.period / substeps
-    rng = np.random.default_rng(seed)
-    odometry = drive.odometry()
-    bits = encoder.counter_bits
-    true_r, true_d = model.wheel_radius, model.half_track
-
-    pose = pose0.copy()
-    pose[2] = float(wrap_angle(pose[2]))
-    estimate = pose.copy()
-    motors = np.zeros((2, 3))  # (i, ω, φ) per wheel
-    counted = encoder.count(motors[:, 2])  # cumulative counts incl. random errors
-    raw = encoder.wrap(counted)
-    raw_at_speed_read, raw_at_control_read = raw.copy(), raw.copy()
-    integral = np.zeros(2)
-    duty = np.zeros(2)
-    measured = np.zeros(2)
-    setpoint = np.zeros(2)
-    rows: list[tuple] = []
-    t, arrived_at = 0.0, None
-    n_max = math.ceil(t_max / control_period)
-    for _ in range(n_max + 1):
-        # Microprocessor: read the counters, update odometry, compute set-points.
-        ticks = unwrap_ticks(np.stack([raw_at_control_read, raw]), bits)[0]
-        raw_at_control_read = raw.copy()
-        estimate = odometry.update(estimate, ticks)
-        if arrived_at is None and controller.arrived(estimate, goal):
-            arrived_at = t
-        setpoint = controller.rpm_setpoints(estimate, goal) if arrived_at is None else np.zeros(2)
-        rows.append((t, pose.copy(), estimate.copy(), setpoint, measured, duty, raw.copy()))
-        if (arrived_at is not None and t - arrived_at >= settle_time) or t >= t_max:
-            break
-        for _ in range(loops_per_control):
-            # Microcontroller: measure RPM over the last period, PI → duty held for the next.
-            delta = unwrap_ticks(np.stack([raw_at_speed_read, raw]), bits)[0]
-            raw_at_speed_read = raw.copy()
-            measured = encoder.rpm(delta, loop.period)
-            duty, integral = loop.update(integral, setpoint, measured)
-            for _ in range(substeps):
-                before = motors[:, 2].copy()
-                motors = motor.step(motors, duty, h)
-                turned = motors[:, 2] - before
-                counted = counted + encoder.tick_deltas(before, motors[:, 2], rng)
-                raw = encoder.wrap(counted)
-                distance, rotation = drive.errors.ground_increments(true_r, true_d, turned, rng)
-                twist = np.array([distance / h, 0.0, rotation / h])
-                pose = integrate_step(pose, twist, twist, twist, h, method="exact")
-            t += loop.period
-        t = round(t / control_period) * control_period  # no drift of the clock
-    t_arr, true_pose, est_pose, sp, meas, dut, tick_arr = zip(*rows, strict=True)
-    return GoToGoalLog(
-        t=np.array(t_arr),
-        true_pose=np.array(true_pose),
-        estimated_pose=np.array(est_pose),
-        setpoint_rpm=np.array(sp),
-        measured_rpm=np.array(meas),
-        duty=np.array(dut),
-        ticks=np.array(tick_arr, dtype=np.int64),
-        goal=goal,
-        reached=arrived_at is not None,
-    )

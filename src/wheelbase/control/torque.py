@@ -432,7 +432,7 @@ class TwistTorqueLoop:
     Any law of :mod:`wheelbase.control` with velocity commands (pure pursuit, Kanayama, MPPI,
     ...) thinks in body twists; a dynamic plant takes wheel torques. Each call asks the law for
     (v, ω) at the estimated pose and turns it into wheel torques with
-    :func:`~wheelbase.control.loop.velocity_torques`: body acceleration a = k·(ζ_ref − ζ) with
+    :func:`velocity_torques`: body acceleration a = k·(ζ_ref − ζ) with
     ζ_ref = (v, 0, ω) (a_v = 0: the no-slip constraint leaves the lateral velocity to the
     ground), inverse dynamics τ = M·a + C(ζ)·ζ (+ resistances), τ* = Wᵀ·τ, saturated at
     ``max_torque``. With an exact

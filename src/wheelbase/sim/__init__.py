@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 from wheelbase._lazy import attach
 
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.sim.drive_train import DriveTrainPlant, run_go_to_goal
     from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
     from wheelbase.sim.log import STATUSES, Log, status_code
     from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
@@ -19,6 +20,8 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
 
 _EXPORTS = {
+    "DriveTrainPlant": "wheelbase.sim.drive_train",
+    "run_go_to_goal": "wheelbase.sim.drive_train",
     "Arrival": "wheelbase.sim.engine",
     "Engine": "wheelbase.sim.engine",
     "EngineState": "wheelbase.sim.engine",
@@ -39,6 +42,7 @@ __getattr__, __dir__ = attach(__name__, _EXPORTS)
 __all__ = [
     "STATUSES",
     "Arrival",
+    "DriveTrainPlant",
     "DynamicPlant",
     "EncoderOdometry",
     "Engine",
@@ -48,6 +52,7 @@ __all__ = [
     "PerfectState",
     "WheelAxle",
     "closed_loop",
+    "run_go_to_goal",
     "status_code",
     "track_trajectory",
     "tune_computed_torque",

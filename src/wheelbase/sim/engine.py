@@ -149,6 +149,9 @@ class EngineState:
         One controller copy per robot for a ``per_robot`` controller, else one shared.
     encoders : EncoderReadings or None
         The per-robot random streams of the encoders.
+    plant : object or None
+        What a plant keeps between steps besides pose and twist (a drive train's motor
+        currents and speed-loop integrals), from ``plant.start``.
     """
 
     step: int
@@ -163,6 +166,7 @@ class EngineState:
     seeds: np.ndarray
     controllers: list = field(default_factory=list)
     encoders: EncoderReadings | None = None
+    plant: Any = None
 
     @property
     def running(self) -> np.ndarray:
@@ -183,6 +187,7 @@ class _Row:
     rates: np.ndarray
     ticks: np.ndarray
     controller_status: list[str | None]
+    signals: dict[str, np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -323,6 +328,7 @@ class Engine:
             seeds=seeds,
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
+            plant=self.plant.start(n, seeds),
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -390,10 +396,11 @@ class Engine:
         status[running & ~finite] = DIVERGED
         command = np.where(finite[:, None], command, 0.0)
         command[~running] = 0.0
-        moved, rates = self.plant.motion(state.twist, command, self.command_names)
+        moved, rates = self.plant.motion(state.twist, command, self.command_names, state.plant)
         reference = self._reference_pose(t, n, state.goal)
+        signals = self.plant.signals(state.plant) if state.plant is not None else {}
         row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
-                   state.ticks, controller_status)  # fmt: skip
+                   state.ticks, controller_status, signals)  # fmt: skip
 
         active = status == RUNNING
         if self.collides is not None and active.any():
@@ -422,16 +429,17 @@ class Engine:
         pose, twist = state.pose.copy(), state.twist.copy()
         wheel_angle, ticks = state.wheel_angle.copy(), state.ticks.copy()
         estimate, estimated_twist = state.estimate.copy(), state.estimated_twist.copy()
+        plant_state = state.plant
         if active.any():
-            new_pose, new_twist, end_rates = self.plant.step(
-                state.pose[active], state.twist[active], command[active], moved[active], self.dt
-            )
+            index = np.flatnonzero(active)
+            new_pose, new_twist, turned, plant_state = self.plant.step(
+                state.pose[index], state.twist[index], command[index], moved[index],
+                rates[index], self.dt, plant_state, index,
+            )  # fmt: skip
             ok = np.all(np.isfinite(new_pose), axis=-1) & np.all(np.isfinite(new_twist), axis=-1)
-            moving = np.flatnonzero(active)
-            status[moving[~ok]] = DIVERGED
-            moving, new_pose, new_twist = moving[ok], new_pose[ok], new_twist[ok]
-            # The wheels turn by the integral of their rate: trapezoid of the step's two ends.
-            new_angle = state.wheel_angle[moving] + 0.5 * (rates[moving] + end_rates[ok]) * self.dt
+            status[index[~ok]] = DIVERGED
+            moving, new_pose, new_twist = index[ok], new_pose[ok], new_twist[ok]
+            new_angle = state.wheel_angle[moving] + turned[ok]
             if state.encoders is not None:
                 before = state.wheel_angle.copy()
                 after = before.copy()
@@ -458,6 +466,7 @@ class Engine:
             seeds=state.seeds,
             controllers=state.controllers,
             encoders=state.encoders,
+            plant=plant_state,
         )
         return new_state, row
 
@@ -532,11 +541,14 @@ class Engine:
         t = np.array([row.t for row in rows])
         index = np.minimum(np.arange(len(rows))[None, :], last_row[:, None])  # frozen after end
 
-        def stack(name: str) -> np.ndarray:
-            values = np.stack([getattr(row, name) for row in rows], axis=1)  # (N, T, …)
+        def frozen(arrays: list[np.ndarray]) -> np.ndarray:
+            values = np.stack(arrays, axis=1)  # (N, T, …), each robot's rows held after its end
             return np.take_along_axis(
                 values, index.reshape(index.shape + (1,) * (values.ndim - 2)), axis=1
             )
+
+        def stack(name: str) -> np.ndarray:
+            return frozen([getattr(row, name) for row in rows])
 
         command = stack("command")
         codes = {name: k for k, name in enumerate(status_names)}
@@ -564,6 +576,7 @@ class Engine:
             command_names=self.command_names,
             controller_status=controller_status if status_names else None,
             controller_status_names=status_names,
+            extras={name: frozen([row.signals[name] for row in rows]) for name in rows[0].signals},
             rollout_fans=fans,
         )
 

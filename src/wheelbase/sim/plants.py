@@ -144,7 +144,21 @@ class KinematicPlant:
         command_to_inputs(np.zeros(len(controller_names)), controller_names, self.model)
         return tuple(controller_names)
 
-    def motion(self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...]):
+    def start(self, n: int, seeds: np.ndarray) -> None:
+        """A kinematic robot keeps nothing besides pose and twist.
+
+        Parameters
+        ----------
+        n : int
+            Number of robots.
+        seeds : numpy.ndarray
+            Their seeds (unused).
+        """
+        return None
+
+    def motion(
+        self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
+    ):
         """The true twist ``(N, 3)`` and encoder wheel rates ``(N, 2)`` under a command.
 
         ``twist`` (the state's current twist) is unused: a kinematic robot moves at once.
@@ -157,6 +171,8 @@ class KinematicPlant:
             The controller's commands.
         names : tuple of str
             Their meaning.
+        state : None
+            What the plant keeps (nothing).
         """
         inputs = command_to_inputs(command, names, self.model)
         moved = np.asarray(self.model.twist(inputs), dtype=np.float64).reshape(-1, 3)
@@ -173,32 +189,34 @@ class KinematicPlant:
         moved = moved * (0.5 * (axle.radius_scale[0] + axle.radius_scale[1]))
         return moved, axle.wheel_rates(moved)
 
-    def step(
-        self, pose: np.ndarray, twist: np.ndarray, command: np.ndarray, moved: np.ndarray, dt: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def step(self, pose, twist, command, moved, rates, dt, state=None, index=None):
         """Advance poses by ``dt`` under the twist ``moved`` of :meth:`motion`.
 
         Parameters
         ----------
-        pose : numpy.ndarray, shape (N, 3)
-            Poses at the start of the step.
-        twist : numpy.ndarray, shape (N, 3)
+        pose : numpy.ndarray, shape (M, 3)
+            Poses at the start of the step (the robots still running).
+        twist : numpy.ndarray, shape (M, 3)
             Twists at the start of the step (unused).
-        command : numpy.ndarray, shape (N, k)
+        command : numpy.ndarray, shape (M, k)
             The command (unused: already in ``moved``).
-        moved : numpy.ndarray, shape (N, 3)
+        moved : numpy.ndarray, shape (M, 3)
             The twist held over the step.
+        rates : numpy.ndarray, shape (M, 2)
+            The encoder wheel rates of :meth:`motion`, held over the step.
         dt : float
             Step [s].
+        state, index : optional
+            What the plant keeps, and which robots these rows are (unused).
 
         Returns
         -------
-        pose, twist, wheel_rates_end
-            The new poses and twists and the wheel rates at the end of the step.
+        pose, twist, wheel_turn, state
+            The new poses and twists, the encoder wheels' rotation over the step [rad] and
+            what the plant keeps.
         """
         new_pose = integrate_step(pose, moved, moved, moved, dt, self.integrator)
-        rates = np.zeros((pose.shape[0], 2)) if self.axle is None else self.axle.wheel_rates(moved)
-        return new_pose, moved, rates
+        return new_pose, moved, rates * dt, state
 
 
 @dataclass(frozen=True)
@@ -252,7 +270,21 @@ class DynamicPlant:
             )
         return tuple(controller_names)
 
-    def motion(self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...]):
+    def start(self, n: int, seeds: np.ndarray) -> None:
+        """A rigid body keeps nothing besides pose and twist.
+
+        Parameters
+        ----------
+        n : int
+            Number of robots.
+        seeds : numpy.ndarray
+            Their seeds (unused).
+        """
+        return None
+
+    def motion(
+        self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
+    ):
         """The current twist and its encoder wheel rates (torques act over the step).
 
         Parameters
@@ -263,33 +295,39 @@ class DynamicPlant:
             Wheel torques [N·m] (unused here).
         names : tuple of str
             Their names.
+        state : None
+            What the plant keeps (nothing).
         """
         return twist, self.axle.wheel_rates(twist)
 
-    def step(
-        self, pose: np.ndarray, twist: np.ndarray, command: np.ndarray, moved: np.ndarray, dt: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def step(self, pose, twist, command, moved, rates, dt, state=None, index=None):
         """Advance the states by ``dt`` under wheel torques ``command`` held over the step.
 
         Parameters
         ----------
-        pose, twist : numpy.ndarray, shape (N, 3)
-            The state at the start of the step.
-        command : numpy.ndarray, shape (N, 2)
+        pose, twist : numpy.ndarray, shape (M, 3)
+            The state at the start of the step (the robots still running).
+        command : numpy.ndarray, shape (M, 2)
             Wheel torques (left, right) [N·m].
-        moved : numpy.ndarray, shape (N, 3)
+        moved : numpy.ndarray, shape (M, 3)
             The twist of :meth:`motion` (unused).
+        rates : numpy.ndarray, shape (M, 2)
+            The encoder wheel rates at the start of the step.
         dt : float
             Step [s].
+        state, index : optional
+            What the plant keeps, and which robots these rows are (unused).
 
         Returns
         -------
-        pose, twist, wheel_rates_end
+        pose, twist, wheel_turn, state
+            The wheels turn by the integral of their rate: the trapezoid of the step's ends.
         """
         from wheelbase.dynamics import _step_many
 
         # the engine has checked the shapes and values: the compiled step directly
-        state = np.concatenate([pose, twist], axis=-1)
-        _step_many(state, np.ascontiguousarray(command, dtype=np.float64), self._params, dt)
-        new_twist = state[:, 3:]
-        return state[:, :3], new_twist, self.axle.wheel_rates(new_twist)
+        full = np.concatenate([pose, twist], axis=-1)
+        _step_many(full, np.ascontiguousarray(command, dtype=np.float64), self._params, dt)
+        new_twist = full[:, 3:]
+        turned = 0.5 * (rates + self.axle.wheel_rates(new_twist)) * dt
+        return full[:, :3], new_twist, turned, state
