@@ -81,3 +81,11 @@ def test_step_count_is_bounded(tmp_path):
                                  "--t-end", "5", "--out", str(tmp_path / "o")])  # fmt: skip
     assert isinstance(result.exception, ConfigError)
     assert "t_end / dt = 5e+300 steps: more than max_steps" in str(result.exception)
+
+
+def test_goal_beyond_1e10_m_is_refused(tmp_path):
+    # a goal 1e300 m away overflowed the metrics (found by the fuzz suite's explore run)
+    result = runner.invoke(app, ["control", "--start", "1", "1", "0", "--goal", "0", "1e300",
+                                 "0", "--out", str(tmp_path / "o")])  # fmt: skip
+    assert isinstance(result.exception, ConfigError)
+    assert "goal x and y must be within ±1e+10 m" in str(result.exception)

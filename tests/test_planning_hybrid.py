@@ -234,6 +234,11 @@ def test_start_goal_and_parameter_errors():
         ({"footprint": (1e9, 0.5)}, r"footprint reaches 5e\+08 m from its reference point.*"),
         ({"xy_resolution": 1e-3}, r"1.8e\+09 state bins.*max_state_bins = 50000000"),
         ({"max_state_bins": 0}, r"max_state_bins must be an integer >= 1"),
+        ({"headings": 10**400}, r"1e\+400 headings give 2.5e\+403 state bins"),
+        (
+            {"headings": 4.49423283715579e305},
+            r"4.49e\+305 headings give 1.12e\+309 state bins",
+        ),  # int too large for :g
     ],
 )
 def test_constructor_errors_name_the_option(options, match):

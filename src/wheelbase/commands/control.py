@@ -28,6 +28,7 @@ from wheelbase._validate import finite, parse_angle, positive
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.pose import POSE_LAWS, make_pose_law
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.limits import MAX_COORDINATE
 from wheelbase.sim import Log
 
 __all__ = ["control_run_to_files", "plot_run", "register"]
@@ -44,8 +45,14 @@ def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
         x, y = float(values[0]), float(values[1])
     except ValueError:
         raise ConfigError(f"{name} must be X Y ANGLE, e.g. 2 0 180deg (got {values!r})") from None
-    return np.array([finite(f"{name} x", x, "m"), finite(f"{name} y", y, "m"),
+    pose = np.array([finite(f"{name} x", x, "m"), finite(f"{name} y", y, "m"),
                      parse_angle(values[2])])  # fmt: skip
+    if max(abs(x), abs(y)) > MAX_COORDINATE:
+        raise ConfigError(
+            f"{name} x and y must be within ±{MAX_COORDINATE:g} m, where float64 still resolves "
+            f"micrometres (got ({x:g}, {y:g}))"
+        )
+    return pose
 
 
 def _check_free(out: Path, names: tuple[str, ...], force: bool) -> None:

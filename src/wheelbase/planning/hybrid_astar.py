@@ -273,8 +273,9 @@ class HybridAStar:
         bins = nx * ny * self.headings
         if bins > self.max_state_bins:
             raise ConfigError(
-                f"xy_resolution {self.xy_resolution:g} m and {self.headings} headings give "
-                f"{bins:.3g} state bins: more than max_state_bins = {self.max_state_bins}; use "
+                f"xy_resolution {self.xy_resolution:g} m and {_count(self.headings)} headings give "
+                f"{_count(bins)} state bins: more than max_state_bins = "
+                f"{self.max_state_bins}; use "
                 "a coarser xy_resolution or fewer headings, or raise max_state_bins"
             )
         self._nx, self._ny = nx, ny
@@ -582,6 +583,14 @@ class HybridAStar:
 
 
 # ---------------------------------------------------------------------- helpers
+def _count(number: int) -> str:
+    """A count for a message, 3 digits (an int too large for a float stays readable)."""
+    if number < 10**300:
+        return f"{number:.3g}"
+    digits = str(number)
+    return f"{digits[0]}.{digits[1:3]}".rstrip("0").rstrip(".") + f"e+{len(digits) - 1}"
+
+
 def _driven_backwards(path: Path) -> Path:
     """The same curve traversed from its end to its start: every motion in the other gear,
     the curvature (dθ per signed metre) unchanged."""
