@@ -89,6 +89,15 @@ def test_batch_over_seeds(scenario_file, tmp_path):
     rows = json.loads((out / "batch.json").read_text())["rows"]
     assert [row["seed"] for row in rows] == [0, 1]
     assert "success rate" in result.output
+    assert len((out / "rows.jsonl").read_text().splitlines()) == 1 + 2  # written as they finish
+    again = invoke("batch", scenario_file, "--seeds", 2, "--out", out)
+    assert again.exit_code == 2 and "--resume" in again.output
+    resumed = invoke("batch", scenario_file, "--seeds", 2, "--out", out, "--resume")
+    assert resumed.exit_code == 0, resumed.output  # nothing missing: nothing runs again
+    assert json.loads((out / "batch.json").read_text())["rows"] == rows
+    fresh = invoke("batch", scenario_file, "--seeds", 3, "--out", out, "--force")
+    assert fresh.exit_code == 0, fresh.output
+    assert len(json.loads((out / "batch.json").read_text())["rows"]) == 3
 
 
 @pytest.mark.parametrize(

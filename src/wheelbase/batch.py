@@ -13,6 +13,7 @@ Without an executor the chunks run in this process.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -25,7 +26,7 @@ import numpy as np
 
 from wheelbase.errors import ConfigError
 
-__all__ = ["BatchResult", "run_batch", "run_chunk"]
+__all__ = ["JOURNAL", "BatchResult", "Journal", "run_batch", "run_chunk"]
 
 
 def run_chunk(scenario: dict[str, Any], seeds: Sequence[int]) -> list[dict[str, Any]]:
@@ -51,10 +52,13 @@ def run_chunk(scenario: dict[str, Any], seeds: Sequence[int]) -> list[dict[str, 
     try:
         return run_seeds(scenario, seeds)
     except Exception as error:  # a batch records every failure and goes on
-        name = scenario.get("name", "scenario")
-        message = f"{type(error).__name__}: {error}"
-        return [{"name": name, "seed": int(seed), "status": "error", "error": message}
-                for seed in seeds]  # fmt: skip
+        return _error_rows(scenario.get("name", "scenario"), seeds, error)
+
+
+def _error_rows(name: str, seeds: Sequence[int], error: Exception) -> list[dict[str, Any]]:
+    message = f"{type(error).__name__}: {error}"
+    return [{"name": name, "seed": int(seed), "status": "error", "error": message}
+            for seed in seeds]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -138,6 +142,84 @@ class BatchResult:
         return paths
 
 
+JOURNAL = "rows.jsonl"
+"""File (JSON lines) where a batch appends every finished chunk's rows as it finishes."""
+
+
+class Journal:
+    """Rows of a batch on disk as they finish, so that an interrupted batch can resume.
+
+    The first line records the batch (a fingerprint of its scenarios and seeds); each further
+    line is one finished row, written and flushed as its chunk completes, so a Ctrl-C or a
+    crash loses at most the chunks still running. Resuming reads the rows back (a torn last
+    line from a crash is ignored) and refuses a journal written for another batch.
+
+    Parameters
+    ----------
+    path : str or Path
+        The journal file.
+    fingerprint : str
+        What identifies the batch (:func:`run_batch` hashes the resolved scenarios and seeds).
+    resume : bool
+        Continue the journal that is there (default: refuse to replace an existing one).
+    """
+
+    def __init__(self, path: str | Path, fingerprint: str, *, resume: bool = False) -> None:
+        self.path = Path(path)
+        self.done: dict[tuple[int, int], dict[str, Any]] = {}
+        if self.path.exists():
+            if not resume:
+                raise FileExistsError(
+                    f"{self.path} exists (an earlier batch): use --resume to finish it or "
+                    "--force to start again"
+                )
+            self._read(fingerprint)
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.path.write_text(json.dumps({"batch": fingerprint}) + "\n")
+
+    def _read(self, fingerprint: str) -> None:
+        lines = self.path.read_text().splitlines()
+        try:
+            header = json.loads(lines[0]) if lines else {}
+        except json.JSONDecodeError:
+            header = {}
+        if header.get("batch") != fingerprint:
+            raise ConfigError(
+                f"{self.path} was written for another batch (other scenarios or seeds): "
+                "resume with the same arguments, or start again with --force"
+            )
+        for line in lines[1:]:
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:  # the line a crash cut short: that run runs again
+                continue
+            self.done[(int(row["scenario_index"]), int(row["seed"]))] = row
+
+    def append(self, rows: list[dict[str, Any]]) -> None:
+        """Write finished rows and flush them to disk.
+
+        Parameters
+        ----------
+        rows : list of dict
+            Rows with ``scenario_index`` and ``seed``.
+        """
+        with self.path.open("a") as handle:
+            for row in rows:
+                handle.write(json.dumps(row, default=_plain) + "\n")
+            handle.flush()
+        for row in rows:
+            self.done[(int(row["scenario_index"]), int(row["seed"]))] = row
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")
+
+
 def run_batch(
     scenarios: Sequence[Any],
     *,
@@ -145,6 +227,8 @@ def run_batch(
     executor: Executor | None = None,
     chunk_size: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    journal: str | Path | None = None,
+    resume: bool = False,
 ) -> BatchResult:
     """Run every scenario (× every seed) as vectorised chunks and collect the metrics.
 
@@ -163,11 +247,19 @@ def run_batch(
         about four chunks per scenario and at most 256 seeds each).
     progress : callable, optional
         ``progress(done, total)`` (runs) after each completed chunk.
+    journal : str or Path, optional
+        Append every finished row to this JSON-lines file as its chunk finishes
+        (:class:`Journal`): an interrupted batch keeps what it finished.
+    resume : bool
+        With ``journal``: take the rows already there and run only the missing ones.
 
     Returns
     -------
     BatchResult
-        Rows in submission order (scenario-major, then seed).
+        Rows in submission order (scenario-major, then seed), each with ``scenario_index``.
+        A chunk that raises (a run in error) gives rows with ``status`` ``"error"``; the batch
+        goes on. On a Dask cluster a chunk whose worker dies is run again elsewhere by Dask;
+        its rows are kept once (by position).
     """
     import time
 
@@ -182,35 +274,57 @@ def run_batch(
     if not scenarios:
         raise ConfigError("give at least one scenario")
     resolved = [s if isinstance(s, Scenario) else load_scenario(s) for s in scenarios]
-    tasks: list[tuple[dict[str, Any], list[int]]] = []
-    for scenario in resolved:
+    plan: list[tuple[int, dict[str, Any], list[int]]] = []
+    for number, scenario in enumerate(resolved):
         data = scenario.model_dump(mode="json")
         own = list(range(seeds)) if seeds is not None else [scenario.seed]
+        plan.append((number, data, own))
+    book = None
+    if journal is not None:
+        fingerprint = hashlib.sha256(
+            json.dumps([[data, own] for _, data, own in plan], sort_keys=True).encode()
+        ).hexdigest()
+        book = Journal(journal, fingerprint, resume=resume)
+    tasks: list[tuple[int, dict[str, Any], list[int]]] = []
+    for number, data, own in plan:
+        missing = [seed for seed in own if book is None or (number, seed) not in book.done]
         size = chunk_size
         if size is None:
-            size = len(own) if executor is None else min(256, max(1, math.ceil(len(own) / 4)))
-        tasks.extend((data, own[i : i + size]) for i in range(0, len(own), size))
+            quarter = math.ceil(len(missing) / 4)
+            size = len(missing) if executor is None else min(256, quarter)
+        size = max(size, 1)
+        tasks.extend((number, data, missing[i : i + size]) for i in range(0, len(missing), size))
 
-    total = sum(len(chunk) for _, chunk in tasks)
+    total = sum(len(own) for _, _, own in plan)
+    done = total - sum(len(chunk) for _, _, chunk in tasks)
     start = time.perf_counter()
-    results: list[list[dict[str, Any]] | None] = [None] * len(tasks)
-    done = 0
+
+    def finished(number: int, rows: list[dict[str, Any]]) -> None:
+        nonlocal done
+        rows = [{"scenario_index": number, **row} for row in rows]
+        if book is not None:
+            book.append(rows)
+        for row in rows:
+            found[(number, int(row["seed"]))] = row
+        done += len(rows)
+        if progress is not None:
+            progress(done, total)
+
+    found: dict[tuple[int, int], dict[str, Any]] = dict(book.done) if book is not None else {}
     if executor is None:
-        for index, (data, chunk) in enumerate(tasks):
-            results[index] = run_chunk(data, chunk)
-            done += len(chunk)
-            if progress is not None:
-                progress(done, total)
+        for number, data, chunk in tasks:
+            finished(number, run_chunk(data, chunk))
     else:
         futures = {
-            executor.submit(run_chunk, data, chunk): index
-            for index, (data, chunk) in enumerate(tasks)
+            executor.submit(run_chunk, data, chunk): (number, chunk)
+            for number, data, chunk in tasks
         }
         for future in as_completed(futures):
-            index = futures[future]
-            results[index] = future.result()
-            done += len(tasks[index][1])
-            if progress is not None:
-                progress(done, total)
-    rows = [row for chunk in results if chunk is not None for row in chunk]
-    return BatchResult(rows=rows, wall_time_s=time.perf_counter() - start)
+            number, chunk = futures[future]
+            try:
+                rows = future.result()
+            except Exception as error:  # the worker gave up (killed too often, broken pool)
+                rows = _error_rows(resolved[number].name, chunk, error)
+            finished(number, rows)
+    ordered = [found[(number, seed)] for number, _, own in plan for seed in own]
+    return BatchResult(rows=ordered, wall_time_s=time.perf_counter() - start)

@@ -803,13 +803,13 @@ def _plan(grid, robot: Robot, scenario: Scenario, start, goals):
         stats["expanded_nodes"] += leg.stats.expanded_nodes
         stats["compile_time_s"] += leg.stats.compile_time_s
         if not leg.success:
-            stats.update(success=False, message=leg.stats.message or "no path found")
+            stats.update(planning_success=False, message=leg.stats.message or "no path found")
             return None, stats
         legs.append(leg)
         leg_start = goal
     plan = legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
     stats.update(
-        success=True,
+        planning_success=True,
         path_length_m=float(sum(leg.length for leg in legs)),
         cusps=int(sum(leg.cusps for leg in legs)),
         turning_radius_m=radius,

@@ -179,23 +179,36 @@ def register(app: typer.Typer) -> None:
         scheduler: str = typer.Option(
             None, help="Dask scheduler address (needs the 'dask' extra): run on that cluster."
         ),
-        out: Path = typer.Option(Path("wheelbase-batch"), help="Folder for batch.csv/json."),
+        out: Path = typer.Option(
+            Path("wheelbase-batch"), help="Folder for rows.jsonl (as runs finish), batch.csv/json."
+        ),
         force: bool = typer.Option(False, help="Overwrite an existing batch table."),
+        resume: bool = typer.Option(
+            False, help="Finish the batch in --out: run only the seeds missing from rows.jsonl."
+        ),
     ) -> None:
         """Run many scenarios (or one over many seeds) as vectorised batches; write one table.
 
         The seeds of a scenario run in lockstep in one process; --workers N splits them into
-        chunks over N local processes, --scheduler over a Dask cluster.
+        chunks over N local processes, --scheduler over a Dask cluster. Every finished chunk's
+        rows go to OUT/rows.jsonl at once: after a Ctrl-C or a crash, --resume runs the rest.
         """
         from concurrent.futures import ProcessPoolExecutor
 
-        from wheelbase.batch import run_batch
+        from wheelbase.batch import JOURNAL, run_batch
 
         if workers < 1:
             raise WheelbaseError(f"--workers must be >= 1 (got {workers})")
-        for name in ("batch.csv", "batch.json"):
-            if (out / name).exists() and not force:
-                raise FileExistsError(f"{out / name} exists; use --force to overwrite")
+        if resume and force:
+            raise WheelbaseError("--resume finishes the batch in --out; --force starts it again")
+        for name in ("batch.csv", "batch.json", JOURNAL):
+            if (out / name).exists() and not (force or resume):
+                raise FileExistsError(
+                    f"{out / name} exists; use --resume to finish that batch or --force to "
+                    "start again"
+                )
+        if force and (out / JOURNAL).exists():
+            (out / JOURNAL).unlink()
         console = Console()
         executor = None
         client = None
@@ -219,13 +232,15 @@ def register(app: typer.Typer) -> None:
                     executor=executor,
                     chunk_size=chunk_size,
                     progress=lambda done, total: bar.update(task, completed=done, total=total),
+                    journal=out / JOURNAL,
+                    resume=resume,
                 )
         finally:
             if client is not None:
                 client.close()
             elif executor is not None:
                 executor.shutdown()
-        result.write(out, force=force)
+        result.write(out, force=force or resume)
         summary = result.summary()
         table = Table(title=f"{len(result.rows)} runs in {result.wall_time_s:.1f} s "
                       f"({result.runs_per_second:.2f} runs/s)")  # fmt: skip
