@@ -152,6 +152,9 @@ class EngineState:
     plant : object or None
         What a plant keeps between steps besides pose and twist (a drive train's motor
         currents and speed-loop integrals), from ``plant.start``.
+    estimator : object or None
+        What an estimator keeps besides the estimate (a covariance, particles), from
+        ``estimator.start``.
     """
 
     step: int
@@ -167,6 +170,7 @@ class EngineState:
     controllers: list = field(default_factory=list)
     encoders: EncoderReadings | None = None
     plant: Any = None
+    estimator: Any = None
 
     @property
     def running(self) -> np.ndarray:
@@ -329,6 +333,7 @@ class Engine:
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
+            estimator=self.estimator.start(start, seeds),
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -449,10 +454,13 @@ class Engine:
             else:
                 delta = None
             pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
-            est, est_twist = self.estimator.update(
-                state.estimate[moving], delta, self.dt, new_pose, new_twist
-            )
+            est, est_twist, estimator_state = self.estimator.update(
+                state.estimate[moving], delta, self.dt, new_pose, new_twist,
+                state=state.estimator, index=moving,
+            )  # fmt: skip
             estimate[moving], estimated_twist[moving] = est, est_twist
+        else:
+            estimator_state = state.estimator
         new_state = EngineState(
             step=state.step + 1,
             pose=pose,
@@ -467,6 +475,7 @@ class Engine:
             controllers=state.controllers,
             encoders=state.encoders,
             plant=plant_state,
+            estimator=estimator_state,
         )
         return new_state, row
 

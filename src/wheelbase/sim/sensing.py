@@ -4,6 +4,11 @@ The engine reads the encoders after each plant step (the wheel angles went from 
 ``after``) and hands the tick differences to the estimator, whose estimate the controller sees
 at the next step. :class:`PerfectState` hands the controller the true state instead.
 
+An estimator has ``encoder`` (the encoders it reads, or None), ``start(poses, seeds)`` (what it
+keeps besides the estimate: a covariance, particles; None here) and ``update(estimate, ticks,
+dt, pose, twist, state=..., index=...)`` returning the new estimate ``(M, 3)``, the estimated
+twist ``(M, 3)`` and its new state, for the robots ``index`` still running.
+
 Random encoder errors are drawn from one generator per robot, seeded by that robot's seed, so
 a robot's run does not depend on which batch it ran in: robot ``i`` of a batch equals the
 single run with seed ``seeds[i]``. Gaussian tick noise is drawn in blocks of steps (one call
@@ -83,7 +88,19 @@ class PerfectState:
 
     encoder: ClassVar[None] = None
 
-    def update(self, estimate: np.ndarray, ticks: np.ndarray, dt: float, pose, twist):
+    def start(self, poses: np.ndarray, seeds: np.ndarray) -> None:
+        """Nothing to keep besides the estimate.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray, shape (N, 3)
+            Start poses.
+        seeds : numpy.ndarray
+            The robots' seeds.
+        """
+        return None
+
+    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None):
         """The true pose and twist.
 
         Parameters
@@ -96,8 +113,10 @@ class PerfectState:
             Step [s] (unused).
         pose, twist : numpy.ndarray, shape (N, 3)
             The true pose and body twist.
+        state, index : optional
+            What the estimator keeps, and which robots these are (unused).
         """
-        return pose.copy(), twist.copy()
+        return pose.copy(), twist.copy(), state
 
 
 @dataclass(frozen=True)
@@ -125,7 +144,19 @@ class EncoderOdometry:
                 f"odometry must be a WheelOdometry (got {type(self.odometry).__name__})"
             )
 
-    def update(self, estimate: np.ndarray, ticks: np.ndarray, dt: float, pose, twist):
+    def start(self, poses: np.ndarray, seeds: np.ndarray) -> None:
+        """Nothing to keep besides the estimate.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray, shape (N, 3)
+            Start poses.
+        seeds : numpy.ndarray
+            The robots' seeds.
+        """
+        return None
+
+    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None):
         """Dead-reckon the estimate over one step, and the twist it implies.
 
         Parameters
@@ -138,6 +169,8 @@ class EncoderOdometry:
             Step [s].
         pose, twist : numpy.ndarray, shape (N, 3)
             The truth (unused: odometry only sees ticks).
+        state, index : optional
+            What the estimator keeps, and which robots these are (unused).
         """
         from wheelbase.odometry.dead_reckoning import pose_increment
 
@@ -145,4 +178,4 @@ class EncoderOdometry:
         new = estimate.copy()
         new[:, :2] += pose_increment(estimate[:, 2], distance, rotation, self.odometry.method)
         new[:, 2] = wrap_angle(estimate[:, 2] + rotation)
-        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
+        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1), state
