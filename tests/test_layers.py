@@ -1,0 +1,62 @@
+"""Imports run one way (README, "What is inside"): a module never imports a higher layer."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "wheelbase"
+
+# bottom to top; a module may import its own layer and the layers below it
+LAYERS = (
+    {"errors", "_validate", "_io", "_lazy", "_jax", "geometry", "polyline", "limits", "plot"},
+    {"models", "planning"},
+    {"integrate", "integrate_numba", "integrate_jax", "dynamics", "trajectory", "timing", "motor"},
+    {"sensors", "odometry"},
+    {"control", "localization"},
+    {"sim"},
+    {"runner", "batch", "scenario", "report", "dynamics_plot", "mcap_export"},
+    {"gym"},
+    {"cli", "commands", "__main__"},
+)
+LEVEL = {name: level for level, names in enumerate(LAYERS) for name in names}
+
+
+def top_module(path: Path) -> str:
+    part = path.relative_to(SRC).parts[0]
+    return part[:-3] if part.endswith(".py") else part
+
+
+MODULES = sorted(
+    path for path in SRC.rglob("*.py")
+    if path.relative_to(SRC).parts[0] not in ("__init__.py", "data")
+)  # fmt: skip
+
+
+def test_every_module_has_a_layer():
+    assert {top_module(path) for path in MODULES} <= set(LEVEL)
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(SRC)))
+def test_imports_run_one_way(path):
+    own = top_module(path)
+    for node in ast.walk(ast.parse(path.read_text())):
+        if (
+            isinstance(node, ast.ImportFrom)
+            and node.module
+            and node.module.startswith("wheelbase.")
+        ):
+            target = node.module.split(".")[1]
+            assert LEVEL[target] <= LEVEL[own], (
+                f"{path.relative_to(SRC)} (layer {LEVEL[own]}) imports wheelbase.{target} "
+                f"(layer {LEVEL[target]}) at line {node.lineno}"
+            )
+
+
+def test_the_library_never_imports_the_benchmark_harness():
+    for path in MODULES:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                names = [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+                names += [alias.name for alias in getattr(node, "names", [])]
+                assert not any(name.split(".")[0] == "control_cases" for name in names), path
