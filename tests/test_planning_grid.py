@@ -309,6 +309,13 @@ def test_lattice_collisions_is_a_subset_of_the_exact_check():
         grid.lattice_collisions(robot, poses, 0.0)
 
 
+def test_footprint_beyond_1e10_m_is_refused():
+    # 1e300 m overflowed the area check (found by the fuzz suite's explore run: wheelbase plan
+    # --footprint 1e300 1e300)
+    with pytest.raises(ConfigError, match=r"within ±1e\+10 m of the reference point"):
+        Footprint.rectangle(1e300, 1e300)
+
+
 def test_with_origin_moves_the_cells_and_shares_the_derived_maps():
     occ = np.zeros((20, 30), bool)
     occ[5:8, 10:12] = True

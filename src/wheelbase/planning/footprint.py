@@ -14,6 +14,7 @@ import numpy as np
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_COORDINATE
 
 __all__ = ["Footprint"]
 
@@ -44,6 +45,12 @@ class Footprint:
         poly = as_float_array("polygon", self.polygon, 2, min_ndim=2, max_ndim=2)
         if len(poly) < 3:
             raise ConfigError(f"polygon needs >= 3 vertices (got {len(poly)})")
+        reach = float(np.max(np.abs(poly)))
+        if reach > MAX_COORDINATE:
+            raise ConfigError(
+                f"polygon vertices must be within ±{MAX_COORDINATE:g} m of the reference point "
+                f"(got one {reach:.3g} m away)"
+            )
         area2 = np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1])
         if abs(area2) < 1e-12:
             raise ConfigError("polygon must have a non-zero area")
