@@ -264,6 +264,7 @@ def test_batch_shape_and_one_robot_only():
             {"samples": 10**6, "horizon_steps": 200},
             r"samples × horizon_steps = 2e\+08: more than max_sample_steps = 100000000",
         ),
+        ({"dt": 1.56e154}, r"the horizon reaches 1.56e\+155 m .* more than 1e\+10 m"),
         (
             {"footprint": Footprint.rectangle(1e9, 1.0)},
             r"footprint .* needs 1.2e\+10 outline disks .* more than 100000",

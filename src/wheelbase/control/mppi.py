@@ -71,7 +71,7 @@ from wheelbase.control.path import _as_polyline, path_key, same_path
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
-from wheelbase.limits import MAX_SAMPLE_STEPS
+from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
 
 __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
@@ -280,7 +280,13 @@ class MPPI:
         self._set_map(grid, footprint)
         if self.backend == "jax":
             import_jax()
-        ahead = 1.2 * self.horizon_steps * self.dt * float(self._hi[0]) + 2.0 * self.path_spacing
+        reach = self.horizon_steps * self.dt * float(self._hi[0])
+        if reach > MAX_COORDINATE:
+            raise ConfigError(
+                f"the horizon reaches {reach:.3g} m (horizon_steps × dt × max_speed): more than "
+                f"{MAX_COORDINATE:g} m, beyond which the rollouts' costs overflow; use a smaller dt"
+            )
+        ahead = 1.2 * reach + 2.0 * self.path_spacing
         # points of the path window: the reach of the horizon, cut to the path (see _path_tables)
         self._reach_points = math.ceil(min(ahead / self.path_spacing, 1e12)) + 1
         self._window_points = self._reach_points
