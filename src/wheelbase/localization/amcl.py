@@ -98,7 +98,7 @@ BEAM_COMBINATIONS: tuple[str, ...] = ("product", "cubes")
 """How the likelihood field combines beams: the book's Π p or Nav2's 1 + Σ p³."""
 GLOBAL_LOCALIZATION: dict[str, object] = {
     "sensor_model": "beam",
-    "max_particles": 5000,
+    "max_particles": 20000,
     "min_ess": 0.3,
     "z_hit": 0.9,
     "z_short": 0.05,
@@ -108,8 +108,13 @@ GLOBAL_LOCALIZATION: dict[str, object] = {
     "recovery_alpha_fast": 0.1,
 }
 """Options of :class:`AMCL` for global localisation and the kidnapped robot (module
-docstring), as the tests and ``benchmarks/sensors.py`` use them: ``AMCL(grid=..., lidar=...,
-**GLOBAL_LOCALIZATION)``."""
+docstring): ``AMCL(grid=..., lidar=..., **GLOBAL_LOCALIZATION)``. On the maze with a 30 m,
+360-beam lidar, 18 of 20 wandering robots were within 0.2 m for good within 10 m of travel
+(``benchmarks/sensors.py``; 11 of 20 with 5,000 particles, 17 of 20 with 30,000). The two
+others settled on the maze's near twin, the map turned by a half turn (it differs only by
+four short stubs and 0.3 m offsets): their scans fit that pose far worse than the true one
+(by 0.6 nats a beam), but the recovery's long-term average w_slow started during the spread-out
+first updates, so it never expected better and nothing was injected."""
 
 
 @dataclass(frozen=True)
