@@ -167,7 +167,7 @@ def _heuristic(r, c, gr, gc, connectivity):
     return float(max(dr, dc)) + (_SQRT2 - 1.0) * float(min(dr, dc))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _can_move(occ, r, c, k, rows, cols, cut_corners=False):
     dr = _DR[k]
     dc = _DC[k]

@@ -122,6 +122,32 @@ def _world_tuple(
     )
 
 
+@numba.njit(cache=True, inline="always")
+def _circles_clearance(dist, res, x0, y0, circles, radius, x, y, th):
+    """A lower bound [m] on how far every covering circle at pose ``(x, y, th)`` stays from
+    the obstacles and the map's edge: positive means the footprint is clear, and clear still
+    after any motion that moves no circle centre that far. The distance field ``dist`` (of
+    a raster with cells ``res`` from ``(x0, y0)``) at the cell of a centre less √2·res (the
+    farthest a point lies from its cell's centre, and the cell centre from the nearest
+    obstacle point) bounds the centre's distance to the obstacles; -1 when a centre is off
+    the map. (Arrays and scalars, not the world tuple: taking arrays out of a tuple costs
+    atomic reference counts, a third of the search's time when done per sample.)"""
+    rows, cols = dist.shape
+    slack = math.sqrt(2.0) * res
+    c, s = math.cos(th), math.sin(th)
+    best = np.inf
+    for k in range(circles.shape[0]):
+        cx = x + c * circles[k, 0] - s * circles[k, 1]
+        cy = y + s * circles[k, 0] + c * circles[k, 1]
+        i = math.floor((cy - y0) / res)
+        j = math.floor((cx - x0) / res)
+        if i < 0 or i >= rows or j < 0 or j >= cols:
+            return -1.0
+        edge = min(cx - x0, x0 + cols * res - cx, cy - y0, y0 + rows * res - cy)
+        best = min(best, dist[i, j] - slack - radius, edge - radius)
+    return best
+
+
 @numba.njit(cache=True)
 def _collides_one(world, poly, circles, radius, x, y, th):
     occ = world[_OCC]
@@ -129,6 +155,8 @@ def _collides_one(world, poly, circles, radius, x, y, th):
     res = world[_RES]
     x0 = world[_X0]
     y0 = world[_Y0]
+    if _circles_clearance(dist, res, x0, y0, circles, radius, x, y, th) > 0.0:
+        return False  # the circles cover the footprint and are all clear (fast path)
     has_cells = world[_HAS_CELLS]
     rows, cols = occ.shape
     wp = _world_polygon(poly, x, y, th)

@@ -13,12 +13,22 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
   penalty, here 2 m);
-* heuristic: max(Reeds–Shepp length — Dubins without reverse, Euclidean distance for turning in
-  place — ignoring obstacles, Dijkstra distance from the goal on the grid inflated by the
-  footprint's inscribed radius, obstacles included);
+* heuristic (admissible: see :meth:`HybridAStar._holonomic_heuristic`): max(Reeds–Shepp
+  length — Dubins without reverse, Euclidean distance for turning in place — ignoring
+  obstacles, a lower bound on the distance around the obstacles for the reference point)
+  plus the least cost of turning to the goal's heading (``turn_in_place_cost`` per radian, or
+  for a car ``(non_straight_penalty − 1)·R`` per radian: it drives at least R metres of arc
+  per radian turned). The curve length costs microseconds, so a child is queued on the cheap
+  part alone and gets the curve length when it first reaches the top of the queue; it is
+  skipped altogether where the obstacle distance exceeds the straight-line distance by πR,
+  which no Reeds–Shepp curve does;
 * analytic expansion: a Reeds–Shepp (Dubins, rotate–straight–rotate) shot to the goal tried
   every ``⌊h / (analytic_expansion_ratio · xy_resolution)⌋`` expansions (every expansion near
   the goal) and accepted when collision-free.
+
+Motions are checked by conservative advancement: at a checked sample, the distance field
+bounds how far every covering circle may move and stay clear, and the samples within that
+reach are skipped (they are clear); only samples near an obstacle reach the exact test.
 
 Collision checking is continuous, not only at samples: every motion is sampled at spacing
 ``collision_step`` and checked with the footprint grown by the largest distance any footprint
@@ -35,7 +45,6 @@ robots (use ``rear_axle_to_center``), the wheel-axle centre for differential dri
 
 from __future__ import annotations
 
-import heapq
 import math
 import time
 from dataclasses import dataclass
@@ -49,7 +58,7 @@ from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_STATE_BINS
 from wheelbase.planning.astar import _dijkstra_kernel
-from wheelbase.planning.collision import _collides_one
+from wheelbase.planning.collision import _circles_clearance, _collides_one
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
 from wheelbase.planning.dubins import _dubins_all
 from wheelbase.planning.footprint import Footprint
@@ -155,8 +164,10 @@ class HybridAStar:
         the forward and reverse costs swapped and returns that path driven backwards: the same
         cost, but the search starts where the space is tight, e.g. inside a parking slot,
         where a few short moves decide everything and the curve shots to the open end succeed
-        early. ``"auto"`` (default) picks the end whose footprint has less clearance, when
-        reversing is allowed and both goal tolerances are 0; otherwise the start.
+        early. ``"auto"`` (default) picks the end whose footprint has less clearance, for a
+        car-like robot (``turning_radius > 0``) when reversing is allowed and both goal
+        tolerances are 0; otherwise the start (a robot that turns in place leaves any end
+        as easily: on the bundled maze, searching from the goal expanded 5× more states).
 
     Notes
     -----
@@ -293,6 +304,14 @@ class HybridAStar:
         if self.turning_radius == 0.0:
             self.collision_margin = 0.5 * self.collision_step * 1.0
         self._checked = fp.inflated(self.collision_margin)
+        # least cost [m/rad] of changing the heading, for the heuristic: a turn in place costs
+        # turn_in_place_cost per radian; a car turns along arcs of |κ| <= 1/R, so it drives at
+        # least R metres of arc per radian, each dearer by (non_straight_penalty − 1)
+        self._turn_cost = (
+            self.turn_in_place_cost
+            if self.turning_radius == 0.0
+            else (self.non_straight_penalty - 1.0) * self.turning_radius
+        )
         self._prims = self._build_primitives()
         self._prims_swapped = self._build_primitives(swap_directions=True) if self.reverse else None
         # The search works in the grid's own frame (origin (0, 0)): 4.5e9 m from the world
@@ -449,7 +468,7 @@ class HybridAStar:
             self.yaw_goal_tolerance,
             self.max_iterations,
             self.time_limit,
-            self.turn_in_place_cost,
+            self._turn_cost,
         )
         status, goal_node, xs, ys, ths, parents, prim_of, expanded, shot_types, shot_lengths = out
         planning_time = time.perf_counter() - t0
@@ -498,8 +517,12 @@ class HybridAStar:
 
         So each Dijkstra distance ``D`` obeys ``D − 2√2·hres <= L`` for every feasible path of
         length ``L``, and every motion costs at least its length: the maximum of the three is
-        admissible and A* with ``heuristic_weight=1`` returns least-cost paths on its lattice.
-        A weight above 1 gives this up on purpose, for speed.
+        admissible. The search adds a heading term that stays admissible: a path that turns
+        the heading by ``Δθ`` (wrapped) turns at least ``|Δθ|`` in all; a car does so on arcs
+        of curvature at most 1/R, at least ``R·|Δθ|`` metres of them, each costing
+        ``non_straight_penalty − 1`` more than its length; a differential drive pays
+        ``turn_in_place_cost`` per radian. So A* with ``heuristic_weight=1`` returns
+        least-cost paths on its lattice; a weight above 1 gives this up on purpose, for speed.
         """
         blocked = self._heuristic_blocked
         rows, cols = blocked.shape
@@ -523,7 +546,12 @@ class HybridAStar:
     def _search_backwards(self, start: np.ndarray, goal: np.ndarray) -> bool:
         if self.search_from != "auto":
             return self.search_from == "goal"
-        if not self.reverse or self.xy_goal_tolerance > 0 or self.yaw_goal_tolerance > 0:
+        if (
+            not self.reverse
+            or self.turning_radius == 0.0  # turns in place: no end is tighter to leave
+            or self.xy_goal_tolerance > 0
+            or self.yaw_goal_tolerance > 0
+        ):
             return False
         clear = self._local.footprint_clearance(self.footprint, np.stack([start, goal]))
         return bool(clear[1] < clear[0])
@@ -673,9 +701,12 @@ def _now():
     return t
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _wrap(a):
-    return math.atan2(math.sin(a), math.cos(a))
+    """``a`` wrapped to (−π, π] [rad], by arithmetic (no trigonometric calls)."""
+    if -math.pi < a <= math.pi:
+        return a
+    return a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))
 
 
 @numba.njit(cache=True)
@@ -743,6 +774,18 @@ def _shot_word(x, y, th, gx, gy, gth, mode, radius, families, reverse_ok):
     return True, types, lengths
 
 
+@numba.njit(cache=True, inline="always")
+def _next_sample(k, clear, per):
+    """The first sample after ``k`` that the clearance ``clear`` [m] at sample ``k`` does not
+    vouch for, when no covering circle moves more than ``per`` [m] from one sample to the
+    next (conservative advancement: the samples in between are clear)."""
+    if clear <= 0.0:
+        return k + 1
+    if per <= 0.0:
+        return 1 << 62
+    return k + max(1, math.ceil(min(clear / per, 1.0e15)))
+
+
 @numba.njit(cache=True)
 def _shot_free(
     x,
@@ -765,15 +808,48 @@ def _shot_free(
         kind = types[i]
         span = abs(ell) * rho if kind == _ROTATE else abs(ell)
         n = max(1, math.ceil(span / step))
-        for k in range(1, n + 1):
+        # the most any covering circle (within rho of the reference point) moves per sample
+        per = (
+            span / n
+            if kind == _ROTATE
+            else abs(ell) / n * (1.0 + (rho / radius if kind != 0 else 0.0))
+        )
+        dist, res, x0, y0 = world[2], world[3], world[4], world[5]
+        k = _next_sample(0, _circles_clearance(dist, res, x0, y0, circles, cradius, x, y, th), per)
+        while k <= n:
             px, py, pth = _advance(x, y, th, kind, ell * k / n, radius)
-            if _collides_one(world, poly, circles, cradius, px, py, pth):
+            clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
+            if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth):
                 return False
+            k = _next_sample(k, clear, per)
         x, y, th = _advance(x, y, th, kind, ell, radius)
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def _motion_free(
+    world, dist, res, x0, y0, poly, circles, cradius, x, y, th, offsets, p, ns, sweep, clear0
+):
+    """Whether the samples ``offsets[p, :ns]`` of primitive ``p`` from pose ``(x, y, th)`` are
+    free; ``sweep`` bounds how far a covering circle moves along the whole primitive and
+    ``clear0`` is the clearance of the circles at the pose (see :func:`_circles_clearance`;
+    ``dist``, ``res``, ``x0``, ``y0`` are the world's distance field and raster geometry)."""
+    c = math.cos(th)
+    s = math.sin(th)
+    per = sweep / ns
+    k = _next_sample(-1, clear0, per)
+    while k < ns:
+        px = x + c * offsets[p, k, 0] - s * offsets[p, k, 1]
+        py = y + s * offsets[p, k, 0] + c * offsets[p, k, 1]
+        pth = th + offsets[p, k, 2]
+        clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
+        if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth):
+            return False
+        k = _next_sample(k, clear, per)
+    return True
+
+
+@numba.njit(cache=True, inline="always")
 def _bin(x, y, th, x0, y0, xy_res, nx, ny, nh):
     ix = math.floor((x - x0) / xy_res)
     iy = math.floor((y - y0) / xy_res)
@@ -783,26 +859,101 @@ def _bin(x, y, th, x0, y0, xy_res, nx, ny, nh):
     return (iy * nx + ix) * nh + ih
 
 
+@numba.njit(cache=True, inline="always")
+def _cheap_heuristic(x, y, th, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost):
+    """A lower bound on :func:`_heuristic` without the curve length (a table look-up): the
+    holonomic cost-to-go or the straight-line distance, plus the least cost of turning to the
+    goal's heading (for turning in place, this is the whole heuristic)."""
+    j = math.floor((x - x0) / hres)
+    i = math.floor((y - y0) / hres)
+    if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
+        return np.inf
+    return max(math.hypot(gx - x, gy - y), hgrid[i, j]) + turn_cost * abs(_wrap(gth - th))
+
+
 @numba.njit(cache=True)
 def _heuristic(x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost):
+    """Admissible cost-to-go: max(curve length without obstacles, holonomic cost-to-go with
+    them) + ``turn_cost`` × |heading change| (see :meth:`HybridAStar._holonomic_heuristic`)."""
     j = math.floor((x - x0) / hres)
     i = math.floor((y - y0) / hres)
     if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
         return np.inf
     h2 = hgrid[i, j]
+    turn = turn_cost * abs(_wrap(gth - th))
+    d = math.hypot(gx - x, gy - y)
+    if mode == _MODE_POINT or (mode == _MODE_RS and h2 >= d + math.pi * radius):
+        # turning in place: the Euclidean distance is the curve length. Reeds–Shepp: turning
+        # to face the goal (or away), a straight line and turning to the goal's heading is a
+        # path of at most d + πR (each turn in place costs |angle|·R, e.g. by L+R−L+, and
+        # the two turns add up to at most π for one of the two driving directions): the
+        # curve length cannot exceed h2, and its microseconds are saved
+        return max(d, h2) + turn
     if mode == _MODE_RS:
         nx, ny, nphi = _normalise(x, y, th, gx, gy, gth, radius)
         h1 = _min_length(nx, ny, nphi, families) * radius
-    elif mode == _MODE_DUBINS:
+    else:
         segs = _dubins_all(x, y, th, gx, gy, gth, radius)
         h1 = np.inf
         for w in range(6):
             if not np.isnan(segs[w, 0]):
                 h1 = min(h1, (segs[w, 0] + segs[w, 1] + segs[w, 2]) * radius)
-    else:
-        # turning in place: travel >= both bounds, and the heading must still turn to the goal's
-        return max(math.hypot(gx - x, gy - y), h2) + turn_cost * abs(_wrap(gth - th))
-    return max(h1, h2)
+    return max(h1, h2) + turn
+
+
+@numba.njit(cache=True, inline="always")
+def _before(ka, ia, kb, ib):
+    """Tuple order of (key, node) entries."""
+    return ka < kb or (ka == kb and ia < ib)
+
+
+@numba.njit(cache=True, inline="always")
+def _heap_push(keys, ids, size, key, item):
+    """Push onto the binary heap ``keys[:size]``/``ids[:size]`` (room for one more is the
+    caller's job); returns the new size."""
+    i = size
+    while i > 0:
+        parent = (i - 1) >> 1
+        if not _before(key, item, keys[parent], ids[parent]):
+            break
+        keys[i] = keys[parent]
+        ids[i] = ids[parent]
+        i = parent
+    keys[i] = key
+    ids[i] = item
+    return size + 1
+
+
+@numba.njit(cache=True, inline="always")
+def _heap_pop(keys, ids, size):
+    """Pop the least entry of a non-empty heap: ``(key, node, new size)``."""
+    key, item = keys[0], ids[0]
+    size -= 1
+    if size > 0:
+        lk, li = keys[size], ids[size]
+        i = 0
+        while True:
+            c = 2 * i + 1
+            if c >= size:
+                break
+            if c + 1 < size and _before(keys[c + 1], ids[c + 1], keys[c], ids[c]):
+                c += 1
+            if not _before(keys[c], ids[c], lk, li):
+                break
+            keys[i] = keys[c]
+            ids[i] = ids[c]
+            i = c
+        keys[i] = lk
+        ids[i] = li
+    return key, item, size
+
+
+@numba.njit(cache=True)
+def _grown(a, n, capacity):
+    """A copy of ``a[:n]`` in a new array of ``capacity`` entries."""
+    out = np.empty(capacity, dtype=a.dtype)
+    out[:n] = a[:n]
+    return out
 
 
 @numba.njit(cache=True)
@@ -841,7 +992,6 @@ def _search(
     turn_cost,
 ):
     t_start = _now()
-    occ = world[0]
     dist = world[2]
     res = world[3]
     x0 = world[4]
@@ -854,6 +1004,10 @@ def _search(
     parents = np.empty(capacity, dtype=np.int64)
     prim_of = np.empty(capacity, dtype=np.int64)
     last_dir = np.empty(capacity, dtype=np.int64)
+    # whether a node's queue key holds the full heuristic or only the cheap bound: the curve
+    # length (microseconds) is computed when a node first reaches the top of the queue, so
+    # children that are never expanded never pay for it (the key only grows: still A*)
+    exact_h = np.empty(capacity, dtype=np.bool_)
     nbins = nx * ny * nh
     best_g = np.full(nbins, np.inf)
     closed = np.zeros(nbins, dtype=np.bool_)
@@ -867,6 +1021,7 @@ def _search(
     parents[0] = -1
     prim_of[0] = -1
     last_dir[0] = 0
+    exact_h[0] = True
     n_nodes = 1
     b0 = _bin(start[0], start[1], start[2], x0, y0, xy_res, nx, ny, nh)
     best_g[b0] = 0.0
@@ -886,7 +1041,13 @@ def _search(
         y0,
         turn_cost,
     )
-    heap = [(hweight * h0, 0)]
+    # the open list: a binary heap of (key, node) in two arrays (numba's heapq on a list costs
+    # atomic reference counts at every push and pop, a quarter of the search's time); the
+    # order is that of the tuples, so the search is the same
+    hcap = 2 * capacity
+    hkeys = np.empty(hcap)
+    hids = np.empty(hcap, dtype=np.int64)
+    hsize = _heap_push(hkeys, hids, 0, hweight * h0, 0)
     expanded = 0
     since_shot = 1 << 30
     status = 1
@@ -894,153 +1055,145 @@ def _search(
     shot_types = np.zeros(5, dtype=np.int64)
     shot_lengths = np.zeros(5)
     n_prims = pdir.shape[0]
-    slack = math.sqrt(2.0) * res
 
-    while len(heap) > 0:
-        f, node = heapq.heappop(heap)
-        x, y, th, g = xs[node], ys[node], ths[node], gs[node]
-        b = _bin(x, y, th, x0, y0, xy_res, nx, ny, nh)
-        if closed[b] or g > best_g[b] + 1e-9:
-            continue
-        closed[b] = True
-        expanded += 1
-        if expanded > max_iter:
-            status = 2
-            break
-        if (expanded & 255) == 0 and _now() - t_start > time_limit:
-            status = 3
-            break
-        # goal tolerance
-        if (
-            xy_tol > 0.0
-            and math.hypot(x - gx, y - gy) <= xy_tol
-            and abs(_wrap(th - gth)) <= yaw_tol
-        ):
-            status = 0
-            goal_node = node
-            break
-        # analytic expansion
-        h = (f - g) / hweight
-        since_shot += 1
-        # An infinite heuristic (no free way to the goal even for a point) means no shot can
-        # succeed either: none is tried, and int() never sees inf (undefined when compiled).
-        shots = h < _FINITE
-        interval = int(min(max(h, 0.0) / (ratio * xy_res), 1.0e18)) if shots else 0
-        if shots and since_shot >= interval:
-            since_shot = 0
-            ok, types, lengths = _shot_word(
-                x, y, th, gx, gy, gth, mode, radius, families, reverse_ok
-            )
-            if ok and _shot_free(
-                x,
-                y,
-                th,
-                types,
-                lengths,
-                radius,
-                step,
-                rho,
-                world,
-                poly,
-                circles,
-                cradius,
+    # The node arrays grow in the outer loop only: reassigning them inside the search loop
+    # makes Numba reference-count all eight at every accepted child (a third of the time).
+    while True:
+        grow = False
+        if n_nodes + n_prims > capacity:
+            capacity *= 2
+            xs = _grown(xs, n_nodes, capacity)
+            ys = _grown(ys, n_nodes, capacity)
+            ths = _grown(ths, n_nodes, capacity)
+            gs = _grown(gs, n_nodes, capacity)
+            parents = _grown(parents, n_nodes, capacity)
+            prim_of = _grown(prim_of, n_nodes, capacity)
+            last_dir = _grown(last_dir, n_nodes, capacity)
+            exact_h = _grown(exact_h, n_nodes, capacity)
+        if hsize + n_prims + 1 > hcap:
+            hcap *= 2
+            hkeys = _grown(hkeys, hsize, hcap)
+            hids = _grown(hids, hsize, hcap)
+        while hsize > 0:
+            if n_nodes + n_prims > capacity or hsize + n_prims + 1 > hcap:
+                grow = True  # room for every child of the next node: grow outside this loop
+                break
+            f, node, hsize = _heap_pop(hkeys, hids, hsize)
+            x, y, th, g = xs[node], ys[node], ths[node], gs[node]
+            b = _bin(x, y, th, x0, y0, xy_res, nx, ny, nh)
+            if closed[b] or g > best_g[b] + 1e-9:
+                continue
+            if not exact_h[node]:
+                exact_h[node] = True
+                hfull = _heuristic(
+                    x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost
+                )
+                if not hfull < _FINITE:
+                    continue
+                if g + hweight * hfull > f:
+                    hsize = _heap_push(hkeys, hids, hsize, g + hweight * hfull, node)
+                    continue
+            closed[b] = True
+            expanded += 1
+            if expanded > max_iter:
+                status = 2
+                break
+            if (expanded & 255) == 0 and _now() - t_start > time_limit:
+                status = 3
+                break
+            # goal tolerance
+            if (
+                xy_tol > 0.0
+                and math.hypot(x - gx, y - gy) <= xy_tol
+                and abs(_wrap(th - gth)) <= yaw_tol
             ):
                 status = 0
                 goal_node = node
-                shot_types = types
-                shot_lengths = lengths
                 break
-        c = math.cos(th)
-        s = math.sin(th)
-        parent_prim = prim_of[node]
-        # lower bound on how far every covering circle may move and stay clear
-        free_sweep = np.inf
-        for k in range(circles.shape[0]):
-            cx = x + c * circles[k, 0] - s * circles[k, 1]
-            cy = y + s * circles[k, 0] + c * circles[k, 1]
-            ci = math.floor((cy - y0) / res)
-            cj = math.floor((cx - x0) / res)
-            if ci < 0 or ci >= occ.shape[0] or cj < 0 or cj >= occ.shape[1]:
-                free_sweep = -1.0
-                break
-            edge = min(cx - x0, x0 + occ.shape[1] * res - cx, cy - y0, y0 + occ.shape[0] * res - cy)
-            free_sweep = min(free_sweep, dist[ci, cj] - slack - cradius, edge - cradius)
-        for p in range(n_prims):
-            ns = nsamples[p]
-            ox = offsets[p, ns - 1, 0]
-            oy = offsets[p, ns - 1, 1]
-            nxp = x + c * ox - s * oy
-            nyp = y + s * ox + c * oy
-            nth = _wrap(th + offsets[p, ns - 1, 2])
-            nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-            if nb < 0 or closed[nb]:
-                continue
-            cost = pcost[p]
-            d = pdir[p]
-            ld = last_dir[node]
-            if d != 0 and ld != 0 and d != ld:
-                cost += switch_penalty
-            if (
-                parent_prim >= 0
-                and pdir[p] != 0
-                and pdir[parent_prim] != 0
-                and pkappa[p] != pkappa[parent_prim]
-            ):
-                cost += change_penalty * pcost[p]
-            ng = g + cost
-            if ng >= best_g[nb]:
-                continue
-            if psweep[p] >= free_sweep:
-                free = True
-                for k in range(ns):
-                    ox = offsets[p, k, 0]
-                    oy = offsets[p, k, 1]
-                    px = x + c * ox - s * oy
-                    py = y + s * ox + c * oy
-                    pth = th + offsets[p, k, 2]
-                    if _collides_one(world, poly, circles, cradius, px, py, pth):
-                        free = False
-                        break
-                if not free:
+            # analytic expansion
+            h = (f - g) / hweight
+            since_shot += 1
+            # An infinite heuristic (no free way to the goal even for a point) means no shot can
+            # succeed either: none is tried, and int() never sees inf (undefined when compiled).
+            shots = h < _FINITE
+            interval = int(min(max(h, 0.0) / (ratio * xy_res), 1.0e18)) if shots else 0
+            if shots and since_shot >= interval:
+                since_shot = 0
+                ok, types, lengths = _shot_word(
+                    x, y, th, gx, gy, gth, mode, radius, families, reverse_ok
+                )
+                if ok and _shot_free(
+                    x,
+                    y,
+                    th,
+                    types,
+                    lengths,
+                    radius,
+                    step,
+                    rho,
+                    world,
+                    poly,
+                    circles,
+                    cradius,
+                ):
+                    status = 0
+                    goal_node = node
+                    shot_types = types
+                    shot_lengths = lengths
+                    break
+            c = math.cos(th)
+            s = math.sin(th)
+            parent_prim = prim_of[node]
+            # lower bound on how far every covering circle may move and stay clear
+            free_sweep = _circles_clearance(dist, res, x0, y0, circles, cradius, x, y, th)
+            for p in range(n_prims):
+                ns = nsamples[p]
+                ox = offsets[p, ns - 1, 0]
+                oy = offsets[p, ns - 1, 1]
+                nxp = x + c * ox - s * oy
+                nyp = y + s * ox + c * oy
+                nth = _wrap(th + offsets[p, ns - 1, 2])
+                nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
+                if nb < 0 or closed[nb]:
                     continue
-            hn = _heuristic(
-                nxp, nyp, nth, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost
-            )
-            if not np.isfinite(hn):
-                continue
-            best_g[nb] = ng
-            if n_nodes == capacity:
-                capacity *= 2
-                xs2 = np.empty(capacity)
-                xs2[:n_nodes] = xs[:n_nodes]
-                xs = xs2
-                ys2 = np.empty(capacity)
-                ys2[:n_nodes] = ys[:n_nodes]
-                ys = ys2
-                ths2 = np.empty(capacity)
-                ths2[:n_nodes] = ths[:n_nodes]
-                ths = ths2
-                gs2 = np.empty(capacity)
-                gs2[:n_nodes] = gs[:n_nodes]
-                gs = gs2
-                pa2 = np.empty(capacity, dtype=np.int64)
-                pa2[:n_nodes] = parents[:n_nodes]
-                parents = pa2
-                pr2 = np.empty(capacity, dtype=np.int64)
-                pr2[:n_nodes] = prim_of[:n_nodes]
-                prim_of = pr2
-                ld2 = np.empty(capacity, dtype=np.int64)
-                ld2[:n_nodes] = last_dir[:n_nodes]
-                last_dir = ld2
-            xs[n_nodes] = nxp
-            ys[n_nodes] = nyp
-            ths[n_nodes] = nth
-            gs[n_nodes] = ng
-            parents[n_nodes] = node
-            prim_of[n_nodes] = p
-            last_dir[n_nodes] = d if d != 0 else ld
-            heapq.heappush(heap, (ng + hweight * hn, n_nodes))
-            n_nodes += 1
+                cost = pcost[p]
+                d = pdir[p]
+                ld = last_dir[node]
+                if d != 0 and ld != 0 and d != ld:
+                    cost += switch_penalty
+                if (
+                    parent_prim >= 0
+                    and pdir[p] != 0
+                    and pdir[parent_prim] != 0
+                    and pkappa[p] != pkappa[parent_prim]
+                ):
+                    cost += change_penalty * pcost[p]
+                ng = g + cost
+                if ng >= best_g[nb]:
+                    continue
+                if psweep[p] >= free_sweep and not _motion_free(
+                    world, dist, res, x0, y0, poly, circles, cradius, x, y, th,
+                    offsets, p, ns, psweep[p], free_sweep,
+                ):  # fmt: skip
+                    continue
+                hn = _cheap_heuristic(
+                    nxp, nyp, nth, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost
+                )
+                if not hn < _FINITE:
+                    continue
+                best_g[nb] = ng
+                xs[n_nodes] = nxp
+                ys[n_nodes] = nyp
+                ths[n_nodes] = nth
+                gs[n_nodes] = ng
+                parents[n_nodes] = node
+                prim_of[n_nodes] = p
+                last_dir[n_nodes] = d if d != 0 else ld
+                exact_h[n_nodes] = mode == _MODE_POINT  # there the cheap bound is the heuristic
+                hsize = _heap_push(hkeys, hids, hsize, ng + hweight * hn, n_nodes)
+                n_nodes += 1
+        if not grow:
+            break
     return (
         status,
         goal_node,

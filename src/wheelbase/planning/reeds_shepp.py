@@ -40,6 +40,8 @@ MAX_CANDIDATES = 48
 @numba.njit(cache=True)
 def _mod2pi(x):
     """Wrap to [−π, π] (the Reeds–Shepp paper's convention)."""
+    if -_PI <= x <= _PI:
+        return x  # the common case, without the call to fmod
     v = np.fmod(x, 2.0 * _PI)
     if v < -_PI:
         v += 2.0 * _PI
