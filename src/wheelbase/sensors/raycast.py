@@ -125,7 +125,7 @@ _CHUNK = 512  # rays per parallel task
 
 
 @numba.njit(cache=True, parallel=True)
-def _march_kernel(gap, res, x0, y0, origins, headings, cos_b, sin_b, max_range, out):
+def _march_kernel(gap, res, x0, y0, origins, cos_h, sin_h, cos_b, sin_b, max_range, out):
     """The march of the module docstring for ray ``r`` = beam ``r % B`` of origin ``r // B``.
 
     Each task keeps ``_LANES`` rays in flight and steps them in turn, taking a new ray when
@@ -164,8 +164,8 @@ def _march_kernel(gap, res, x0, y0, origins, headings, cos_b, sin_b, max_range, 
                     r_next += 1
                     n = r // n_beams
                     b = r - n * n_beams
-                    c = math.cos(headings[n])
-                    s = math.sin(headings[n])
+                    c = cos_h[n]
+                    s = sin_h[n]
                     u = c * cos_b[b] - s * sin_b[b]
                     v = s * cos_b[b] + c * sin_b[b]
                     # a zero component becomes a tiny positive one: its boundary is never met
@@ -374,7 +374,8 @@ def scan_rays(
     if method == "exact":
         _exact_kernel(grid.occupied.view(np.uint8), *args)
     else:
-        _march_kernel(gap, *args)
+        cos_h, sin_h = np.cos(headings), np.sin(headings)  # once per origin, not per ray
+        _march_kernel(gap, *args[:4], cos_h, sin_h, *args[5:])
     return out
 
 
