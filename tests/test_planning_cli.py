@@ -122,3 +122,66 @@ def test_path_plot_and_curve_csv(tmp_path):
     data = np.loadtxt(written, delimiter=",", skiprows=1)
     np.testing.assert_allclose(data[:, 1:4], path.poses, atol=1e-6)
     np.testing.assert_array_equal(data[:, 4], path.directions)
+
+
+def test_plan_on_a_geojson_world_measures_clearance_on_the_polygons(tmp_path):
+    import shapely
+
+    from wheelbase.planning import Footprint, load_map
+    from wheelbase.planning.plot import plot_grid
+
+    wall = [[4.0, 0.0], [5.0, 0.0], [5.0, 4.5], [4.0, 4.5], [4.0, 0.0]]
+    ring = [[7.0, 3.0], [10.0, 3.0], [10.0, 6.0], [7.0, 6.0], [7.0, 3.0]]
+    hole = [[8.0, 4.0], [9.0, 4.0], [9.0, 5.0], [8.0, 5.0], [8.0, 4.0]]
+    doc = {
+        "type": "FeatureCollection",
+        "bbox": [0.0, 0.0, 12.0, 7.0],
+        "resolution": 0.05,
+        "features": [
+            {"type": "Feature", "properties": {},
+             "geometry": {"type": "Polygon", "coordinates": [wall]}},
+            {"type": "Feature", "properties": {},
+             "geometry": {"type": "Polygon", "coordinates": [ring, hole]}},
+            {"type": "Feature", "properties": {"radius": 0.5},
+             "geometry": {"type": "Point", "coordinates": [2.0, 5.5]}},
+        ],
+    }  # fmt: skip
+    world_file = tmp_path / "world.geojson"
+    world_file.write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    args = ["plan", str(world_file), "--start", "1", "1", "0", "--goal", "11", "1.5", "0"]
+    result = runner.invoke(app, [*args, "--footprint", "0.6", "0.4", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["success"] is True
+    with (out / "path.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    poses = np.array([[float(r["x_m"]), float(r["y_m"]), float(r["theta_rad"])] for r in rows])
+    assert poses[:, 1].max() > 4.5  # over the wall
+    # the clearance is the exact distance to the polygons and the disc (shapely agrees)
+    fp = Footprint.rectangle(0.6, 0.4)
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    px, py = fp.polygon[:, 0], fp.polygon[:, 1]
+    shapes = shapely.polygons(
+        np.stack([poses[:, None, 0] + c[:, None] * px - s[:, None] * py,
+                  poses[:, None, 1] + s[:, None] * px + c[:, None] * py], -1)
+    )  # fmt: skip
+    disc = shapely.Point(2, 5.5).buffer(0.5, 512)
+    obstacles = shapely.union_all([shapely.Polygon(wall), shapely.Polygon(ring, [hole]), disc])
+    truth = float(shapely.distance(shapes, obstacles).min())
+    assert metrics["min_clearance_m"] == pytest.approx(truth, abs=1e-4)
+    assert (out / "path.png").stat().st_size > 10_000
+    # the figure draws the polygons themselves (with the hole open) and the disc
+    ax = plot_grid(load_map(world_file))
+    assert len(ax.patches) == 3 and len(ax.images) == 0
+    hole_centre, solid = (8.5, 4.5), (7.5, 3.5)
+    fig = ax.figure
+    fig.canvas.draw()
+    pixels = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float).mean(-1)
+    height = pixels.shape[0]
+
+    def shade(point):
+        col, row = ax.transData.transform(point)
+        return pixels[int(height - row), int(col)]
+
+    assert shade(solid) < 60 and shade(hole_centre) > 200  # black polygon, white hole

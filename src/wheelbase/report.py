@@ -26,13 +26,24 @@ __all__ = [
 def _draw_map(ax, grid) -> None:
     if grid is None:
         return
-    x0, y0 = grid.origin
-    rows, cols = grid.occupied.shape
-    extent = (x0, x0 + cols * grid.resolution, y0, y0 + rows * grid.resolution)
-    ax.imshow(
-        grid.occupied, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.6,
-        interpolation="nearest",
-    )  # fmt: skip
+    from wheelbase.planning.world import PolygonWorld
+
+    world = grid if isinstance(grid, PolygonWorld) else None
+    cells = world.grid if world is not None else grid
+    if cells is not None:
+        x0, y0 = cells.origin
+        rows, cols = cells.occupied.shape
+        extent = (x0, x0 + cols * cells.resolution, y0, y0 + rows * cells.resolution)
+        ax.imshow(
+            cells.occupied, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.6,
+            interpolation="nearest",
+        )  # fmt: skip
+    if world is not None:  # the exact polygons and discs, in the grey of occupied cells
+        import matplotlib
+
+        from wheelbase.planning.plot import draw_obstacles
+
+        draw_obstacles(ax, world, color=matplotlib.colormaps["Greys"](1.0 / 1.6))
 
 
 def _outline(pose: np.ndarray, polygon: np.ndarray) -> np.ndarray:

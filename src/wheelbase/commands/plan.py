@@ -5,8 +5,10 @@
 :class:`~wheelbase.planning.HybridAStar` and writes ``path.csv``, ``path.png`` (map, footprints
 along the path, start/goal arrows) and ``metrics.json`` (``success``, ``length_m``, ``cusps``,
 ``planning_time_s``, ``expanded_nodes``, ``min_clearance_m``), and prints the metrics. MAP is a
-ROS ``map_server`` YAML, a Moving AI ``.map`` (1 m cells) or a bundled map name
-(``parking_lot``, ``corridor_uturn``, ``maze``, ``warehouse``). Headings are in degrees unless
+ROS ``map_server`` YAML, a Moving AI ``.map`` (1 m cells), a polygon world (YAML or GeoJSON, see
+:mod:`wheelbase.planning.world_io`: collision and ``min_clearance_m`` exact on the polygons, the
+figure draws them) or a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
+``warehouse``, ``parallel_120``, ``perpendicular_bay``, …). Headings are in degrees unless
 written with ``rad`` (``1.57rad``); ``90deg`` is accepted too.
 """
 
@@ -151,8 +153,8 @@ def register(app: typer.Typer) -> None:
             str,
             typer.Argument(
                 metavar="MAP",
-                help="ROS map YAML, Moving AI .map, or a bundled map: parking_lot, "
-                "corridor_uturn, maze, warehouse.",
+                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), or "
+                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ...",
             ),
         ],
         start: Annotated[

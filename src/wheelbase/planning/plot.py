@@ -16,16 +16,49 @@ if TYPE_CHECKING:
     from wheelbase.planning.footprint import Footprint
     from wheelbase.planning.occupancy import OccupancyGrid
     from wheelbase.planning.path import Path
+    from wheelbase.planning.world import PolygonWorld
 
-__all__ = ["plot_grid", "plot_path"]
+__all__ = ["draw_obstacles", "plot_grid", "plot_path"]
 
 
-def plot_grid(grid: OccupancyGrid, ax: Any = None) -> Any:
-    """Draw an occupancy grid (occupied black, unknown grey) in world coordinates [m].
+def draw_obstacles(ax: Any, world: PolygonWorld, color: Any = "black") -> None:
+    """Draw a polygon world's polygons (holes left open) and discs, exactly, as filled shapes.
 
     Parameters
     ----------
-    grid : OccupancyGrid
+    ax : matplotlib.axes.Axes
+        Axes to draw on.
+    world : PolygonWorld
+        The world (its grid, if any, is not drawn here).
+    color : color
+        Fill colour.
+    """
+    from matplotlib.patches import Circle, PathPatch
+    from matplotlib.path import Path as MplPath
+
+    def oriented(ring: np.ndarray, ccw: bool) -> np.ndarray:
+        area2 = np.sum(ring[:, 0] * np.roll(ring[:, 1], -1) - np.roll(ring[:, 0], -1) * ring[:, 1])
+        return ring if (area2 > 0) == ccw else ring[::-1]
+
+    for exterior, holes in world.polygons:
+        # exterior counter-clockwise, holes clockwise: the non-zero fill rule leaves holes open
+        rings = [oriented(exterior, True), *(oriented(h, False) for h in holes)]
+        vertices = np.concatenate([np.vstack([r, r[:1]]) for r in rings])
+        codes = np.concatenate(
+            [[MplPath.MOVETO, *[MplPath.LINETO] * (len(r) - 1), MplPath.CLOSEPOLY] for r in rings]
+        )
+        ax.add_patch(PathPatch(MplPath(vertices, codes), facecolor=color, edgecolor=color, lw=0.5))
+    for x, y, r in world.discs:
+        ax.add_patch(Circle((x, y), r, facecolor=color, edgecolor=color, lw=0.5))
+
+
+def plot_grid(grid: OccupancyGrid | PolygonWorld, ax: Any = None) -> Any:
+    """Draw a map in world coordinates [m]: an occupancy grid (occupied black, unknown grey),
+    or a polygon world's exact polygons and discs (over its grid, if it has one).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or PolygonWorld
         The map.
     ax : matplotlib.axes.Axes or None
         Axes to draw on; a new figure when ``None``.
@@ -36,12 +69,21 @@ def plot_grid(grid: OccupancyGrid, ax: Any = None) -> Any:
     """
     import matplotlib.pyplot as plt
 
+    from wheelbase.planning.world import PolygonWorld
+
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 8 * grid.height_m / max(grid.width_m, 1e-9) + 0.5))
-    image = np.where(grid.occupied, 0.0, 1.0)
-    if grid.unknown is not None:
-        image = np.where(grid.unknown, 0.75, image)
-    ax.imshow(image, origin="lower", extent=grid.extent, cmap="gray", vmin=0, vmax=1)
+    cells = grid.grid if isinstance(grid, PolygonWorld) else grid
+    if cells is not None:
+        image = np.where(cells.occupied, 0.0, 1.0)
+        if cells.unknown is not None:
+            image = np.where(cells.unknown, 0.75, image)
+        ax.imshow(image, origin="lower", extent=cells.extent, cmap="gray", vmin=0, vmax=1)
+    if isinstance(grid, PolygonWorld):
+        draw_obstacles(ax, grid)
+        x0, x1, y0, y1 = grid.extent
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
@@ -52,7 +94,7 @@ def plot_path(
     path: Path,
     ax: Any = None,
     *,
-    grid: OccupancyGrid | None = None,
+    grid: OccupancyGrid | PolygonWorld | None = None,
     footprint: Footprint | None = None,
     footprint_every: float = 2.0,
     start: ArrayLike | None = None,
@@ -66,8 +108,8 @@ def plot_path(
         The planned path.
     ax : matplotlib.axes.Axes or None
         Axes to draw on; a new figure when ``None``.
-    grid : OccupancyGrid or None
-        Map drawn underneath.
+    grid : OccupancyGrid, PolygonWorld or None
+        Map drawn underneath (polygons exactly).
     footprint : Footprint or None
         Outline drawn every ``footprint_every`` metres and at the start and goal.
     footprint_every : float
