@@ -178,7 +178,7 @@ def pose_benchmark(
 def figure_eight_reference(duration: float = 30.0, dt: float = 0.01) -> Any:
     """The figure-eight reference: x = 1.1 + 0.7 sin(2πt/T), y = 0.9 + 0.7 sin(4πt/T).
 
-    Returns a :class:`wheelbase.models.PathReference` on the grid 0, dt, …, T, built from the
+    Returns a :class:`wheelbase.models.PoseTrajectory` on the grid 0, dt, …, T, built from the
     analytic derivatives (document 002 eq. 10).
 
     Parameters

@@ -8,7 +8,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import simulate
 from wheelbase.models.diffdrive import DiffDrive
 from wheelbase.models.path import (
-    PathReference,
+    PoseTrajectory,
     pure_motions,
     reference_from_derivatives,
     reference_from_xy,
@@ -38,7 +38,7 @@ def figure_eight(t):
 def test_circle_from_derivatives_is_exact():
     t = np.linspace(0.0, 20.0, 101)
     ref = reference_from_derivatives(*circle(t), t=t)
-    assert isinstance(ref, PathReference)
+    assert isinstance(ref, PoseTrajectory)
     np.testing.assert_allclose(ref.v, R * W, rtol=1e-14)
     np.testing.assert_allclose(ref.omega, W, rtol=1e-14)
     np.testing.assert_allclose(ref.curvature, 1.0 / R, rtol=1e-14)

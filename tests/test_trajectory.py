@@ -76,14 +76,14 @@ def test_feasible_trajectory_properties(points, speed):
     if np.any(np.all(np.diff(points, axis=0) == 0, axis=1)):
         return
     ref = feasible_trajectory(points, speed, peak_yaw_rate=0.5, dt=0.02)
-    np.testing.assert_allclose(ref.pose[-1, :2], points[-1], atol=1e-9)
+    np.testing.assert_allclose(ref.poses[-1, :2], points[-1], atol=1e-9)
     np.testing.assert_allclose(ref.twist[:, 1], 0.0, atol=1e-12)  # never slides sideways
     # a drive can follow it: ψ continuous, pose = ∫ J(ψ)·twist
-    assert np.max(np.abs(np.diff(np.unwrap(ref.pose[:, 2])))) <= 0.5 * 0.02 + 1e-9
+    assert np.max(np.abs(np.diff(np.unwrap(ref.poses[:, 2])))) <= 0.5 * 0.02 + 1e-9
     vel = ref.world_velocity
     for k in range(2):
         pos = points[0, k] + _cumtrapz(vel[:, k], ref.t)
-        np.testing.assert_allclose(pos, ref.pose[:, k], atol=1e-3 * max(1, np.abs(points).max()))
+        np.testing.assert_allclose(pos, ref.poses[:, k], atol=1e-3 * max(1, np.abs(points).max()))
     # the translation phases are those of trapezoidal(): same total translation time
     plain = trapezoidal(points, speed)
     turning = np.abs(ref.twist[:, 2]) > 0
@@ -99,9 +99,9 @@ def test_feasible_turn_profile_and_initial_heading():
     assert math.isclose(ref.duration, turn_time + 15.0, rel_tol=1e-12)
     assert math.isclose(np.abs(ref.twist[:, 2]).max(), 0.2, rel_tol=1e-3)
     mid = ref.at([turn_time / 2])
-    assert math.isclose(abs(mid.pose[0, 2]), math.pi / 2, rel_tol=1e-9)
+    assert math.isclose(abs(mid.poses[0, 2]), math.pi / 2, rel_tol=1e-9)
     no_turn = feasible_trajectory([[0, 0], [1, 1]], 0.1)
-    assert math.isclose(no_turn.pose[0, 2], math.pi / 4)
+    assert math.isclose(no_turn.poses[0, 2], math.pi / 4)
     assert not np.any(no_turn.twist[:, 2])
 
 
@@ -109,9 +109,9 @@ def test_heading_from_velocity_uses_atan2_and_jumps_at_stopovers():
     traj = trapezoidal([[0, 0], [-10, 0], [-10, 10]], 0.1, dt=1.0)
     ref = heading_from_velocity(traj)
     first = (traj.t > 0) & (traj.t < 150)
-    np.testing.assert_allclose(np.abs(ref.pose[first, 2]), math.pi)  # atan(Δy/Δx) would say 0
+    np.testing.assert_allclose(np.abs(ref.poses[first, 2]), math.pi)  # atan(Δy/Δx) would say 0
     second = traj.t > 150
-    np.testing.assert_allclose(ref.pose[second, 2], math.pi / 2)  # a jump of −π/2 at t = 150 s
+    np.testing.assert_allclose(ref.poses[second, 2], math.pi / 2)  # a jump of −π/2 at t = 150 s
     np.testing.assert_allclose(ref.twist[:, 1:], 0.0, atol=1e-12)  # no lateral speed, r = 0
     np.testing.assert_allclose(ref.twist[:, 0], np.hypot(*traj.velocity.T), atol=1e-12)
     assert isinstance(ref.at([0.0, 75.0]), PoseTrajectory)

@@ -52,7 +52,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         BodyTwist,
         DiffDrive,
         KinematicModel,
-        PathReference,
+        PoseTrajectory,
         RearWheelBicycle,
         Unicycle,
         Wheel,
@@ -78,7 +78,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.runner import RunResult, run
     from wheelbase.scenario import Scenario, load_scenario
     from wheelbase.timing import SpeedLimits, time_parametrize
-    from wheelbase.trajectory import PoseTrajectory, Trajectory, feasible_trajectory, trapezoidal
+    from wheelbase.trajectory import Trajectory, feasible_trajectory, trapezoidal
 
 _EXPORTS = {
     "MPPI": "wheelbase.control",
@@ -122,7 +122,6 @@ _EXPORTS = {
     "BodyTwist": "wheelbase.models",
     "DiffDrive": "wheelbase.models",
     "KinematicModel": "wheelbase.models",
-    "PathReference": "wheelbase.models",
     "RearWheelBicycle": "wheelbase.models",
     "Unicycle": "wheelbase.models",
     "Wheel": "wheelbase.models",
@@ -151,7 +150,7 @@ _EXPORTS = {
     "load_scenario": "wheelbase.scenario",
     "SpeedLimits": "wheelbase.timing",
     "time_parametrize": "wheelbase.timing",
-    "PoseTrajectory": "wheelbase.trajectory",
+    "PoseTrajectory": "wheelbase.models",
     "Trajectory": "wheelbase.trajectory",
     "feasible_trajectory": "wheelbase.trajectory",
     "trapezoidal": "wheelbase.trajectory",
@@ -187,7 +186,6 @@ __all__ = [
     "LinearTracker",
     "MapError",
     "OccupancyGrid",
-    "PathReference",
     "PlannedPath",
     "PlanningError",
     "PolarPose",

@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 from wheelbase.dynamics import DynamicsResult, InverseDynamicsResult
 from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.models.path import PoseTrajectory
 from wheelbase.sim.log import Log
-from wheelbase.trajectory import PoseTrajectory
 
 __all__ = ["plot_forward_cases", "plot_inverse_dynamics", "plot_tracking"]
 
@@ -71,7 +71,7 @@ def plot_inverse_dynamics(reference: PoseTrajectory, inverse: InverseDynamicsRes
     fig = Figure(figsize=(11.0, 8.0), layout="constrained")
     axes = fig.subplots(2, 2)
     ax = axes[0, 0]
-    ax.plot(reference.pose[:, 0], reference.pose[:, 1], "b-", label="trajectory")
+    ax.plot(reference.poses[:, 0], reference.poses[:, 1], "b-", label="trajectory")
     ax.plot(*reference.waypoints.T, "ro", label="waypoints")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")

@@ -33,7 +33,7 @@ import numpy as np
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
-from wheelbase.models.path import PathReference
+from wheelbase.models.path import PoseTrajectory
 from wheelbase.polyline import distance_to_polyline
 from wheelbase.scenario import Scenario, load_scenario
 from wheelbase.sim import (
@@ -221,8 +221,8 @@ class TorqueTracking:
     """Computed-torque PID (document 000 §5.3) on a time-parametrised trajectory.
 
     Adapts :class:`wheelbase.control.ComputedTorquePID` to the closed loop: it is called with
-    the estimated state (x, y, θ, u, v, r) and a :class:`PathReference`, whose row
-    (x, y, ψ, u, 0, r, u̇, 0, ṙ) at time t it builds (accelerations by central differences).
+    the estimated state (x, y, θ, u, v, r) and a :class:`PoseTrajectory`, whose rows
+    (x, y, ψ, u, 0, r, u̇, 0, ṙ) it reads (accelerations bounded, see below).
 
     Parameters
     ----------
@@ -271,14 +271,14 @@ class TorqueTracking:
             max_torque=max_torque,
             derivative_filter=derivative_filter,
         )
-        self._rows: tuple[Any, np.ndarray] | None = None
+        self._rows: tuple[Any, Any] | None = None
         self._accel_bounds = (float(max_acceleration), float(max_yaw_acceleration))
 
     def reset(self) -> None:
         """Forget the integrals of the PID."""
         self._pid.reset()
 
-    def __call__(self, t: float, state: np.ndarray, reference: PathReference) -> np.ndarray:
+    def __call__(self, t: float, state: np.ndarray, reference: PoseTrajectory) -> np.ndarray:
         """Wheel torques (left, right) [N·m] for the estimated state (6,) at time ``t`` [s].
 
         Parameters
@@ -287,27 +287,17 @@ class TorqueTracking:
             Time [s].
         state : numpy.ndarray, shape (6,)
             Estimated (x, y, θ, u, v, r).
-        reference : PathReference
+        reference : PoseTrajectory
             The trajectory.
         """
         if self._rows is None or self._rows[0] is not reference:
-            times = reference.t
-            heading = np.unwrap(reference.poses[:, 2])
-            zeros = np.zeros_like(times)
-            table = np.column_stack(
-                [
-                    reference.poses[:, 0], reference.poses[:, 1], heading,
-                    reference.v, zeros, reference.omega,
-                    np.clip(np.gradient(reference.v, times), -self._accel_bounds[0],
-                            self._accel_bounds[0]),
-                    zeros,
-                    np.clip(np.gradient(reference.omega, times), -self._accel_bounds[1],
-                            self._accel_bounds[1]),
-                ]
-            )  # fmt: skip
-            self._rows = (reference, table)
-        row = _interpolate_rows(reference.t, self._rows[1], t)
-        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
+            from wheelbase.control.torque import TimedRows
+
+            table = reference.reference()
+            table[:, 6] = np.clip(table[:, 6], -self._accel_bounds[0], self._accel_bounds[0])
+            table[:, 8] = np.clip(table[:, 8], -self._accel_bounds[1], self._accel_bounds[1])
+            self._rows = (reference, TimedRows(reference.t, table))
+        row = self._rows[1].at(t)
         return self._pid(t, state, row)
 
 
@@ -381,7 +371,7 @@ class RunResult:
         The map.
     plan : Path or None
         The concatenated plan of all legs (None when planning failed).
-    reference : PathReference or None
+    reference : PoseTrajectory or None
         The time-parametrised trajectory.
     log : Log or None
         The closed-loop record (None when planning failed).
@@ -393,7 +383,7 @@ class RunResult:
     robot: Robot
     grid: Any
     plan: Any
-    reference: PathReference | None
+    reference: PoseTrajectory | None
     log: Log | None
     metrics: dict[str, Any]
 
@@ -438,7 +428,7 @@ class Prepared:
         Goal poses [m, m, rad].
     plan : Path or None
         The concatenated plan (None when planning failed).
-    reference : PathReference or None
+    reference : PoseTrajectory or None
         The time-parametrised plan.
     planning : dict
         Planning figures (time, nodes, length, cusps, success, message).
@@ -452,7 +442,7 @@ class Prepared:
     start: np.ndarray
     goals: list[np.ndarray]
     plan: Any
-    reference: PathReference | None
+    reference: PoseTrajectory | None
     planning: dict[str, Any]
     engine: Engine | None
 
@@ -827,7 +817,7 @@ def _concatenate(legs, path_type):
     return path_type(poses, directions, curvatures, np.concatenate(arc), True, legs[0].stats)
 
 
-def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PathReference:
+def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PoseTrajectory:
     """Time-parametrise each forward/backward run of the plan; stops at every goal."""
     return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
 

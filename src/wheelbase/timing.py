@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
-from wheelbase.models.path import PathReference
+from wheelbase.models.path import PoseTrajectory
 
 __all__ = ["SpeedLimits", "time_parametrize"]
 
@@ -81,7 +81,7 @@ def time_parametrize(
     directions: ArrayLike | None = None,
     limits: SpeedLimits | None = None,
     dt: float = 0.05,
-) -> PathReference:
+) -> PoseTrajectory:
     """Time-parametrise a path of poses into a trajectory sampled every ``dt`` seconds.
 
     Parameters
@@ -100,7 +100,7 @@ def time_parametrize(
 
     Returns
     -------
-    PathReference
+    PoseTrajectory
         ``t`` (T,), ``poses`` (T, 3), signed ``v`` (T,), ``omega`` (T,) and ``curvature`` (T,)
         (0 where the robot turns in place or stands). It starts and ends at rest, at the first
         and last pose of the path.
@@ -213,7 +213,7 @@ def _turn_in_place(pose: np.ndarray, heading0: float, heading1: float, limits: S
     return _Piece(times, swept, rates, ends, 0)
 
 
-def _sample(pieces: list[_Piece], path: np.ndarray, dt: float) -> PathReference:
+def _sample(pieces: list[_Piece], path: np.ndarray, dt: float) -> PoseTrajectory:
     total = sum(piece.duration for piece in pieces)
     n = max(2, math.ceil(total / dt - 1e-9) + 1)
     t = dt * np.arange(n)
@@ -246,10 +246,8 @@ def _sample(pieces: list[_Piece], path: np.ndarray, dt: float) -> PathReference:
             out_w[mask] = rate * kappa[segment]
         offset += piece.duration
     out_pose[:, 2] = wrap_angle(out_pose[:, 2])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        curvature = np.where(np.abs(out_v) > 1e-12, out_w / out_v, 0.0)
     out_pose[-1] = [path[-1, 0], path[-1, 1], wrap_angle(path[-1, 2])]
-    return PathReference(t=t, poses=out_pose, v=out_v, omega=out_w, curvature=curvature)
+    return PoseTrajectory.from_speeds(t, out_pose, out_v, out_w)
 
 
 def _profile(piece: _Piece, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

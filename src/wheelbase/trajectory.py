@@ -22,7 +22,6 @@ before every segment whose direction differs from the current heading.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,9 +30,9 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, finite, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.models.path import PoseTrajectory
 
 __all__ = [
-    "PoseTrajectory",
     "Trajectory",
     "feasible_trajectory",
     "heading_from_velocity",
@@ -188,58 +187,6 @@ class Trajectory:
         t = as_float_array("times", times, min_ndim=1, max_ndim=1)
         pos, vel, acc = self._phases.evaluate(t)
         return Trajectory(t, pos, vel, acc, self.waypoints, self.waypoint_times, self._phases)
-
-
-@dataclass(frozen=True)
-class PoseTrajectory:
-    """A planar pose trajectory with its body-frame twist and twist rate.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-        Sample times [s].
-    pose : numpy.ndarray, shape (T, 3)
-        (x [m], y [m], ψ [rad] in (−π, π]).
-    twist : numpy.ndarray, shape (T, 3)
-        Body twist (u [m/s], v [m/s], r [rad/s]) = J(ψ)ᵀ·η̇ (document 000 §5.2).
-    twist_rate : numpy.ndarray, shape (T, 3)
-        Its time derivative (u̇ [m/s²], v̇ [m/s²], ṙ [rad/s²]).
-    waypoints : numpy.ndarray, shape (P, 2)
-        The waypoints (x, y) [m].
-    """
-
-    t: np.ndarray
-    pose: np.ndarray
-    twist: np.ndarray
-    twist_rate: np.ndarray
-    waypoints: np.ndarray
-    _evaluate: Callable[[np.ndarray], PoseTrajectory] = field(repr=False, compare=False)
-
-    @property
-    def duration(self) -> float:
-        """Time span of the trajectory [s]."""
-        return float(self.t[-1])
-
-    @property
-    def world_velocity(self) -> np.ndarray:
-        """(ẋ, ẏ, ψ̇) ``(T, 3)`` = J(ψ)·twist."""
-        c, s = np.cos(self.pose[:, 2]), np.sin(self.pose[:, 2])
-        u, v, r = self.twist.T
-        return np.column_stack([c * u - s * v, s * u + c * v, r])
-
-    def at(self, times: ArrayLike) -> PoseTrajectory:
-        """The same trajectory sampled at other times [s] (clamped to its span).
-
-        Parameters
-        ----------
-        times : array_like, shape (T,)
-            Sample times [s].
-        """
-        return self._evaluate(as_float_array("times", times, min_ndim=1, max_ndim=1))
-
-    def reference(self) -> np.ndarray:
-        """Rows (x, y, ψ, u, v, r, u̇, v̇, ṙ) ``(T, 9)``: the controller's reference format."""
-        return np.column_stack([self.pose, self.twist, self.twist_rate])
 
 
 def _body_frame(psi, vel, acc, yaw_rate):

@@ -217,7 +217,7 @@ def _as_polyline(reference: object) -> Polyline:
     if isinstance(reference, Polyline):
         return reference
     poses = getattr(reference, "poses", None)
-    if poses is not None:  # a planned path (wheelbase.planning.Path) or a PathReference
+    if poses is not None:  # a planned path (wheelbase.planning.Path) or a PoseTrajectory
         directions = getattr(reference, "directions", None)
         if directions is not None:
             directions = np.asarray(directions, dtype=np.float64).ravel()

@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.dynamics import DiffDriveDynamics
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.trajectory import PoseTrajectory
+from wheelbase.models.path import PoseTrajectory
 
 __all__ = [
     "ComputedTorquePID",
@@ -256,7 +256,7 @@ class ComputedTorquePID:
     Notes
     -----
     Called as ``controller(t, pose, reference, twist=...)`` it returns the wheel torques
-    (τ_L, τ_R) [N·m]. ``reference`` is a :class:`~wheelbase.trajectory.PoseTrajectory`
+    (τ_L, τ_R) [N·m]. ``reference`` is a :class:`~wheelbase.models.PoseTrajectory`
     (evaluated at t) or one row (x, y, ψ, u, v, r, u̇, v̇, ṙ); ``twist`` is the measured body
     twist (u, v, r), or pass the full state (x, y, ψ, u, v, r) as ``pose``. ``dt`` defaults to
     the time since the previous call.

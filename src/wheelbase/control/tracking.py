@@ -44,9 +44,9 @@ def sample_reference(reference: Any, t: float) -> tuple[np.ndarray, np.ndarray, 
 
     Parameters
     ----------
-    reference : PathReference, callable or tuple
+    reference : PoseTrajectory, callable or tuple
         - an object with arrays ``t`` (T,), ``poses`` (T, 3), ``v`` (T,), ``omega`` (T,), such
-          as :class:`wheelbase.models.PathReference`: linearly interpolated in time (heading
+          as :class:`wheelbase.models.PoseTrajectory`: linearly interpolated in time (heading
           unwrapped), held at its ends;
         - a callable ``f(t) -> (pose, v_r, ω_r)``;
         - a tuple ``(pose, v_r, ω_r)`` already sampled.
@@ -56,7 +56,7 @@ def sample_reference(reference: Any, t: float) -> tuple[np.ndarray, np.ndarray, 
     if hasattr(reference, "poses") and hasattr(reference, "omega"):
         times = getattr(reference, "t", None)
         if times is None:
-            raise InputError("a PathReference needs times t to be sampled by a tracker")
+            raise InputError("a PoseTrajectory needs times t to be sampled by a tracker")
         poses = np.asarray(reference.poses, dtype=np.float64)
         heading = np.unwrap(poses[:, 2])
         x = np.interp(t, times, poses[:, 0])
@@ -72,7 +72,7 @@ def sample_reference(reference: Any, t: float) -> tuple[np.ndarray, np.ndarray, 
         pose, v, omega = reference
     except (TypeError, ValueError):
         raise InputError(
-            "a tracking reference must be a PathReference, a callable t -> (pose, v, omega) "
+            "a tracking reference must be a PoseTrajectory, a callable t -> (pose, v, omega) "
             f"or a tuple (pose, v, omega) (got {type(reference).__name__})"
         ) from None
     pose = as_float_array("reference pose", pose, 3)
@@ -118,7 +118,7 @@ class _Tracker:
             Time [s].
         pose : array_like, shape (..., 3)
             Measured poses.
-        reference : PathReference, callable or tuple
+        reference : PoseTrajectory, callable or tuple
             See :func:`sample_reference`.
         """
         pose = as_float_array("pose", pose, 3)

@@ -9,7 +9,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.models.bicycle import Ackermann, Bicycle, RearWheelBicycle
     from wheelbase.models.diffdrive import DiffDrive
     from wheelbase.models.path import (
-        PathReference,
+        PoseTrajectory,
         PureMotion,
         pure_motions,
         reference_from_derivatives,
@@ -25,7 +25,7 @@ _EXPORTS = {
     "Bicycle": "wheelbase.models.bicycle",
     "RearWheelBicycle": "wheelbase.models.bicycle",
     "DiffDrive": "wheelbase.models.diffdrive",
-    "PathReference": "wheelbase.models.path",
+    "PoseTrajectory": "wheelbase.models.path",
     "PureMotion": "wheelbase.models.path",
     "pure_motions": "wheelbase.models.path",
     "reference_from_derivatives": "wheelbase.models.path",
@@ -46,7 +46,7 @@ __all__ = [
     "DiffDrive",
     "KinematicModel",
     "ModelBase",
-    "PathReference",
+    "PoseTrajectory",
     "PureMotion",
     "RearWheelBicycle",
     "Unicycle",

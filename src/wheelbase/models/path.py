@@ -15,7 +15,8 @@ Document 002 eq. 9 gives the two pure motions of a differential drive: straight 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -26,7 +27,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.models.diffdrive import DiffDrive
 
 __all__ = [
-    "PathReference",
+    "PoseTrajectory",
     "PureMotion",
     "pure_motions",
     "reference_from_derivatives",
@@ -35,34 +36,127 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class PathReference:
-    """Reference states and unicycle inputs along a desired path (document 002 eq. 10).
+class PoseTrajectory:
+    """A timed pose trajectory: the one type wherever wheelbase means "where to be, when".
+
+    Built from a path's derivatives (document 002 eq. 10, :func:`reference_from_derivatives`),
+    by time-parametrising a planned path (:func:`wheelbase.timing.time_parametrize`) or from
+    trapezoidal profiles through waypoints (:func:`wheelbase.trajectory.feasible_trajectory`);
+    followed by the trackers, the computed-torque PID and the inverse dynamics.
 
     Attributes
     ----------
     t : numpy.ndarray, shape (T,) or None
-        Times [s] (None when built from derivatives without times).
+        Sample times [s] (None when built from derivatives without times).
     poses : numpy.ndarray, shape (T, 3)
-        Reference poses (x [m], y [m], Φ [rad] wrapped to (−π, π]).
-    v : numpy.ndarray, shape (T,)
-        Forward speed [m/s]; negative when reversing.
-    omega : numpy.ndarray, shape (T,)
-        Yaw rate Φ̇ [rad/s].
-    curvature : numpy.ndarray, shape (T,)
-        Signed curvature κ = ω / v [1/m] (positive turning left in the direction of travel of
-        the robot's x axis).
+        (x [m], y [m], ψ [rad] in (−π, π]).
+    twist : numpy.ndarray, shape (T, 3)
+        Body twist (u [m/s], v [m/s], r [rad/s]) = J(ψ)ᵀ·η̇ (document 000 §5.2); u < 0 when
+        reversing.
+    twist_rate : numpy.ndarray, shape (T, 3)
+        Its time derivative (u̇ [m/s²], v̇ [m/s²], ṙ [rad/s²]): exact where the builder knows
+        it, else second-order differences in time (zeros without times).
+    waypoints : numpy.ndarray, shape (P, 2) or None
+        The waypoints (x, y) [m] it was built through, if any.
     """
 
     t: np.ndarray | None
     poses: np.ndarray
-    v: np.ndarray
-    omega: np.ndarray
-    curvature: np.ndarray
+    twist: np.ndarray
+    twist_rate: np.ndarray
+    waypoints: np.ndarray | None = None
+    _evaluate: Callable[[np.ndarray], PoseTrajectory] | None = field(
+        default=None, repr=False, compare=False
+    )
+
+    @classmethod
+    def from_speeds(
+        cls, t: np.ndarray | None, poses: np.ndarray, v: np.ndarray, omega: np.ndarray
+    ) -> PoseTrajectory:
+        """A trajectory of a robot that cannot slide sideways: twist (v, 0, ω).
+
+        Parameters
+        ----------
+        t : numpy.ndarray, shape (T,) or None
+            Times [s].
+        poses : numpy.ndarray, shape (T, 3)
+            Poses [m, m, rad].
+        v, omega : numpy.ndarray, shape (T,)
+            Forward speed [m/s] and yaw rate [rad/s].
+        """
+        twist = np.stack([v, np.zeros_like(v), omega], -1)
+        if t is not None and len(t) >= 2:
+            rate = np.gradient(twist, t, axis=0)
+        else:
+            rate = np.zeros_like(twist)
+        return cls(t, poses, twist, rate)
+
+    @property
+    def v(self) -> np.ndarray:
+        """Forward speed u [m/s], shape (T,); negative when reversing."""
+        return self.twist[:, 0]
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Yaw rate r [rad/s], shape (T,)."""
+        return self.twist[:, 2]
+
+    @property
+    def curvature(self) -> np.ndarray:
+        """Signed curvature κ = ω / v [1/m] along the robot's x axis (0 where v = 0)."""
+        v = self.v
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(np.abs(v) > 1e-12, self.omega / v, 0.0)
 
     @property
     def inputs(self) -> np.ndarray:
         """Unicycle inputs ``(T, 2)`` = (v [m/s], ω [rad/s]) for :func:`wheelbase.simulate`."""
         return np.stack([self.v, self.omega], -1)
+
+    @property
+    def duration(self) -> float:
+        """Time span of the trajectory [s]."""
+        if self.t is None:
+            raise InputError("a trajectory built without times has no duration")
+        return float(self.t[-1])
+
+    @property
+    def world_velocity(self) -> np.ndarray:
+        """(ẋ, ẏ, ψ̇) ``(T, 3)`` = J(ψ)·twist."""
+        c, s = np.cos(self.poses[:, 2]), np.sin(self.poses[:, 2])
+        u, v, r = self.twist.T
+        return np.column_stack([c * u - s * v, s * u + c * v, r])
+
+    def at(self, times: ArrayLike) -> PoseTrajectory:
+        """The same trajectory at other times [s] (clamped to its span): exact where it was
+        built from a closed form, else interpolated linearly (heading unwrapped).
+
+        Parameters
+        ----------
+        times : array_like, shape (T,)
+            Sample times [s].
+        """
+        times = as_float_array("times", times, min_ndim=1, max_ndim=1)
+        if self._evaluate is not None:
+            return self._evaluate(times)
+        if self.t is None:
+            raise InputError("a trajectory built without times cannot be sampled in time")
+        clamped = np.clip(times, self.t[0], self.t[-1])
+
+        def column(values: np.ndarray) -> np.ndarray:
+            return np.interp(clamped, self.t, values)
+
+        heading = np.unwrap(self.poses[:, 2])
+        poses = np.column_stack(
+            [column(self.poses[:, 0]), column(self.poses[:, 1]), wrap_angle(column(heading))]
+        )
+        twist = np.column_stack([column(self.twist[:, k]) for k in range(3)])
+        rate = np.column_stack([column(self.twist_rate[:, k]) for k in range(3)])
+        return PoseTrajectory(times, poses, twist, rate, self.waypoints)
+
+    def reference(self) -> np.ndarray:
+        """Rows (x, y, ψ, u, v, r, u̇, v̇, ṙ) ``(T, 9)``: the controller's reference format."""
+        return np.column_stack([self.poses, self.twist, self.twist_rate])
 
 
 def reference_from_derivatives(
@@ -76,7 +170,7 @@ def reference_from_derivatives(
     reverse: bool = False,
     t: ArrayLike | None = None,
     min_speed: float = 1e-9,
-) -> PathReference:
+) -> PoseTrajectory:
     """Reference (pose, v, ω, κ) from a path and its analytic time derivatives.
 
     Parameters
@@ -97,7 +191,8 @@ def reference_from_derivatives(
 
     Returns
     -------
-    PathReference
+    PoseTrajectory
+        Its ``twist_rate`` comes from differences in time (zeros without ``t``).
 
     Raises
     ------
@@ -136,7 +231,7 @@ def reference_from_xy(
     *,
     reverse: bool = False,
     min_speed: float = 1e-9,
-) -> PathReference:
+) -> PoseTrajectory:
     """Reference (pose, v, ω, κ) from a path sampled at times ``t``.
 
     The derivatives are estimated with ``np.gradient`` (second order inside and at the edges,
@@ -198,7 +293,7 @@ def _reference(x, y, xd, yd, xdd, ydd, t, reverse, min_speed):
     v = -speed if reverse else speed
     omega = (xd * ydd - yd * xdd) / speed_sq
     poses = np.stack([x, y, wrap_angle(heading)], -1)
-    return PathReference(t=t, poses=poses, v=v, omega=omega, curvature=omega / v)
+    return PoseTrajectory.from_speeds(t, poses, v, omega)
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,10 @@
 """Computed-torque trajectory tracking on the engine (document 000 §5.3), and its tuning.
 
-:func:`track_trajectory` drives the dynamic robot along a :class:`~wheelbase.trajectory.
-PoseTrajectory` open loop (the inverse-dynamics torques, figure 5.12/5.13) or with a
-:class:`~wheelbase.control.ComputedTorquePID` (figures 5.14–5.16); :func:`tune_computed_torque`
-picks the PID's bandwidths by running a grid of candidates as one batch.
+:func:`track_trajectory` drives the dynamic robot along a
+:class:`~wheelbase.models.PoseTrajectory` open loop (the inverse-dynamics torques, figure
+5.12/5.13) or with a :class:`~wheelbase.control.ComputedTorquePID` (figures 5.14–5.16);
+:func:`tune_computed_torque` picks the PID's bandwidths by running a grid of candidates as one
+batch.
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ from wheelbase.dynamics import DiffDriveDynamics, inverse_dynamics
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import time_grid
+from wheelbase.models.path import PoseTrajectory
 from wheelbase.sim.engine import Engine
 from wheelbase.sim.log import Log, status_code
 from wheelbase.sim.plants import DynamicPlant
-from wheelbase.trajectory import PoseTrajectory
 
 __all__ = ["track_trajectory", "tune_computed_torque"]
 
