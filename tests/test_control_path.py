@@ -167,16 +167,16 @@ def test_follower_parameters():
 
 
 def test_planned_path_with_per_sample_directions_is_accepted():
-    from wheelbase.planning.path import Path
+    from wheelbase.planning.path import PlannedPath
 
     polyline = three_point_turn()
     points = polyline.points
     per_sample = np.r_[polyline.directions[0], polyline.directions].astype(np.int8)
     poses = np.column_stack([points, np.zeros(len(points))])
     try:
-        planned = Path(poses=poses, directions=per_sample, curvatures=np.zeros(len(points)),
+        planned = PlannedPath(poses=poses, directions=per_sample, curvatures=np.zeros(len(points)),
                        arc_length=polyline.arc_length, success=True, stats=None)  # fmt: skip
-    except TypeError:  # the planner's Path may need more fields: an equivalent stand-in
+    except TypeError:  # the planner's PlannedPath may need more fields: an equivalent stand-in
         planned = type("P", (), {"poses": poses, "directions": per_sample})()
     law = PurePursuit(speed=0.3, limits=LIMITS)
     result = closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)

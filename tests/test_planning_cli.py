@@ -1,4 +1,4 @@
-"""``wheelbase plan``: files, metrics, refusal to overwrite, errors; Path.to_csv / plot."""
+"""``wheelbase plan``: files, metrics, refusal to overwrite, errors; PlannedPath.to_csv / plot."""
 
 import csv
 import json

@@ -8,7 +8,7 @@ import pytest
 
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
-from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, Path, smooth_path
+from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, PlannedPath, smooth_path
 from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
 
 
@@ -355,7 +355,7 @@ def test_smoothing_leaves_turns_in_place_and_failures_alone():
     raw = planner.plan(sc.start, sc.goal)
     smooth = smooth_path(raw, grid, planner.footprint, 0.0)
     np.testing.assert_allclose(smooth.poses, raw.poses)
-    failed = Path.failure(raw.stats)
+    failed = PlannedPath.failure(raw.stats)
     assert smooth_path(failed, grid, planner.footprint, 1.0) is failed
     with pytest.raises(ConfigError, match="window"):
         smooth_path(raw, grid, planner.footprint, 1.0, window=0.0)
@@ -447,7 +447,7 @@ def test_smoothing_is_the_same_at_a_4_5e9_m_offset():
     planner = HybridAStar(near_grid, (0.6, 0.4), 1.0, smooth=False)
     raw = planner.plan((1.5, 1.5, 0.0), (6.5, 5.0, -math.pi / 2))
     shift = np.array([FAR, FAR, 0.0])
-    moved = Path(raw.poses + shift, raw.directions, raw.curvatures, raw.arc_length, True)
+    moved = PlannedPath(raw.poses + shift, raw.directions, raw.curvatures, raw.arc_length, True)
     near = smooth_path(raw, near_grid, planner.footprint, 1.0)
     far = smooth_path(moved, far_grid, planner.footprint, 1.0)
     assert not np.allclose(near.poses, raw.poses)  # smoothing did something

@@ -68,13 +68,13 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         Footprint,
         HybridAStar,
         OccupancyGrid,
+        PlannedPath,
         astar,
         dijkstra,
         dubins_length,
         load_map,
         reeds_shepp_length,
     )
-    from wheelbase.planning import Path as PlannedPath
     from wheelbase.runner import RunResult, run
     from wheelbase.scenario import Scenario, load_scenario
     from wheelbase.timing import SpeedLimits, time_parametrize
@@ -143,7 +143,7 @@ _EXPORTS = {
     "dubins_length": "wheelbase.planning",
     "load_map": "wheelbase.planning",
     "reeds_shepp_length": "wheelbase.planning",
-    "PlannedPath": "wheelbase.planning:Path",
+    "PlannedPath": "wheelbase.planning",
     "RunResult": "wheelbase.runner",
     "run": "wheelbase.runner",
     "Scenario": "wheelbase.scenario",

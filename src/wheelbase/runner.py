@@ -768,7 +768,7 @@ def _check_free(grid, robot: Robot, pose: np.ndarray, name: str) -> None:
 
 def _plan(grid, robot: Robot, scenario: Scenario, start, goals):
     from wheelbase.planning import HybridAStar
-    from wheelbase.planning.path import Path as PlannedPath
+    from wheelbase.planning.path import PlannedPath
 
     spec = scenario.planner
     radius = robot.turning_radius if spec.turning_radius is None else spec.turning_radius

@@ -217,7 +217,7 @@ def _as_polyline(reference: object) -> Polyline:
     if isinstance(reference, Polyline):
         return reference
     poses = getattr(reference, "poses", None)
-    if poses is not None:  # a planned path (wheelbase.planning.Path) or a PoseTrajectory
+    if poses is not None:  # a planned path (wheelbase.planning.PlannedPath) or a PoseTrajectory
         directions = getattr(reference, "directions", None)
         if directions is not None:
             directions = np.asarray(directions, dtype=np.float64).ravel()
@@ -319,10 +319,10 @@ class PathFollower:
         pose : array_like, shape (..., 3)
             Measured poses (x [m], y [m], θ [rad]) of the reference point (the rear axle of a
             steered vehicle).
-        reference : Polyline, Path or array_like, shape (M, 2)
+        reference : Polyline, PlannedPath or array_like, shape (M, 2)
             The path: a :class:`Polyline`, points, or anything with ``poses`` (M, 3) and
             optional ``directions`` per segment (M − 1) or per sample (M, the direction of the
-            motion reaching each sample, as :class:`wheelbase.planning.Path` has).
+            motion reaching each sample, as :class:`wheelbase.planning.PlannedPath` has).
         """
         pose = as_float_array("pose", pose, 3)
         path = self._state.get("path")

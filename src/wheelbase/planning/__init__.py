@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.planning.maps import BUNDLED_MAPS, PlanningScenario, bundled_scenarios, load_map
     from wheelbase.planning.movingai import MovingAIScenario, read_movingai_scenarios
     from wheelbase.planning.occupancy import OccupancyGrid
-    from wheelbase.planning.path import CurvePath, Path, PlanningStats
+    from wheelbase.planning.path import CurvePath, PlannedPath, PlanningStats
     from wheelbase.planning.reeds_shepp import (
         reeds_shepp_candidates,
         reeds_shepp_length,
@@ -42,7 +42,7 @@ _EXPORTS = {
     "read_movingai_scenarios": "wheelbase.planning.movingai",
     "OccupancyGrid": "wheelbase.planning.occupancy",
     "CurvePath": "wheelbase.planning.path",
-    "Path": "wheelbase.planning.path",
+    "PlannedPath": "wheelbase.planning.path",
     "PlanningStats": "wheelbase.planning.path",
     "reeds_shepp_candidates": "wheelbase.planning.reeds_shepp",
     "reeds_shepp_length": "wheelbase.planning.reeds_shepp",
@@ -60,7 +60,7 @@ __all__ = [
     "HybridAStar",
     "MovingAIScenario",
     "OccupancyGrid",
-    "Path",
+    "PlannedPath",
     "PlanningScenario",
     "PlanningStats",
     "PolygonWorld",

@@ -63,7 +63,7 @@ from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
 from wheelbase.planning.dubins import _dubins_all
 from wheelbase.planning.footprint import Footprint
 from wheelbase.planning.occupancy import OccupancyGrid
-from wheelbase.planning.path import Path, PlanningStats
+from wheelbase.planning.path import PlannedPath, PlanningStats
 from wheelbase.planning.reeds_shepp import _FAMILIES, _best, _min_length, _normalise
 from wheelbase.planning.smoothing import smooth_path
 from wheelbase.planning.world import PolygonWorld
@@ -391,7 +391,7 @@ class HybridAStar:
         return pose
 
     # ------------------------------------------------------------------ planning
-    def plan(self, start: ArrayLike, goal: ArrayLike) -> Path:
+    def plan(self, start: ArrayLike, goal: ArrayLike) -> PlannedPath:
         """Plan from ``start`` to ``goal``.
 
         Parameters
@@ -403,7 +403,7 @@ class HybridAStar:
 
         Returns
         -------
-        Path
+        PlannedPath
             Poses sampled every ``collision_step`` metres (and along turns in place), driving
             directions, steering curvatures and statistics; ``success=False`` (empty arrays,
             with the statistics) when the search space is exhausted or a limit is hit.
@@ -474,7 +474,7 @@ class HybridAStar:
         planning_time = time.perf_counter() - t0
         stats = PlanningStats(int(expanded), planning_time, compile_time, _STATUS[int(status)])
         if status != 0:
-            return Path.failure(stats)
+            return PlannedPath.failure(stats)
         path = self._reconstruct(
             goal_node, xs, ys, ths, parents, prim_of, shot_types, shot_lengths, start, prims
         )
@@ -491,7 +491,7 @@ class HybridAStar:
         stats = PlanningStats(int(expanded), time.perf_counter() - t0, compile_time, _STATUS[0])
         poses = path.poses + origin
         poses[0], poses[-1] = ends  # exactly as given (headings wrapped)
-        return Path(poses, path.directions, path.curvatures, path.arc_length, True, stats)
+        return PlannedPath(poses, path.directions, path.curvatures, path.arc_length, True, stats)
 
     def _holonomic_heuristic(self, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Admissible cost-to-go [m] around the obstacles on cells of ``xy_resolution``.
@@ -558,7 +558,7 @@ class HybridAStar:
 
     def _reconstruct(
         self, goal_node, xs, ys, ths, parents, prim_of, shot_types, shot_lengths, start, prims
-    ) -> Path:
+    ) -> PlannedPath:
         chain = [int(goal_node)]
         while parents[chain[-1]] >= 0:
             chain.append(int(parents[chain[-1]]))
@@ -607,7 +607,7 @@ class HybridAStar:
         d_all = np.concatenate([[d_all[0] if len(d_all) else 1], d_all])
         k_all = np.concatenate([[k_all[0] if len(k_all) else 0.0], k_all])
         arc = np.concatenate([[0.0], np.cumsum(s_all)])
-        return Path(poses_arr, d_all, k_all, arc)
+        return PlannedPath(poses_arr, d_all, k_all, arc)
 
 
 # ---------------------------------------------------------------------- helpers
@@ -619,7 +619,7 @@ def _count(number: int) -> str:
     return f"{digits[0]}.{digits[1:3]}".rstrip("0").rstrip(".") + f"e+{len(digits) - 1}"
 
 
-def _driven_backwards(path: Path) -> Path:
+def _driven_backwards(path: PlannedPath) -> PlannedPath:
     """The same curve traversed from its end to its start: every motion in the other gear,
     the curvature (dθ per signed metre) unchanged."""
     n = len(path.poses)
@@ -630,7 +630,9 @@ def _driven_backwards(path: Path) -> Path:
     directions[0] = directions[1] if n > 1 else path.directions[0]
     curvatures[0] = curvatures[1] if n > 1 else path.curvatures[0]
     arc = path.arc_length[-1] - path.arc_length[::-1]
-    return Path(path.poses[::-1].copy(), directions, curvatures, arc, path.success, path.stats)
+    return PlannedPath(
+        path.poses[::-1].copy(), directions, curvatures, arc, path.success, path.stats
+    )
 
 
 def _arc_offsets(kappa: float, s: np.ndarray) -> np.ndarray:

@@ -1,7 +1,7 @@
-"""The planning result :class:`Path` and the curve paths of Reeds–Shepp and Dubins.
+"""The planning result :class:`PlannedPath` and the curve paths of Reeds–Shepp and Dubins.
 
-A :class:`Path` is a sequence of poses of the robot's **reference point** (the rear-axle centre
-for car-like robots, the wheel-axle centre for differential drive) with, at each sample, the
+A :class:`PlannedPath` is a sequence of poses of the robot's **reference point** (the rear-axle
+centre for car-like robots, the wheel-axle centre for differential drive) with, at each sample, the
 driving direction (+1 forward, −1 reverse) and the steering curvature κ [1/m] (positive = turning
 left when driving forward; a reverse move along κ turns the heading by −κ·|Δs|). Turning in
 place (differential drive) has zero arc length and κ = ±inf.
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from wheelbase.planning.footprint import Footprint
     from wheelbase.planning.occupancy import OccupancyGrid
 
-__all__ = ["CurvePath", "Path", "PlanningStats"]
+__all__ = ["CurvePath", "PlannedPath", "PlanningStats"]
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class PlanningStats:
 
 
 @dataclass(frozen=True, eq=False)
-class Path:
+class PlannedPath:
     """A planned path: poses with driving direction and curvature at each sample.
 
     Parameters
@@ -91,7 +91,7 @@ class Path:
         object.__setattr__(self, "arc_length", np.asarray(self.arc_length, dtype=np.float64))
 
     @classmethod
-    def failure(cls, stats: PlanningStats) -> Path:
+    def failure(cls, stats: PlanningStats) -> PlannedPath:
         """An empty, unsuccessful path carrying the statistics of the failed search.
 
         Parameters
@@ -101,7 +101,7 @@ class Path:
 
         Returns
         -------
-        Path
+        PlannedPath
         """
         empty = np.zeros(0)
         return cls(np.zeros((0, 3)), empty.astype(np.int8), empty, empty, False, stats)
@@ -239,7 +239,7 @@ class CurvePath:
             pose = _advance(pose, int(kind), float(length), self.turning_radius)
         return pose
 
-    def sample(self, step: float = 0.1) -> Path:
+    def sample(self, step: float = 0.1) -> PlannedPath:
         """Sample the path at arc-length spacing at most ``step``, including every segment end.
 
         Parameters
@@ -249,7 +249,7 @@ class CurvePath:
 
         Returns
         -------
-        Path
+        PlannedPath
             Poses, driving directions, curvatures and arc length; the last pose is the end
             pose to rounding.
         """
@@ -276,7 +276,7 @@ class CurvePath:
         else:
             dirs.insert(0, dirs[0])
             curv.insert(0, curv[0])
-        return Path(np.array(poses), np.array(dirs), np.array(curv), np.array(arc))
+        return PlannedPath(np.array(poses), np.array(dirs), np.array(curv), np.array(arc))
 
 
 def _advance(pose: np.ndarray, kind: int, s: float, r: float) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Matplotlib figures of maps and planned paths (no plotting inside the algorithms).
 
-:meth:`wheelbase.planning.Path.plot` delegates here.
+:meth:`wheelbase.planning.PlannedPath.plot` delegates here.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from wheelbase.geometry import transform_points
 if TYPE_CHECKING:
     from wheelbase.planning.footprint import Footprint
     from wheelbase.planning.occupancy import OccupancyGrid
-    from wheelbase.planning.path import Path
+    from wheelbase.planning.path import PlannedPath
     from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["draw_obstacles", "plot_grid", "plot_path"]
@@ -91,7 +91,7 @@ def plot_grid(grid: OccupancyGrid | PolygonWorld, ax: Any = None) -> Any:
 
 
 def plot_path(
-    path: Path,
+    path: PlannedPath,
     ax: Any = None,
     *,
     grid: OccupancyGrid | PolygonWorld | None = None,
@@ -104,7 +104,7 @@ def plot_path(
 
     Parameters
     ----------
-    path : Path
+    path : PlannedPath
         The planned path.
     ax : matplotlib.axes.Axes or None
         Axes to draw on; a new figure when ``None``.

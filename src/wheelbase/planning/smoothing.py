@@ -35,13 +35,13 @@ from wheelbase._validate import nonnegative, positive
 from wheelbase.geometry import wrap_angle
 from wheelbase.planning.footprint import Footprint
 from wheelbase.planning.occupancy import OccupancyGrid
-from wheelbase.planning.path import Path
+from wheelbase.planning.path import PlannedPath
 
 __all__ = ["smooth_path"]
 
 
 def smooth_path(
-    path: Path,
+    path: PlannedPath,
     grid: OccupancyGrid,
     footprint: Footprint,
     turning_radius: float,
@@ -50,12 +50,12 @@ def smooth_path(
     safe_distance: float = 0.3,
     collision_margin: float | None = None,
     basis: int = 6,
-) -> Path:
+) -> PlannedPath:
     """Smooth a planned path segment by segment, keeping cusps, clearance and curvature.
 
     Parameters
     ----------
-    path : Path
+    path : PlannedPath
         A successful path (e.g. from :meth:`HybridAStar.plan`).
     grid : OccupancyGrid
         The map it was planned on.
@@ -75,7 +75,7 @@ def smooth_path(
 
     Returns
     -------
-    Path
+    PlannedPath
         Same start, goal, cusps and statistics; poses, curvatures and arc length updated.
 
     Examples
@@ -137,7 +137,9 @@ def smooth_path(
             curv[a + 1 : b + 1] = new_k
             curv[a] = new_k[0] if a == 0 else curv[a]
             break
-    return Path(poses, path.directions.copy(), curv, path.arc_length.copy(), True, path.stats)
+    return PlannedPath(
+        poses, path.directions.copy(), curv, path.arc_length.copy(), True, path.stats
+    )
 
 
 def _clearance_kept(grid, footprint, poses, margin, safe) -> float:
