@@ -93,8 +93,8 @@ def test_differential_drive_turns_in_place():
     np.testing.assert_allclose(path.poses[idx, :2], path.poses[idx - 1, :2], atol=1e-12)
 
 
-# the slots below 1.2 car lengths are beyond the planner (benchmarks/planning.py reports them)
-UNSOLVED = ("parallel_115", "parallel_110")
+# the 1.1-car-length slot is beyond the planner (benchmarks/planning.py reports it)
+UNSOLVED = ("parallel_110",)
 
 
 @pytest.mark.parametrize("name", [n for n in BUNDLED_MAPS if n not in UNSOLVED])
@@ -110,6 +110,27 @@ def test_bundled_scenarios_all_succeed_collision_free(name):
         )
         path = planner.plan(sc.start, sc.goal)
         check_path(grid, planner, path, sc.start, sc.goal)
+
+
+def test_moves_to_contact_park_in_a_slot_1_15_car_lengths_long():
+    """Out of a 1.15-car-length slot takes 13 moves, most shorter than a motion primitive: cut
+    at contact. Without them the search runs out of states; with them the path is exact at
+    the ends and collision-free (an independent point-lattice check at 2 cm)."""
+    sc = next(s for s in bundled_scenarios() if s.name == "parallel_115_out")
+    world = load_map(sc.map_name)
+    options = {**sc.planner, "smooth": False}
+    assert options.pop("moves_to_contact") is True
+    kwargs = {"rear_axle_to_center": sc.rear_axle_to_center, **options}
+    without = HybridAStar(world, sc.footprint, sc.turning_radius, **kwargs)
+    assert not without.plan(sc.start, sc.goal).success
+    planner = HybridAStar(world, sc.footprint, sc.turning_radius, moves_to_contact=True, **kwargs)
+    path = planner.plan(sc.start, sc.goal)
+    check_path(world, planner, path, sc.start, sc.goal, spacing=0.02)
+    assert path.cusps >= 9
+    # moves (between cusps) shorter than one primitive: only cut moves are that short
+    bounds = [0, *path.cusp_indices, len(path.poses) - 1]
+    moves = np.diff(path.arc_length[bounds])
+    assert np.sum(moves < planner.primitive_length - 1e-9) >= 3
 
 
 def test_search_from_goal_returns_the_same_kind_of_path():

@@ -8,7 +8,10 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   first (cheapest) state to close a bin prunes later ones;
 * motion primitives: arcs of curvature in ``linspace(−1/R, 1/R, curvatures)`` driven forward and
   (optionally) in reverse, of length ``max(R·2π/headings, √2·xy_resolution)``; with
-  ``turning_radius=0`` (differential drive) straight moves plus turns in place;
+  ``turning_radius=0`` (differential drive) straight moves plus turns in place; with
+  ``moves_to_contact``, near obstacles a primitive that collides is kept up to its last free
+  sample (the short back-and-forth moves of tight parking: a 1.15-car-length parallel slot
+  takes 13);
 * cost: distance × ``non_straight_penalty`` on arcs × ``reverse_penalty`` in reverse, plus
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
@@ -169,6 +172,12 @@ class HybridAStar:
         tolerances are 0; otherwise the start (a robot that turns in place leaves any end
         as easily: on the bundled maze, searching from the goal expanded 5× more states).
 
+    moves_to_contact : bool
+        Near obstacles, cut a motion primitive that collides at its last free sample and keep
+        the shorter move (a move until contact, as a driver edges forward and back in a tight
+        slot); default off. The tight parking scenarios need it: their manoeuvres are many
+        moves shorter than a primitive. Every cut move is collision-checked like any motion.
+
     Notes
     -----
     A motion primitive is never longer than the map's diagonal (no longer one could stay in
@@ -211,6 +220,7 @@ class HybridAStar:
         smooth: bool = True,
         max_state_bins: int = MAX_STATE_BINS,
         search_from: str = "auto",
+        moves_to_contact: bool = False,
     ) -> None:
         if not isinstance(grid, OccupancyGrid | PolygonWorld):
             raise ConfigError(
@@ -278,6 +288,7 @@ class HybridAStar:
         self.search_from = check_choice("search_from", search_from, ("auto", "start", "goal"))
         if self.search_from == "goal" and not self.reverse:
             raise ConfigError("search_from='goal' needs reverse=True (a path driven backwards)")
+        self.moves_to_contact = flag("moves_to_contact", moves_to_contact)
 
         nx = math.ceil(grid.width_m / self.xy_resolution)
         ny = math.ceil(grid.height_m / self.xy_resolution)
@@ -469,14 +480,15 @@ class HybridAStar:
             self.max_iterations,
             self.time_limit,
             self._turn_cost,
+            self.moves_to_contact,
         )
-        status, goal_node, xs, ys, ths, parents, prim_of, expanded, shot_types, shot_lengths = out
+        status, goal_node, xs, ys, ths, parents, prim_of, used_of, expanded, shots, lengths = out
         planning_time = time.perf_counter() - t0
         stats = PlanningStats(int(expanded), planning_time, compile_time, _STATUS[int(status)])
         if status != 0:
             return PlannedPath.failure(stats)
         path = self._reconstruct(
-            goal_node, xs, ys, ths, parents, prim_of, shot_types, shot_lengths, start, prims
+            goal_node, xs, ys, ths, parents, prim_of, used_of, shots, lengths, start, prims
         )
         if backwards:
             path = _driven_backwards(path)
@@ -557,8 +569,9 @@ class HybridAStar:
         return bool(clear[1] < clear[0])
 
     def _reconstruct(
-        self, goal_node, xs, ys, ths, parents, prim_of, shot_types, shot_lengths, start, prims
-    ) -> PlannedPath:
+        self, goal_node, xs, ys, ths, parents, prim_of, used_of, shot_types, shot_lengths, start,
+        prims,
+    ) -> PlannedPath:  # fmt: skip
         chain = [int(goal_node)]
         while parents[chain[-1]] >= 0:
             chain.append(int(parents[chain[-1]]))
@@ -571,12 +584,13 @@ class HybridAStar:
             p = int(prim_of[node])
             parent = int(parents[node])
             base = np.array([xs[parent], ys[parent], ths[parent]])
-            offs = prims.offsets[p, : prims.nsamples[p]]
+            used = int(used_of[node])  # all of the primitive's samples, or a move cut at contact
+            offs = prims.offsets[p, :used]
             poses.append(_compose(base, offs))
             n = len(offs)
             dirs.append(np.full(n, prims.direction[p]))
             curv.append(np.full(n, prims.kappa[p]))
-            dist.append(np.full(n, prims.length[p] / n))
+            dist.append(np.full(n, prims.length[p] / prims.nsamples[p]))
         last = np.array([xs[chain[-1]], ys[chain[-1]], ths[chain[-1]]])
         for kind, length in zip(shot_types, shot_lengths, strict=True):
             if length == 0.0:
@@ -829,13 +843,14 @@ def _shot_free(
 
 
 @numba.njit(cache=True, inline="always")
-def _motion_free(
+def _free_prefix(
     world, dist, res, x0, y0, poly, circles, cradius, x, y, th, offsets, p, ns, sweep, clear0
 ):
-    """Whether the samples ``offsets[p, :ns]`` of primitive ``p`` from pose ``(x, y, th)`` are
-    free; ``sweep`` bounds how far a covering circle moves along the whole primitive and
-    ``clear0`` is the clearance of the circles at the pose (see :func:`_circles_clearance`;
-    ``dist``, ``res``, ``x0``, ``y0`` are the world's distance field and raster geometry)."""
+    """How many leading samples ``offsets[p, :ns]`` of primitive ``p`` from pose ``(x, y, th)``
+    are free (``ns``: all); ``sweep`` bounds how far a covering circle moves along the whole
+    primitive and ``clear0`` is the clearance of the circles at the pose (see
+    :func:`_circles_clearance`; ``dist``, ``res``, ``x0``, ``y0`` are the world's distance
+    field and raster geometry)."""
     c = math.cos(th)
     s = math.sin(th)
     per = sweep / ns
@@ -846,9 +861,9 @@ def _motion_free(
         pth = th + offsets[p, k, 2]
         clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
         if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth):
-            return False
+            return k
         k = _next_sample(k, clear, per)
-    return True
+    return ns
 
 
 @numba.njit(cache=True, inline="always")
@@ -992,6 +1007,7 @@ def _search(
     max_iter,
     time_limit,
     turn_cost,
+    cut_moves,
 ):
     t_start = _now()
     dist = world[2]
@@ -1005,6 +1021,7 @@ def _search(
     gs = np.empty(capacity)
     parents = np.empty(capacity, dtype=np.int64)
     prim_of = np.empty(capacity, dtype=np.int64)
+    used_of = np.empty(capacity, dtype=np.int64)  # samples of the primitive driven (a cut move)
     last_dir = np.empty(capacity, dtype=np.int64)
     # whether a node's queue key holds the full heuristic or only the cheap bound: the curve
     # length (microseconds) is computed when a node first reaches the top of the queue, so
@@ -1022,6 +1039,7 @@ def _search(
     xs[0], ys[0], ths[0], gs[0] = start[0], start[1], start[2], 0.0
     parents[0] = -1
     prim_of[0] = -1
+    used_of[0] = 0
     last_dir[0] = 0
     exact_h[0] = True
     n_nodes = 1
@@ -1070,6 +1088,7 @@ def _search(
             gs = _grown(gs, n_nodes, capacity)
             parents = _grown(parents, n_nodes, capacity)
             prim_of = _grown(prim_of, n_nodes, capacity)
+            used_of = _grown(used_of, n_nodes, capacity)
             last_dir = _grown(last_dir, n_nodes, capacity)
             exact_h = _grown(exact_h, n_nodes, capacity)
         if hsize + n_prims + 1 > hcap:
@@ -1150,33 +1169,42 @@ def _search(
             free_sweep = _circles_clearance(dist, res, x0, y0, circles, cradius, x, y, th)
             for p in range(n_prims):
                 ns = nsamples[p]
-                ox = offsets[p, ns - 1, 0]
-                oy = offsets[p, ns - 1, 1]
-                nxp = x + c * ox - s * oy
-                nyp = y + s * ox + c * oy
-                nth = _wrap(th + offsets[p, ns - 1, 2])
-                nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-                if nb < 0 or closed[nb]:
-                    continue
-                cost = pcost[p]
                 d = pdir[p]
                 ld = last_dir[node]
-                if d != 0 and ld != 0 and d != ld:
-                    cost += switch_penalty
+                extra = switch_penalty if (d != 0 and ld != 0 and d != ld) else 0.0
+                pc = pcost[p]
                 if (
                     parent_prim >= 0
                     and pdir[p] != 0
                     and pdir[parent_prim] != 0
                     and pkappa[p] != pkappa[parent_prim]
                 ):
-                    cost += change_penalty * pcost[p]
-                ng = g + cost
-                if ng >= best_g[nb]:
+                    extra += change_penalty * pcost[p]  # the whole primitive's, cut or not
+                nxp = x + c * offsets[p, ns - 1, 0] - s * offsets[p, ns - 1, 1]
+                nyp = y + s * offsets[p, ns - 1, 0] + c * offsets[p, ns - 1, 1]
+                nth = _wrap(th + offsets[p, ns - 1, 2])
+                nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
+                full_open = nb >= 0 and not closed[nb] and g + (pc + extra) < best_g[nb]
+                near = psweep[p] >= free_sweep
+                if not full_open and not (cut_moves and near):
                     continue
-                if psweep[p] >= free_sweep and not _motion_free(
-                    world, dist, res, x0, y0, poly, circles, cradius, x, y, th,
-                    offsets, p, ns, psweep[p], free_sweep,
-                ):  # fmt: skip
+                use = ns
+                if near:
+                    use = _free_prefix(
+                        world, dist, res, x0, y0, poly, circles, cradius, x, y, th,
+                        offsets, p, ns, psweep[p], free_sweep,
+                    )  # fmt: skip
+                    if use == 0 or (use < ns and not cut_moves) or (use == ns and not full_open):
+                        continue
+                    if use < ns:  # the move until contact: up to the last free sample
+                        nxp = x + c * offsets[p, use - 1, 0] - s * offsets[p, use - 1, 1]
+                        nyp = y + s * offsets[p, use - 1, 0] + c * offsets[p, use - 1, 1]
+                        nth = _wrap(th + offsets[p, use - 1, 2])
+                        nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
+                        if nb < 0 or closed[nb]:
+                            continue
+                ng = g + ((pc if use == ns else pc * use / ns) + extra)
+                if ng >= best_g[nb]:
                     continue
                 hn = _cheap_heuristic(
                     nxp, nyp, nth, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost
@@ -1190,6 +1218,7 @@ def _search(
                 gs[n_nodes] = ng
                 parents[n_nodes] = node
                 prim_of[n_nodes] = p
+                used_of[n_nodes] = use
                 last_dir[n_nodes] = d if d != 0 else ld
                 exact_h[n_nodes] = mode == _MODE_POINT  # there the cheap bound is the heuristic
                 hsize = _heap_push(hkeys, hids, hsize, ng + hweight * hn, n_nodes)
@@ -1204,6 +1233,7 @@ def _search(
         ths[:n_nodes],
         parents[:n_nodes],
         prim_of[:n_nodes],
+        used_of[:n_nodes],
         expanded,
         shot_types,
         shot_lengths,

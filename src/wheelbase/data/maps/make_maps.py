@@ -142,6 +142,10 @@ TIGHT_CAR = {
 PARALLEL_SLOTS = (1.5, 1.4, 1.3, 1.25, 1.2, 1.15, 1.1)
 # tight spaces need short moves: 0.1 m position bins, 2.5 degree heading bins (13 cm arcs)
 TIGHT_PLANNER = {"planner": {"xy_resolution": 0.1, "headings": 144}}
+# a parallel slot below 1.25 car lengths takes 7 to 13 moves shorter than a primitive: moves
+# cut at contact, checked every 2 cm (the continuous-collision margin shrinks with the step)
+SLOT_PLANNER = {"planner": {**TIGHT_PLANNER["planner"], "collision_step": 0.02,
+                            "moves_to_contact": True}}  # fmt: skip
 
 
 def _rect(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
@@ -171,8 +175,8 @@ def parallel_slot(ratio: float) -> tuple[dict, list[dict]]:
     lane = [round(s1 + 1.0 - rear, 3), round(lane_y + 0.5 + width / 2, 3), 0.0]
     name = f"parallel_{round(ratio * 100)}"
     scenarios = [
-        {"name": f"{name}_in", "start": lane, "goal": parked, **TIGHT_CAR, **TIGHT_PLANNER},
-        {"name": f"{name}_out", "start": parked, "goal": lane, **TIGHT_CAR, **TIGHT_PLANNER},
+        {"name": f"{name}_in", "start": lane, "goal": parked, **TIGHT_CAR, **SLOT_PLANNER},
+        {"name": f"{name}_out", "start": parked, "goal": lane, **TIGHT_CAR, **SLOT_PLANNER},
     ]
     return world, scenarios
 
