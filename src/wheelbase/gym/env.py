@@ -75,10 +75,7 @@ class NavigateEnv(gymnasium.Env):
         self.render_mode = render_mode
         self.task = NavigateTask(1, **task)
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
-        size = self.task.observation_size
-        low = np.full(size, -1.0, dtype=np.float32)
-        low[: self.task.lidar.beams + 1] = 0.0
-        self.observation_space = spaces.Box(low, np.ones(size, dtype=np.float32), dtype=np.float32)
+        self.observation_space = spaces.Box(*self.task.observation_bounds(), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
         self._figure: Any = None
 

@@ -336,6 +336,13 @@ class NavigateTask:
         self.ranges = self._scan(pose, rng if noisy else None)
         return reward, arrived, collided, truncated
 
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds ``(beams + 5,)`` float32 of one robot's observation."""
+        size = self.observation_size
+        low = np.full(size, -1.0, dtype=np.float32)
+        low[: self.lidar.beams + 1] = 0.0  # ranges and the goal distance are >= 0
+        return low, np.ones(size, dtype=np.float32)
+
     def observations(self) -> np.ndarray:
         """The observation ``(N, beams + 5)`` of every robot (module docstring), float32."""
         state = self.state

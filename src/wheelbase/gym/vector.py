@@ -93,11 +93,8 @@ class NavigateVectorEnv(VectorEnv):
             "render_modes": ["rgb_array"],
             "render_fps": round(1.0 / self.task.dt),
         }
-        size = self.task.observation_size
-        low = np.full(size, -1.0, dtype=np.float32)
-        low[: self.task.lidar.beams + 1] = 0.0
         self.single_observation_space = spaces.Box(
-            low, np.ones(size, dtype=np.float32), dtype=np.float32
+            *self.task.observation_bounds(), dtype=np.float32
         )
         self.single_action_space = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
