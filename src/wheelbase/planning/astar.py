@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase.errors import ConfigError, InputError, PlanningError
+from wheelbase.planning._heap import _heap_pop, _heap_push
 from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["GridPath", "astar", "dijkstra"]
@@ -223,9 +224,12 @@ def _dijkstra_kernel(occ, gr, gc, connectivity, cut_corners=False, axis=1.0, dia
     closed = np.zeros(n, dtype=np.bool_)
     goal = gr * cols + gc
     g[goal] = 0.0
-    heap = [(0.0, goal)]
-    while len(heap) > 0:
-        gs, idx = heapq.heappop(heap)
+    # an array heap: a cell is pushed at most once per neighbour that improves it
+    keys = np.empty(connectivity * n + 1)
+    items = np.empty(connectivity * n + 1, dtype=np.int64)
+    size = _heap_push(keys, items, 0, 0.0, goal)
+    while size > 0:
+        gs, idx, size = _heap_pop(keys, items, size)
         if closed[idx]:
             continue
         closed[idx] = True
@@ -238,5 +242,5 @@ def _dijkstra_kernel(occ, gr, gc, connectivity, cut_corners=False, axis=1.0, dia
             cand = gs + (diagonal if k >= 4 else axis)
             if cand < g[nidx]:
                 g[nidx] = cand
-                heapq.heappush(heap, (cand, nidx))
+                size = _heap_push(keys, items, size, cand, nidx)
     return g
