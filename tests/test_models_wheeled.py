@@ -224,3 +224,9 @@ def test_geometry_that_overflows_the_jacobian_is_a_config_error(half_length, whe
     # found by tests/test_fuzz.py: an overflow warning, then a Jacobian of inf
     with pytest.raises(ConfigError, match="wheel Jacobian overflows"):
         mecanum4(wheel_radius, half_length, 0.15)
+
+
+def test_a_radius_whose_inverse_jacobian_overflows_is_a_config_error():
+    # omni3(wheel_radius=6e307) overflowed in the pseudo-inverse (found by the explore run)
+    with pytest.raises(ConfigError, match="inverse overflows"):
+        omni3(6.227391691998602e307, 0.2)

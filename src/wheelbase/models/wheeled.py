@@ -189,7 +189,15 @@ class WheeledBase(ModelBase):
             )
         for array in (jacobian, constraints):
             array.setflags(write=False)
-        pinv = np.linalg.pinv(constraints)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            pinv = np.linalg.pinv(constraints)
+        if not np.all(np.isfinite(pinv)):
+            largest = max(wheels, key=lambda w: w.radius)
+            raise ConfigError(
+                f"the wheel Jacobian's inverse overflows float64: a wheel radius of "
+                f"{largest.radius:g} m makes the wheel speeds of any motion underflow (use "
+                "radii below 1e10 m)"
+            )
         pinv.setflags(write=False)
         object.__setattr__(self, "_jacobian", jacobian)
         object.__setattr__(self, "_constraints", constraints)
