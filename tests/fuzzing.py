@@ -47,6 +47,7 @@ __all__ = [
     "run_scenario_file",
     "scenario_cases",
     "scenario_file_cases",
+    "warm_up",
 ]
 
 BUDGET_S = {
@@ -161,6 +162,13 @@ def outcome(call: Callable[[], Any], budget_s: float) -> Outcome:
     if kind != "hang" and seconds > budget_s:
         kind, detail = "hang", f"returned after {seconds:.1f} s > {budget_s:g} s"
     return Outcome(kind, detail, seconds)
+
+
+def warm_up() -> None:
+    """Compile (or load from the cache) the Numba kernels the cases use, outside any budget: a
+    first call that compiles under a loaded machine can take longer than a case may."""
+    for base in BASES:
+        outcome(lambda base=base: run_scenario(base), 600.0)
 
 
 def _where(error: BaseException) -> str:

@@ -26,6 +26,12 @@ def _examples(ci: int, explore: int) -> dict:
     return {"max_examples": ci if current.default.derandomize else explore}
 
 
+@pytest.fixture(autouse=True, scope="module")
+def _compiled():
+    """Kernels compiled before the first budgeted case (a fresh cache compiles for a minute)."""
+    fuzzing.warm_up()
+
+
 def check(call, case, kind: str) -> None:
     """Fail unless the case ran or raised a WheelbaseError within its budget."""
     result = fuzzing.outcome(lambda: call(case), fuzzing.BUDGET_S[kind])
