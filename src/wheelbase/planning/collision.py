@@ -255,6 +255,31 @@ def _first_shared_bucket(world, k, i0, j0):
 
 
 @numba.njit(cache=True)
+def _pieces_in_box(world, xlo, xhi, ylo, yhi, out):
+    """The broad phase: write into ``out`` (room for every piece) the pieces whose bounding
+    box meets ``[xlo, xhi] × [ylo, yhi]``, each once, from the buckets under the box; returns
+    how many."""
+    aabb = world[_PAABB]
+    bstart = world[_BSTART]
+    bitems = world[_BITEMS]
+    bnx = world[_BGEOM][3]
+    count = 0
+    i0, i1, j0, j1 = _bucket_range(world, xlo, xhi, ylo, yhi)
+    for i in range(i0, i1 + 1):
+        for j in range(j0, j1 + 1):
+            b = i * bnx + j
+            for q in range(bstart[b], bstart[b + 1]):
+                k = bitems[q]
+                if aabb[k, 0] > xhi or aabb[k, 1] < xlo or aabb[k, 2] > yhi or aabb[k, 3] < ylo:
+                    continue
+                fi, fj = _first_shared_bucket(world, k, i0, j0)
+                if fi == i and fj == j:
+                    out[count] = k
+                    count += 1
+    return count
+
+
+@numba.njit(cache=True)
 def _convex_separated(a, na, b, nb):
     """True if convex polygons ``a[:na]`` and ``b[:nb]`` (any orientation) are disjoint as
     closed sets: some edge normal of either separates their projections strictly."""
@@ -318,27 +343,12 @@ def _polygon_hits_pieces(world, wp):
     pieces = world[_PIECES]
     nverts = world[_NVERTS]
     prad = world[_PRAD]
-    aabb = world[_PAABB]
-    bstart = world[_BSTART]
-    bitems = world[_BITEMS]
-    bnx = world[_BGEOM][3]
-    xlo = wp[:, 0].min()
-    xhi = wp[:, 0].max()
-    ylo = wp[:, 1].min()
-    yhi = wp[:, 1].max()
-    i0, i1, j0, j1 = _bucket_range(world, xlo, xhi, ylo, yhi)
-    for i in range(i0, i1 + 1):
-        for j in range(j0, j1 + 1):
-            b = i * bnx + j
-            for q in range(bstart[b], bstart[b + 1]):
-                k = bitems[q]
-                if aabb[k, 0] > xhi or aabb[k, 1] < xlo or aabb[k, 2] > yhi or aabb[k, 3] < ylo:
-                    continue
-                fi, fj = _first_shared_bucket(world, k, i0, j0)
-                if fi != i or fj != j:
-                    continue
-                if _piece_hit(wp, pieces[k], nverts[k], prad[k]):
-                    return True
+    near = np.empty(pieces.shape[0], dtype=np.int64)
+    n = _pieces_in_box(world, wp[:, 0].min(), wp[:, 0].max(), wp[:, 1].min(), wp[:, 1].max(), near)
+    for m in range(n):
+        k = near[m]
+        if _piece_hit(wp, pieces[k], nverts[k], prad[k]):
+            return True
     return False
 
 
@@ -413,10 +423,7 @@ def _clearance_batch(world, poly, circles, radius, poses):
     pieces = world[_PIECES]
     nverts = world[_NVERTS]
     prad = world[_PRAD]
-    aabb = world[_PAABB]
-    bstart = world[_BSTART]
-    bitems = world[_BITEMS]
-    bnx = world[_BGEOM][3]
+    near = np.empty(pieces.shape[0], dtype=np.int64)
     rows, cols = occ.shape
     out = np.empty(poses.shape[0])
     slack = math.sqrt(2.0) * res
@@ -457,24 +464,9 @@ def _clearance_batch(world, poly, circles, radius, poses):
                     if occ[a, b]:
                         d = _poly_square_distance(wp, x0 + b * res, y0 + a * res, res)
                         best = min(best, d)
-        if pieces.shape[0] > 0:
-            bi0, bi1, bj0, bj1 = _bucket_range(world, xlo, xhi, ylo, yhi)
-            for bi in range(bi0, bi1 + 1):
-                for bj in range(bj0, bj1 + 1):
-                    bk = bi * bnx + bj
-                    for q in range(bstart[bk], bstart[bk + 1]):
-                        k = bitems[q]
-                        if (
-                            aabb[k, 0] > xhi
-                            or aabb[k, 1] < xlo
-                            or aabb[k, 2] > yhi
-                            or aabb[k, 3] < ylo
-                        ):
-                            continue
-                        fi, fj = _first_shared_bucket(world, k, bi0, bj0)
-                        if fi != bi or fj != bj:
-                            continue
-                        best = min(best, _poly_piece_distance(wp, pieces[k], nverts[k], prad[k]))
+        for m in range(_pieces_in_box(world, xlo, xhi, ylo, yhi, near)):
+            k = near[m]
+            best = min(best, _poly_piece_distance(wp, pieces[k], nverts[k], prad[k]))
         out[n] = best
     return out
 

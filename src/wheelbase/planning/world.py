@@ -30,16 +30,12 @@ from wheelbase._validate import as_float_array, integer, nonnegative, positive
 from wheelbase.errors import MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.collision import (
-    _BITEMS,
-    _BSTART,
     _NVERTS,
-    _PAABB,
     _PIECES,
     _PRAD,
     FootprintChecks,
-    _bucket_range,
     _convex_separated,
-    _first_shared_bucket,
+    _pieces_in_box,
     _point_polygon_distance,
     _world_tuple,
 )
@@ -532,10 +528,7 @@ def _point_distances(world, points, reach):
     pieces = world[_PIECES]
     nverts = world[_NVERTS]
     prad = world[_PRAD]
-    aabb = world[_PAABB]
-    bstart = world[_BSTART]
-    bitems = world[_BITEMS]
-    bnx = world[13][3]
+    near = np.empty(pieces.shape[0], dtype=np.int64)
     out = np.full(points.shape[0], np.inf)
     for n in range(points.shape[0]):
         px = points[n, 0]
@@ -543,19 +536,9 @@ def _point_distances(world, points, reach):
         r = reach[n]
         if not np.isfinite(r):
             r = 1e300
-        xlo, xhi, ylo, yhi = px - r, px + r, py - r, py + r
-        i0, i1, j0, j1 = _bucket_range(world, xlo, xhi, ylo, yhi)
         best = np.inf
-        for i in range(i0, i1 + 1):
-            for j in range(j0, j1 + 1):
-                b = i * bnx + j
-                for q in range(bstart[b], bstart[b + 1]):
-                    k = bitems[q]
-                    if aabb[k, 0] > xhi or aabb[k, 1] < xlo or aabb[k, 2] > yhi or aabb[k, 3] < ylo:
-                        continue
-                    fi, fj = _first_shared_bucket(world, k, i0, j0)
-                    if fi != i or fj != j:
-                        continue
-                    best = min(best, _point_piece_distance(px, py, pieces[k], nverts[k], prad[k]))
+        for m in range(_pieces_in_box(world, px - r, px + r, py - r, py + r, near)):
+            k = near[m]
+            best = min(best, _point_piece_distance(px, py, pieces[k], nverts[k], prad[k]))
         out[n] = best
     return out
