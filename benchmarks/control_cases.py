@@ -218,7 +218,7 @@ def three_point_turn_path(radius: float = 1.5, step: float = 0.05) -> Any:
     step : float
         Largest spacing of the points [m], > 0.
     """
-    from wheelbase.control.path import Polyline
+    from wheelbase.planning import PlannedPath
 
     r = positive("radius", radius, "m")
     n = max(4, math.ceil(0.5 * math.pi * r / positive("step", step, "m")) + 1)
@@ -229,7 +229,7 @@ def three_point_turn_path(radius: float = 1.5, step: float = 0.05) -> Any:
     m = max(2, math.ceil(4.0 / 3.0 * r / step))
     last = np.stack([np.linspace(2 * r, 2 * r / 3, m + 1)[1:], np.zeros(m)], -1)
     directions = np.r_[np.ones(n - 1), -np.ones(n - 1), np.ones(m)]
-    return Polyline(np.concatenate([forward, reverse, last]), directions)
+    return PlannedPath.from_points(np.concatenate([forward, reverse, last]), directions)
 
 
 def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str, Any]]:
@@ -254,7 +254,6 @@ def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str
     """
     from wheelbase.control.base import SteeringLimits, VelocityLimits
     from wheelbase.control.path import (
-        Polyline,
         PurePursuit,
         RearWheelFeedback,
         SegmentFollower,
@@ -262,6 +261,7 @@ def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str
     )
     from wheelbase.control.tracking import Kanayama, LinearTracker
     from wheelbase.models import RearWheelBicycle, Unicycle
+    from wheelbase.planning import PlannedPath
 
     limits = VelocityLimits(*BENCHMARK_LIMITS)
     rows: list[dict[str, Any]] = []
@@ -295,7 +295,7 @@ def tracking_benchmark(dt: float = 0.01) -> tuple[list[dict[str, Any]], dict[str
         final = np.hypot(*(pose[-1, :2] - ref[-1, :2]))
         record("figure_eight", name, "unicycle", result.t, lateral, final)
 
-    eight_path = Polyline(eight.poses[::20, :2])
+    eight_path = PlannedPath.from_points(eight.poses[::20, :2])
     cusp = three_point_turn_path()
     followers = {
         "segment": SegmentFollower,

@@ -49,19 +49,18 @@ import numpy as np
 from control_cases import figure_eight_reference, three_point_turn_path
 from wheelbase.control import (
     MPPI,
-    Polyline,
     PurePursuit,
     RearWheelFeedback,
     SteeringLimits,
     VelocityLimits,
 )
 from wheelbase.models import RearWheelBicycle, Unicycle
-from wheelbase.planning import Footprint, load_map
+from wheelbase.planning import Footprint, PlannedPath, load_map
 from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
 ROBOT = Footprint.rectangle(0.4, 0.4)
-STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])
+STRAIGHT = PlannedPath.from_points([[1.0, 4.0], [11.0, 4.0]])
 
 
 def cluttered():
@@ -172,7 +171,7 @@ def errors(result, path) -> dict:
 
 
 def tracking() -> list[dict]:
-    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    eight = PlannedPath.from_points(figure_eight_reference(30.0, 0.01).poses[::20, :2])
     cusp = three_point_turn_path()
     cases = (
         ("figure_eight", eight, (1.1, 0.8, 0.0), eight.length / 30.0, 0.35, 36.0, 0.05),

@@ -64,8 +64,8 @@ def main(out: Path) -> None:
     limits = SteeringLimits(math.radians(35.0), max_steering_rate=3.0)
     fig = Figure(figsize=(8, 5), layout="constrained")
     ax = fig.add_subplot()
-    points, forward = path.points, path.directions > 0
-    for index in range(path.n_segments):
+    points, forward = path.points, path.directions[1:] > 0  # the segment reaching each sample
+    for index in range(len(path) - 1):
         ax.plot(points[index : index + 2, 0], points[index : index + 2, 1],
                 color="0.7" if forward[index] else "salmon", lw=6)  # fmt: skip
     for cls in (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback):

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from wheelbase.control import MPPI, Polyline, PurePursuit, VelocityLimits
+from wheelbase.control import MPPI, PurePursuit, VelocityLimits
 from wheelbase.models import Unicycle
-from wheelbase.planning import Footprint, load_map
+from wheelbase.planning import Footprint, PlannedPath, load_map
 from wheelbase.sim import closed_loop
 
 
@@ -33,7 +33,7 @@ def main(out: Path) -> None:
     grid = load_map(Path(str(resources.files("wheelbase") / "data" / "maps" / "cluttered.yaml")))
     robot = Footprint.rectangle(0.4, 0.4)
     limits = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
-    path = Polyline([[1.0, 4.0], [11.0, 4.0]])
+    path = PlannedPath.from_points([[1.0, 4.0], [11.0, 4.0]])
     start = np.array([1.0, 4.0, 0.0])
 
     fig = Figure(figsize=(10, 7), layout="constrained")

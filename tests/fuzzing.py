@@ -615,7 +615,7 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
     from wheelbase.planning import Footprint, OccupancyGrid, dubins_length, reeds_shepp_length
 
     grid = OccupancyGrid.from_array(np.zeros((40, 40), bool), 0.1)
-    line = wb.Polyline([[0.0, 0.0], [2.0, 0.0]])
+    line = wb.PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0]])
     limits = VelocityLimits(max_speed=0.5, max_yaw_rate=1.0)
 
     def plan(**kw):

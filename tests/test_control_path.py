@@ -8,7 +8,6 @@ from hypothesis import strategies as st
 from wheelbase import ConfigError, InputError, Unicycle
 from wheelbase.control import SteeringLimits, VelocityLimits
 from wheelbase.control.path import (
-    Polyline,
     PurePursuit,
     RearWheelFeedback,
     SegmentFollower,
@@ -16,6 +15,7 @@ from wheelbase.control.path import (
 )
 from wheelbase.geometry import wrap_angle
 from wheelbase.models import RearWheelBicycle
+from wheelbase.planning import PlannedPath
 from wheelbase.sim import closed_loop
 
 LAWS = (SegmentFollower, PurePursuit, Stanley, RearWheelFeedback)
@@ -35,50 +35,53 @@ def three_point_turn():
     reverse = np.stack([3 + r * np.cos(b), r + r * np.sin(b)], -1)
     last = np.stack([np.linspace(3, 1, 41)[1:], np.zeros(40)], -1)
     directions = np.r_[np.ones(39), -np.ones(39), np.ones(40)]
-    return Polyline(np.concatenate([forward, reverse, last]), directions)
+    return PlannedPath.from_points(np.concatenate([forward, reverse, last]), directions)
 
 
-def test_polyline_geometry():
-    path = Polyline([[0, 0], [1, 0], [1, 0], [1, 2]], directions=[1, 1, -1])
-    assert path.n_segments == 2  # the repeated point is dropped with its segment
-    assert path.length == 3.0
-    np.testing.assert_array_equal(path.sections, [[0, 1], [1, 2]])
+def test_path_from_points_geometry():
+    path = PlannedPath.from_points([[0, 0], [1, 0], [1, 0], [1, 2]], directions=[1, 1, -1])
+    assert len(path) == 3  # the repeated point is dropped with its segment
+    assert path.length == 3.0 and path.cusps == 1
+    np.testing.assert_array_equal(path.directions, [1, 1, -1])
+    # reversing up +y: the robot faces -y
+    np.testing.assert_allclose(path.poses[:, 2], [0.0, 0.0, -math.pi / 2])
     np.testing.assert_allclose(path.distance([[0.5, 1.0], [2.0, 3.0]]), [0.5, math.sqrt(2)])
-    ring = Polyline(circle(2.0, 400))
-    np.testing.assert_allclose(ring.curvature[1:-1], 0.5, rtol=1e-3)
-    fine = ring.resample(0.01)
-    assert fine.length == pytest.approx(ring.length)
-    assert np.max(fine.segment_lengths) <= 0.01 + 1e-12
+    ring = PlannedPath.from_points(circle(2.0, 400))
+    np.testing.assert_allclose(ring.curvatures[1:-1], 0.5, rtol=1e-3)
+    backwards = PlannedPath.from_points(circle(2.0, 400), -np.ones(399))
+    # the same left-turning geometry driven in reverse: steering curvature of the other sign
+    np.testing.assert_allclose(backwards.curvatures[1:-1], -0.5, rtol=1e-3)
 
 
-def test_polyline_bad_input():
+def test_path_from_points_bad_input():
     with pytest.raises(InputError, match="two distinct points"):
-        Polyline([[1.0, 1.0], [1.0, 1.0]])
+        PlannedPath.from_points([[1.0, 1.0], [1.0, 1.0]])
     with pytest.raises(InputError, match="two distinct points"):
-        Polyline([[1.0, 1.0]])
+        PlannedPath.from_points([[1.0, 1.0]])
     with pytest.raises(InputError, match="directions"):
-        Polyline([[0, 0], [1, 0]], directions=[0.5])
+        PlannedPath.from_points([[0, 0], [1, 0]], directions=[0.5])
     with pytest.raises(InputError, match="one entry per segment"):
-        Polyline([[0, 0], [1, 0]], directions=[1, 1])
+        PlannedPath.from_points([[0, 0], [1, 0]], directions=[1, 1])
     with pytest.raises(InputError, match="path points"):
-        Polyline([[0, 0, 0], [1, 0, 0]])
+        PlannedPath.from_points([[0, 0, 0], [1, 0, 0]])
 
 
 @pytest.mark.parametrize("law", LAWS)
 def test_straight_line_offset_decays(law):
-    path = Polyline([[0.0, 0.0], [8.0, 0.0]])
+    path = PlannedPath.from_points([[0.0, 0.0], [8.0, 0.0]])
     controller = law(speed=0.4, wheel_base=0.2, limits=LIMITS)
     result = closed_loop(controller, Unicycle(), [0.0, 0.3, 0.3], path, 28.0, 0.01)
     y = np.abs(result.true_pose[0, :, 1])
     assert y[result.t >= 10.0].max() < 2e-3
     # it stops at the end of the path
     assert result.true_pose[0, -1, 0] == pytest.approx(8.0, abs=0.02)
-    assert np.all(result.command[0, -50:] == 0.0)
+    # (a planned path has a final heading: the follower holds it, so ω is ~1e-22, not 0)
+    assert np.all(np.abs(result.command[0, -50:]) <= 1e-12)
 
 
 @pytest.mark.parametrize("law", [PurePursuit, RearWheelFeedback])
 def test_circle_is_followed_closely(law):
-    path = Polyline(circle(1.0, 300, turns=0.9))
+    path = PlannedPath.from_points(circle(1.0, 300, turns=0.9))
     result = closed_loop(law(speed=0.3, limits=LIMITS), Unicycle(), [0, 0, 0], path, 25, 0.01)
     error = path.distance(result.true_pose[0, :, :2])
     assert error.max() < 0.01
@@ -87,7 +90,7 @@ def test_circle_is_followed_closely(law):
 def test_segment_follower_steady_offset_on_a_circle_is_the_closed_form():
     # without curvature feed-forward the law needs a heading error e = ω/K_φ = v/(R·K_φ), which
     # it gets from the offset atan(K_r·d/ℓ) = e: d = ℓ·tan(v/(R·K_φ))/K_r (outside the circle)
-    path = Polyline(circle(1.0, 600, turns=0.9))
+    path = PlannedPath.from_points(circle(1.0, 600, turns=0.9))
     law = SegmentFollower(speed=0.3, k_r=1.0, k_heading=4.0, length_scale=0.25, limits=LIMITS)
     result = closed_loop(law, Unicycle(), [0, 0, 0], path, 12, 0.01)
     late = result.true_pose[0, result.t > 8, :2]
@@ -99,7 +102,7 @@ def test_stanley_rear_axle_offtracking_matches_the_closed_form():
     # Stanley holds the front axle on the circle, so the rear axle runs on the circle of
     # radius √(R² − L²) that keeps the wheel base as a chord-free tangent: offset R − √(R² − L²)
     radius, base = 1.0, 0.3
-    path = Polyline(circle(radius, 400, turns=0.95))
+    path = PlannedPath.from_points(circle(radius, 400, turns=0.95))
     law = Stanley(speed=0.3, wheel_base=base, k=3.0, limits=LIMITS)
     result = closed_loop(law, Unicycle(), [0, 0, 0], path, 16, 0.01)
     late = result.true_pose[0, (result.t > 8) & (result.t < 16), :2]
@@ -139,7 +142,10 @@ def test_reversing_negates_speed_and_steering(x, y, heading, law):
     # the same geometry driven forwards from θ and backwards from θ + π: (v, ω) → (−v, ω) and
     # (v, δ) → (−v, −δ)
     points = np.array([[-1.0, 0.0], [0.0, 0.2], [2.0, 0.5]])
-    forward, backward = Polyline(points, [1, 1]), Polyline(points, [-1, -1])
+    forward, backward = (
+        PlannedPath.from_points(points, [1, 1]),
+        PlannedPath.from_points(points, [-1, -1]),
+    )
     pose = np.array([x, y, heading])
     flipped = np.array([x, y, heading + math.pi])
     for output in ("velocity", "steering"):
@@ -167,17 +173,8 @@ def test_follower_parameters():
 
 
 def test_planned_path_with_per_sample_directions_is_accepted():
-    from wheelbase.planning.path import PlannedPath
-
-    polyline = three_point_turn()
-    points = polyline.points
-    per_sample = np.r_[polyline.directions[0], polyline.directions].astype(np.int8)
-    poses = np.column_stack([points, np.zeros(len(points))])
-    try:
-        planned = PlannedPath(poses=poses, directions=per_sample, curvatures=np.zeros(len(points)),
-                       arc_length=polyline.arc_length, success=True, stats=None)  # fmt: skip
-    except TypeError:  # the planner's PlannedPath may need more fields: an equivalent stand-in
-        planned = type("P", (), {"poses": poses, "directions": per_sample})()
+    planned = three_point_turn()  # a PlannedPath: one direction per sample
+    assert planned.directions.shape == (len(planned.poses),)
     law = PurePursuit(speed=0.3, limits=LIMITS)
     result = closed_loop(law, Unicycle(), [0.0, 0.05, 0.0], planned, 40.0, 0.01)
     assert result.metrics()[0]["reversals"] == 2

@@ -20,7 +20,6 @@ from control_cases import figure_eight_reference, three_point_turn_path
 from wheelbase.control import (
     MPPI,
     MPPICritics,
-    Polyline,
     PurePursuit,
     SteeringLimits,
     VelocityLimits,
@@ -34,11 +33,11 @@ from wheelbase.models import (
     Unicycle,
     mecanum4,
 )
-from wheelbase.planning import Footprint, OccupancyGrid, load_map
+from wheelbase.planning import Footprint, OccupancyGrid, PlannedPath, load_map
 from wheelbase.sim import closed_loop
 
 LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
-STRAIGHT = Polyline([[1.0, 4.0], [11.0, 4.0]])  # the cluttered map's reference path
+STRAIGHT = PlannedPath.from_points([[1.0, 4.0], [11.0, 4.0]])  # the cluttered map's reference path
 ROBOT = Footprint.rectangle(0.4, 0.4)
 
 
@@ -74,7 +73,7 @@ def backends():
         (
             RearWheelBicycle(wheel_base=0.3, max_steering=0.6),
             SteeringLimits(0.5, max_speed=0.5),
-            Polyline([[2.0, 4.0], [4.0, 4.0], [3.0, 4.0]], [1, -1]),
+            PlannedPath.from_points([[2.0, 4.0], [4.0, 4.0], [3.0, 4.0]], [1, -1]),
             (3.7, 4.05, 0.0),
         ),
         (
@@ -326,7 +325,7 @@ def test_holonomic_bases_follow_the_path_and_use_their_lateral_speed():
     # A mecanum base facing +y follows a path along +x. With the default critics it turns to
     # the path and arrives; with the heading critics off it strafes more than it drives ahead.
     base = mecanum4(0.05, 0.2, 0.15)
-    path = Polyline([[0.0, 0.0], [3.0, 0.0]])
+    path = PlannedPath.from_points([[0.0, 0.0], [3.0, 0.0]])
     lateral = {}
     for critics in (None, {"path_align": 0.0, "goal_heading": 0.0, "twirl": 5.0}):
         mppi = MPPI(base, 30, 0.05, 300, (0.2, 0.2, 0.4), 0.03, critics, LIMITS,
@@ -371,7 +370,7 @@ def lateral_errors(result, path, after=5.0):
 
 
 def test_figure_eight_tracking_beside_pure_pursuit():
-    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    eight = PlannedPath.from_points(figure_eight_reference(30.0, 0.01).poses[::20, :2])
     start = np.array([1.1, 0.8, 0.0])
     pursuit = PurePursuit(speed=eight.length / 30.0, limits=LIMITS)
     pp = closed_loop(pursuit, Unicycle(), start, eight, 30.0, 0.05)
@@ -446,7 +445,7 @@ def test_progress_is_kept_when_the_path_is_a_fresh_array_each_call():
             self.law.reset()
 
         def __call__(self, t, pose, reference):
-            fresh = Polyline(reference.points.copy(), reference.directions.copy())
+            fresh = PlannedPath.from_points(reference.points.copy(), reference.directions[1:])
             return self.law(t, pose, fresh)
 
     def mppi():
@@ -564,7 +563,7 @@ def test_benchmark_quick_prints_the_promised_json():
 
 def test_closed_path_is_driven_round_before_arriving():
     # the figure-eight ends where it starts: arriving needs the progress near the end too
-    eight = Polyline(figure_eight_reference(30.0, 0.01).poses[::20, :2])
+    eight = PlannedPath.from_points(figure_eight_reference(30.0, 0.01).poses[::20, :2])
     mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, None,
                 VelocityLimits(max_speed=0.35, max_yaw_rate=1.5), backend="numba",
                 goal_tolerance=(0.2, 3.0))  # fmt: skip
@@ -574,7 +573,7 @@ def test_closed_path_is_driven_round_before_arriving():
 
 def test_speed_is_capped_into_a_cusp():
     # 2 cm before the cusp of a forward-then-reverse path: |v| <= √(2·a·d) with a = 0.5 m/s²
-    path = Polyline([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
+    path = PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
     mppi = make(samples=200, approach_deceleration=0.5, cusp_tolerance=0.01)
     for _ in range(5):
         command = mppi(0.0, (1.98, 0.0, 0.0), path)
@@ -585,7 +584,7 @@ def test_speed_is_capped_into_a_cusp():
 
 def test_cusp_is_passed_when_the_robot_crosses_its_line():
     # 8 cm beside the cusp (outside cusp_tolerance) but past it: the reverse section is active
-    path = Polyline([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
+    path = PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
     mppi = make(samples=100)
     mppi(0.0, (1.7, 0.0, 0.0), path)
     assert mppi._section == 0
@@ -602,7 +601,7 @@ def test_reverse_against_path_samples_both_signs():
 def test_goal_next_to_an_obstacle_is_reached(cluttered):
     # The goal's footprint clearance is ~0.08 m, inside the 0.4 m inflation: with the obstacle
     # repulsion kept on to the end the robot is pushed 0.18 m aside; off within 1 m, it arrives.
-    path = Polyline([[1.5, 4.0], [2.85, 4.0]])
+    path = PlannedPath.from_points([[1.5, 4.0], [2.85, 4.0]])
     ends = {}
     for near in (0.0, 1.0):
         mppi = MPPI(Unicycle(), 30, 0.05, 200, (0.2, 0.4), 0.03, {"near_goal_distance": near},
@@ -626,7 +625,7 @@ def test_a_car_backs_up_to_a_wall_behind_it():
     bike = RearWheelBicycle(wheel_base=2.7, max_steering=0.6)
     mppi = MPPI(bike, 30, 0.05, 200, (0.2, 0.3), 0.03, None, SteeringLimits(0.6, max_speed=1.0),
                 backend="numba", grid=grid, footprint=car)  # fmt: skip
-    reverse = Polyline([[2.2, 5.0], [6.0, 5.0]], [1])
+    reverse = PlannedPath.from_points([[2.2, 5.0], [6.0, 5.0]], [1])
     plan = mppi.plan(pose, reverse)
     assert plan.status == "ok" and plan.costs.min() < mppi.critics.collision_cost
 
@@ -645,21 +644,21 @@ def test_conservative_collisions_do_not_freeze_a_clear_robot():
                 backend="numba", grid=grid, footprint=car)  # fmt: skip
     now, _ = mppi._clearance(pose)
     assert now <= 0.0
-    plan = mppi.plan(pose, Polyline([[2.0, 5.0], [6.0, 5.0]]))
+    plan = mppi.plan(pose, PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]]))
     assert plan.status == "ok"
     best = mppi.predict(plan, plan.samples[np.argmin(plan.costs)])
     assert mppi._clearance(best)[0].min() >= now - 0.01
     # truly inside the wall, every rollout stays lethal: a safe stop
-    assert mppi.plan(np.array([1.5, 5.0, 0.0]), Polyline([[2.0, 5.0], [6.0, 5.0]])).status == (
-        "all_collide"
-    )
+    assert mppi.plan(
+        np.array([1.5, 5.0, 0.0]), PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]])
+    ).status == ("all_collide")
 
 
 def test_after_all_rollouts_collided_both_signs_are_sampled():
     occupied = np.zeros((200, 200), bool)
     occupied[:, :20] = True  # wall: x < 1 m, far from the path
     grid = OccupancyGrid.from_array(occupied, 0.05)
-    path = Polyline([[5.0, 5.0], [9.0, 5.0]])
+    path = PlannedPath.from_points([[5.0, 5.0], [9.0, 5.0]])
     mppi = make("numba", samples=400, grid=grid, footprint=ROBOT)
     mppi(0.0, (0.5, 5.0, 0.0), path)  # inside the wall
     assert mppi.status == "all_collide"
@@ -687,7 +686,7 @@ def test_same_commands_at_a_4_5e9_m_offset(cluttered, backend):
         pytest.importorskip("jax")
     options = {"backend": backend[:3] if backend == "jax32" else backend,
                "jax_float64": backend == "jax"}  # fmt: skip
-    far_path = Polyline(np.asarray(STRAIGHT.points) + FAR)
+    far_path = PlannedPath.from_points(np.asarray(STRAIGHT.points) + FAR)
     near = make(samples=128, grid=cluttered, footprint=ROBOT, **options)
     far = make(samples=128, grid=_shifted(cluttered, FAR), footprint=ROBOT, **options)
     noise = np.random.default_rng(5).standard_normal((128, 20, 2)) * (0.2, 0.5)

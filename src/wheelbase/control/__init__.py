@@ -29,7 +29,6 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.control.mppi import MPPI, MPPI_BACKENDS, MPPICritics, MPPIPlan
     from wheelbase.control.path import (
         PathFollower,
-        Polyline,
         PurePursuit,
         RearWheelFeedback,
         SegmentFollower,
@@ -76,7 +75,6 @@ _EXPORTS = {
     "MPPICritics": "wheelbase.control.mppi",
     "MPPIPlan": "wheelbase.control.mppi",
     "PathFollower": "wheelbase.control.path",
-    "Polyline": "wheelbase.control.path",
     "PurePursuit": "wheelbase.control.path",
     "RearWheelFeedback": "wheelbase.control.path",
     "SegmentFollower": "wheelbase.control.path",
@@ -124,7 +122,6 @@ __all__: list[str] = [
     "MPPIPlan",
     "PathFollower",
     "PolarPose",
-    "Polyline",
     "PurePursuit",
     "RearWheelFeedback",
     "SegmentFollower",

@@ -443,7 +443,7 @@ class MPPI:
             Time [s] (unused: the path is followed by position).
         pose : array_like, shape (3,) or (1, 3)
             Measured pose (x [m], y [m], θ [rad]).
-        reference : Polyline, PlannedPath or array_like (M, 2)
+        reference : PlannedPath or array_like (M, 2)
             The reference path (a planned path's directions mark reversing sections).
 
         Returns
@@ -464,7 +464,7 @@ class MPPI:
         ----------
         pose : array_like, shape (3,)
             Measured pose (x [m], y [m], θ [rad]).
-        reference : Polyline, PlannedPath or array_like (M, 2)
+        reference : PlannedPath or array_like (M, 2)
             The reference path.
         noise : array_like, shape (K, T, m), optional
             The perturbations ε to use instead of drawing them (cross-backend checks).

@@ -1,8 +1,10 @@
 """Law 7: following a reference path given as a polyline, forwards and in reverse.
 
-A :class:`Polyline` holds the path points in the order of travel and a direction (+1 forward,
-−1 reverse) per segment; maximal runs of one direction are *sections*, joined at cusps (as in
-the paths of Hybrid A*, document 002). Four followers share one machinery:
+The path is a :class:`~wheelbase.planning.PlannedPath` (a planner's, or
+``PlannedPath.from_points(points, directions)``) or an array of points: the followers read it
+as points in the order of travel with a direction (+1 forward, −1 reverse) per segment; maximal
+runs of one direction are *sections*, joined at cusps (as in the paths of Hybrid A*, document
+002). Four followers share one machinery:
 
 =========================  ==================================================================
 :class:`SegmentFollower`   reference path control of document 002 / Klančar et al. §3.2.3:
@@ -54,7 +56,6 @@ from wheelbase.geometry import wrap_angle
 
 __all__ = [
     "PathFollower",
-    "Polyline",
     "PurePursuit",
     "RearWheelFeedback",
     "SegmentFollower",
@@ -70,8 +71,10 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
 
 # --------------------------------------------------------------------------- polyline
 @dataclass(frozen=True)
-class Polyline:
-    """A reference path: points in the order of travel and a direction per segment.
+class _Polyline:
+    """The followers' view of a path (private): points in the order of travel and a direction
+    per segment. Users give a :class:`~wheelbase.planning.PlannedPath` (e.g.
+    ``PlannedPath.from_points``) or an array of points.
 
     Parameters
     ----------
@@ -89,7 +92,7 @@ class Polyline:
 
     Examples
     --------
-    >>> path = Polyline([[0, 0], [1, 0], [1, 1]])
+    >>> path = _Polyline([[0, 0], [1, 0], [1, 1]])
     >>> path.length, path.sections.tolist()
     (2.0, [[0, 2]])
     """
@@ -126,7 +129,7 @@ class Polyline:
         object.__setattr__(self, "directions", directions)
 
     @classmethod
-    def from_poses(cls, poses: ArrayLike, directions: ArrayLike | None = None) -> Polyline:
+    def from_poses(cls, poses: ArrayLike, directions: ArrayLike | None = None) -> _Polyline:
         """A polyline through the positions of poses ``(M, 3)`` (the headings are not used)."""
         poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
         return cls(poses[:, :2], directions)
@@ -187,7 +190,7 @@ class Polyline:
             kappa[end] = inner[-1]
         return kappa
 
-    def resample(self, step: float) -> Polyline:
+    def resample(self, step: float) -> _Polyline:
         """The same path with points every ``step`` metres or less along each section."""
         step = positive("step", step, "m")
         points, directions = [self.points[:1]], []
@@ -198,7 +201,7 @@ class Polyline:
             fractions = np.arange(1, count + 1)[:, None] / count
             points.append(a + fractions * (b - a))
             directions.extend([direction] * count)
-        return Polyline(np.concatenate(points), np.asarray(directions))
+        return _Polyline(np.concatenate(points), np.asarray(directions))
 
     def distance(self, xy: ArrayLike) -> np.ndarray:
         """Distance [m] from points ``(..., 2)`` to the nearest point of the path.
@@ -213,8 +216,8 @@ class Polyline:
         return distance_to_polyline(xy, self.points)
 
 
-def _as_polyline(reference: object) -> Polyline:
-    if isinstance(reference, Polyline):
+def _as_polyline(reference: object) -> _Polyline:
+    if isinstance(reference, _Polyline):
         return reference
     poses = getattr(reference, "poses", None)
     if poses is not None:  # a planned path (wheelbase.planning.PlannedPath) or a PoseTrajectory
@@ -225,8 +228,8 @@ def _as_polyline(reference: object) -> Polyline:
                 # one direction per sample, "of the motion that reaches it": segment k → k + 1
                 # is driven in the direction of sample k + 1
                 directions = directions[1:]
-        return Polyline.from_poses(poses, directions)
-    return Polyline(as_float_array("path", reference, 2, min_ndim=2, max_ndim=2))
+        return _Polyline.from_poses(poses, directions)
+    return _Polyline(as_float_array("path", reference, 2, min_ndim=2, max_ndim=2))
 
 
 def _final_heading(reference: object) -> float | None:
@@ -236,7 +239,7 @@ def _final_heading(reference: object) -> float | None:
     return None if poses is None else float(np.asarray(poses, dtype=np.float64)[-1, 2])
 
 
-def path_key(line: Polyline, reference: object) -> tuple[np.ndarray, np.ndarray, float | None]:
+def path_key(line: _Polyline, reference: object) -> tuple[np.ndarray, np.ndarray, float | None]:
     """What identifies a followed path: its points, directions and final heading."""
     return (np.asarray(line.points), np.asarray(line.directions), _final_heading(reference))
 
@@ -319,10 +322,10 @@ class PathFollower:
         pose : array_like, shape (..., 3)
             Measured poses (x [m], y [m], θ [rad]) of the reference point (the rear axle of a
             steered vehicle).
-        reference : Polyline, PlannedPath or array_like, shape (M, 2)
-            The path: a :class:`Polyline`, points, or anything with ``poses`` (M, 3) and
-            optional ``directions`` per segment (M − 1) or per sample (M, the direction of the
-            motion reaching each sample, as :class:`wheelbase.planning.PlannedPath` has).
+        reference : PlannedPath or array_like, shape (M, 2)
+            The path: a :class:`~wheelbase.planning.PlannedPath`, points, or anything with
+            ``poses`` (M, 3) and optional ``directions`` per segment (M − 1) or per sample (M,
+            the direction of the motion reaching each sample, as a ``PlannedPath`` has).
         """
         pose = as_float_array("pose", pose, 3)
         path = self._state.get("path")
@@ -415,7 +418,7 @@ class PathFollower:
         raise NotImplementedError
 
 
-def _tables(path: Polyline) -> dict:
+def _tables(path: _Polyline) -> dict:
     seg = path.segments
     lengths = path.segment_lengths
     section_end = np.empty(path.n_segments, np.int64)  # index of the section's end point

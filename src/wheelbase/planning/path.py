@@ -17,8 +17,9 @@ from pathlib import Path as FilePath
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from wheelbase._validate import positive
+from wheelbase._validate import as_float_array, positive
 from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
 
@@ -105,6 +106,88 @@ class PlannedPath:
         """
         empty = np.zeros(0)
         return cls(np.zeros((0, 3)), empty.astype(np.int8), empty, empty, False, stats)
+
+    @classmethod
+    def from_points(cls, points: ArrayLike, directions: ArrayLike | None = None) -> PlannedPath:
+        """A path through points in the order of travel, e.g. for a path follower or MPPI.
+
+        The heading at each point is the robot's along the segment that reaches it (reversed
+        by π on a reverse segment; the first point takes the first segment's), the curvature
+        the turn of that heading per metre around the point, the direction that of the segment
+        reaching it.
+
+        Parameters
+        ----------
+        points : array_like, shape (M, 2)
+            Path points [m]; repeated consecutive points are dropped. At least two distinct.
+        directions : array_like, shape (M − 1,), optional
+            +1 (forward) or −1 (reverse) for each segment, in the order of ``points`` (before
+            duplicates are dropped); default all +1.
+
+        Raises
+        ------
+        InputError
+            Fewer than two distinct points, a bad shape, non-finite values, or directions that
+            are not ±1.
+
+        Examples
+        --------
+        >>> path = PlannedPath.from_points([[0, 0], [1, 0], [1, 1]])
+        >>> path.length, path.directions.tolist(), round(float(path.poses[-1, 2]), 4)
+        (2.0, [1, 1, 1], 1.5708)
+        """
+        xy = as_float_array("path points", points, 2, min_ndim=2, max_ndim=2)
+        if directions is None:
+            run = np.ones(max(xy.shape[0] - 1, 0))
+        else:
+            run = as_float_array("directions", directions, min_ndim=1, max_ndim=1)
+            if run.shape[0] != xy.shape[0] - 1:
+                raise InputError(
+                    f"directions must have one entry per segment, {xy.shape[0] - 1} "
+                    f"(got {run.shape[0]})"
+                )
+            if not np.all(np.isin(run, (-1.0, 1.0))):
+                raise InputError("directions must be +1 (forward) or -1 (reverse)")
+        keep = np.ones(xy.shape[0], bool)
+        if xy.shape[0] > 1:
+            keep[1:] = np.hypot(*np.diff(xy, axis=0).T) > 1e-12
+        xy, run = xy[keep], (run[keep[1:]] if run.size else run)
+        if xy.shape[0] < 2:
+            raise InputError(
+                f"a path needs at least two distinct points (got {xy.shape[0]} distinct)"
+            )
+        chord = np.diff(xy, axis=0)
+        lengths = np.hypot(chord[:, 0], chord[:, 1])
+        travel = np.arctan2(chord[:, 1], chord[:, 0])
+        heading = np.where(run > 0, travel, travel + np.pi)
+        # turn of the travel heading per metre between the chords around each point; a reverse
+        # move turns the robot by -kappa*ds, so its steering curvature is the opposite
+        kappa = np.zeros(xy.shape[0])
+        turn = wrap_angle(np.diff(travel)) / (0.5 * (lengths[:-1] + lengths[1:]))
+        same = run[1:] == run[:-1]
+        kappa[1:-1] = np.where(same, turn * run[1:], 0.0)
+        kappa[-1] = kappa[-2] if xy.shape[0] > 2 else 0.0
+        kappa[0] = kappa[1]
+        poses = np.column_stack([xy, wrap_angle(np.concatenate([heading[:1], heading]))])
+        direction = np.concatenate([run[:1], run]).astype(np.int8)
+        return cls(poses, direction, kappa, np.concatenate([[0.0], np.cumsum(lengths)]))
+
+    @property
+    def points(self) -> np.ndarray:
+        """The positions ``(N, 2)`` [m] of the poses."""
+        return self.poses[:, :2]
+
+    def distance(self, xy: ArrayLike) -> np.ndarray:
+        """Distance [m] from points ``(..., 2)`` to the nearest point of the path.
+
+        Parameters
+        ----------
+        xy : array_like, shape (..., 2)
+            Points [m].
+        """
+        from wheelbase.polyline import distance_to_polyline
+
+        return distance_to_polyline(xy, self.points)
 
     def __len__(self) -> int:
         return len(self.poses)
