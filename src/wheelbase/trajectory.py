@@ -18,6 +18,12 @@ the heading ψ = atan2(ẏ, ẋ) of the velocity (document 000 fig. 5.7 differen
 waypoint where the direction changes, ψ jumps — a yaw rate no robot can follow. The feasible
 variant :func:`feasible_trajectory` inserts a turn in place, with its own trapezoidal profile,
 before every segment whose direction differs from the current heading.
+
+Two types, on purpose: :class:`Trajectory` is a *position* profile (x(t), y(t) and their
+derivatives through waypoints, no heading: what ``trapveltraj`` returns), and both
+:func:`heading_from_velocity` and :func:`feasible_trajectory` turn it into the one timed pose
+trajectory of wheelbase, :class:`wheelbase.models.PoseTrajectory`, which every tracker,
+controller and the inverse dynamics take.
 """
 
 from __future__ import annotations
