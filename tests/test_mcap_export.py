@@ -189,6 +189,22 @@ def test_batch_log_has_one_prefix_per_robot(tmp_path):
         assert topics[f"/robot{i}/pose/true"] == log.length[i]
         assert topics[f"/robot{i}/metrics"] == 1
     assert "/map" not in topics and "/robot0/torques" not in topics
+    # A polygon world is a scene of line loops: rings (a hole too), discs, bounds.
+    from wheelbase.planning import PolygonWorld
+
+    square = [(2, 2), (4, 2), (4, 4), (2, 4)]
+    world = PolygonWorld([(square, [[(2.5, 2.5), (3, 2.5), (3, 3)]])], discs=[[6, 3, 0.5]],
+                         bounds=(0, 10, 0, 6))  # fmt: skip
+    path = write_log_mcap(log, tmp_path / "world.mcap", grid=world)
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        ((*_, scene),) = reader.iter_decoded_messages(topics=["/map/obstacles"])
+    loops = scene.entities[0].lines
+    assert len(loops) == 4 and scene.entities[0].frame_id == "map"
+    np.testing.assert_array_equal([(p.x, p.y) for p in loops[0].points], square)
+    radius = [math.hypot(p.x - 6, p.y - 3) for p in loops[2].points]
+    np.testing.assert_allclose(radius, 0.5, rtol=0, atol=1e-12)
+    assert [(p.x, p.y) for p in loops[3].points] == [(0, 0), (10, 0), (10, 6), (0, 6)]
     with pytest.raises(FileExistsError, match="overwrite"):
         write_log_mcap(log, path)
     with pytest.raises(InputError, match="one dict per robot"):

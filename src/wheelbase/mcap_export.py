@@ -9,6 +9,8 @@ topic                     schema                        content
 ========================  ============================  ===========================================
 ``/map``                  ``foxglove.Grid``             the occupancy grid (uint8 ``occupancy``:
                                                         0 free, 100 occupied) in frame ``map``, t=0
+``/map/obstacles``        ``foxglove.SceneUpdate``      a polygon world's polygons (holes too),
+                                                        discs and bounds as line loops, t=0
 ``/plan``                 ``foxglove.PosesInFrame``     the planned path in ``map``, t=0
 ``/pose/true``            ``foxglove.PoseInFrame``      the true pose in ``map``, every row
 ``/pose/estimated``       ``foxglove.PoseInFrame``      the estimator's pose in ``map``, every row
@@ -51,6 +53,7 @@ __all__ = ["MCAP_TOPICS", "require_foxglove", "write_log_mcap", "write_mcap"]
 
 MCAP_TOPICS = (
     "/map",
+    "/map/obstacles",
     "/plan",
     "/pose/true",
     "/pose/estimated",
@@ -62,7 +65,8 @@ MCAP_TOPICS = (
     "/torques",
     "/metrics",
 )
-"""Topics an MCAP file of one robot can hold (``/torques`` on a dynamic plant only)."""
+"""Topics an MCAP file of one robot can hold (``/torques`` on a dynamic plant only,
+``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`)."""
 
 _EXTRA = "MCAP export needs the optional extra: pip install 'wheelbase[foxglove]'"
 
@@ -212,19 +216,39 @@ def _grid(pb: dict[str, Any], grid: Any) -> Any:
     return message
 
 
+def _loop(pb: dict[str, Any], points: np.ndarray, color: Any) -> Any:
+    return pb["LinePrimitive"](
+        type=pb["LinePrimitive"].Type.LINE_LOOP,
+        pose=_pose(pb, np.zeros(3)),
+        thickness=0.03,
+        points=[pb["Point3"](x=float(x), y=float(y), z=0.0) for x, y in points],
+        color=color,
+    )
+
+
+def _obstacles(pb: dict[str, Any], world: Any) -> Any:
+    """A polygon world's rings, discs (64-gons) and bounds as line loops in ``map``."""
+    entity = pb["SceneEntity"](frame_id="map", id="obstacles")
+    dark = pb["Color"](r=0.2, g=0.2, b=0.2, a=1.0)
+    for exterior, holes in world.polygons:
+        for ring in (exterior, *holes):
+            entity.lines.append(_loop(pb, np.asarray(ring), dark))
+    angle = np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)
+    for x, y, r in world.discs:
+        circle = np.column_stack([x + r * np.cos(angle), y + r * np.sin(angle)])
+        entity.lines.append(_loop(pb, circle, dark))
+    x0, x1, y0, y1 = world.bounds
+    box = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    entity.lines.append(_loop(pb, box, pb["Color"](r=0.5, g=0.5, b=0.5, a=1.0)))
+    _stamp(entity, 0.0)
+    return pb["SceneUpdate"](entities=[entity])
+
+
 def _markers(pb: dict[str, Any], footprint: np.ndarray | None, goals: np.ndarray, base: str) -> Any:
     entities = []
     if footprint is not None:
         entity = pb["SceneEntity"](frame_id=base, id="footprint", frame_locked=True)
-        entity.lines.append(
-            pb["LinePrimitive"](
-                type=pb["LinePrimitive"].Type.LINE_LOOP,
-                pose=_pose(pb, np.zeros(3)),
-                thickness=0.02,
-                points=[pb["Point3"](x=float(x), y=float(y), z=0.0) for x, y in footprint],
-                color=pb["Color"](r=0.12, g=0.47, b=0.71, a=1.0),
-            )
-        )
+        entity.lines.append(_loop(pb, footprint, pb["Color"](r=0.12, g=0.47, b=0.71, a=1.0)))
         entities.append(entity)
     for k, goal in enumerate(goals):
         entity = pb["SceneEntity"](frame_id="map", id=f"goal{k}")
@@ -272,8 +296,9 @@ def write_log_mcap(
         The record; each robot's own rows are written (``log.length``).
     path : str or Path
         Output file (``.mcap``).
-    grid : OccupancyGrid, optional
-        The map, written once to ``/map``.
+    grid : OccupancyGrid or PolygonWorld, optional
+        The map, written once: a grid to ``/map``; a polygon world's obstacles to
+        ``/map/obstacles`` (and its grid, if it has one, to ``/map``).
     plan : array_like, shape (M, 3), optional
         Planned poses [m, m, rad], written once to ``/plan``.
     footprint : array_like, shape (K, 2), optional
@@ -320,6 +345,9 @@ def write_log_mcap(
 
     with path.open("wb") as handle:
         out = _File(handle, pb)
+        if grid is not None and hasattr(grid, "polygons"):  # a PolygonWorld
+            out.protobuf("/map/obstacles", 0.0, _obstacles(pb, grid))
+            grid = grid.grid
         if grid is not None:
             out.protobuf("/map", 0.0, _grid(pb, grid))
         if plan_poses is not None:
