@@ -273,3 +273,14 @@ def test_dynamics_command_writes_the_simulated_states(tmp_path):
     bad = CliRunner().invoke(app, ["dynamics", "--out", str(out), "--method", "leapfrog",
                                    "--force"])  # fmt: skip
     assert bad.exit_code != 0 and "method" in str(bad.exception)
+
+
+def test_adaptive_solver_work_is_bounded(monkeypatch):
+    # 1e7 N·m for 2 s took 3 million RK45 evaluations (wheelbase dynamics --torques 1e9 0.5
+    # hung; found by the fuzz suite): past the bound, one clear error
+    from wheelbase import dynamics
+
+    monkeypatch.setattr(dynamics, "MAX_EVALUATIONS", 20_000)
+    with pytest.raises(InputError, match="RK45 took more than 20000 evaluations"):
+        simulate_dynamics(RM100, (1e7, 0.5), t_end=2.0, dt=0.1)
+    assert simulate_dynamics(RM100, (0.01, 0.01), t_end=2.0, dt=0.1).states.shape == (21, 6)

@@ -103,6 +103,39 @@ DYNAMICS_METHODS: tuple[str, ...] = ("RK45", "DOP853", "Radau", "LSODA", "euler"
 fixed-step ``euler`` and ``rk4`` (compiled, batched)."""
 
 _FIXED = ("euler", "rk4")
+MAX_EVALUATIONS = 1_000_000
+"""Most right-hand-side evaluations one adaptive ``solve_ivp`` run may take (about 15 s): with
+huge torques the step size collapses, and 1e7 N·m for 2 s took 3 million evaluations."""
+
+
+class _TooMuchWork(Exception):
+    """Raised by a counted right-hand side past :data:`MAX_EVALUATIONS` (private)."""
+
+
+def _counted(rhs):
+    """``rhs`` that raises _TooMuchWork after MAX_EVALUATIONS calls."""
+    calls = [0]
+
+    def counted(t, y):
+        calls[0] += 1
+        if calls[0] > MAX_EVALUATIONS:
+            raise _TooMuchWork
+        return rhs(t, y)
+
+    return counted
+
+
+def _solve(rhs, span, state, method, **options):
+    """solve_ivp with a bounded amount of work, or an InputError that says what to do."""
+    try:
+        return solve_ivp(_counted(rhs), span, state, method=method, **options)
+    except _TooMuchWork:
+        raise InputError(
+            f"{method} took more than {MAX_EVALUATIONS} evaluations for t = {span[0]:g}.."
+            f"{span[1]:g} s: the torques drive the robot so hard that the adaptive step "
+            "collapses; use smaller torques or a fixed-step method (euler, rk4)"
+        ) from None
+
 
 RM100_HALF_TRACK = 0.455 / 2
 """Half track d of the RM100 preset [m]: half the breadth b = 0.455 m of document 000 ch. 4.
@@ -783,8 +816,8 @@ def _solve_ivp_sampled(dynamics, tau, times, s0, method, rtol, atol):
             _deriv(y, tl, tr, p, buf)
             return buf.copy()
 
-        sol = solve_ivp(
-            rhs, (times[start], times[stop]), state, method=method,
+        sol = _solve(
+            rhs, (times[start], times[stop]), state, method,
             t_eval=times[start : stop + 1], rtol=rtol, atol=atol,
         )  # fmt: skip
         if not sol.success:  # pragma: no cover - scipy failure
@@ -829,8 +862,8 @@ def _simulate_callable(dynamics, function, times, s0, method, rtol, atol):
             _deriv(y, tau[0], tau[1], p, buf)
             return buf.copy()
 
-        sol = solve_ivp(rhs, (times[0], times[-1]), s0, method=method, t_eval=times,
-                        rtol=rtol, atol=atol)  # fmt: skip
+        sol = _solve(rhs, (times[0], times[-1]), s0, method, t_eval=times, rtol=rtol,
+                     atol=atol)  # fmt: skip
         if not sol.success:  # pragma: no cover
             raise InputError(f"solve_ivp failed: {sol.message}")
         out = sol.y.T.copy()
