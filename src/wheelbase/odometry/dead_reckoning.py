@@ -26,6 +26,7 @@ a Python loop.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,20 +71,26 @@ def pose_increment(
         (Δx, Δy) [m]; the heading change is ``rotation`` for every method.
     """
     check_choice("method", method, DEAD_RECKONING_METHODS)
-    theta, distance, rotation = np.broadcast_arrays(
-        np.asarray(theta, dtype=np.float64),
-        np.asarray(distance, dtype=np.float64),
-        np.asarray(rotation, dtype=np.float64),
+    theta, distance, rotation = (
+        np.asarray(v, dtype=np.float64) for v in (theta, distance, rotation)
     )
+    if not theta.shape == distance.shape == rotation.shape:
+        theta, distance, rotation = np.broadcast_arrays(theta, distance, rotation)
     if method == "euler":
-        return np.stack([distance * np.cos(theta), distance * np.sin(theta)], -1)
-    if method == "midpoint":
-        mid = theta + 0.5 * rotation
-        return np.stack([distance * np.cos(mid), distance * np.sin(mid)], -1)
-    # The arc: chord D·sinc(φ/2) along the mid heading θ + φ/2 (exact for any φ, no 0/0).
-    mid = theta + 0.5 * rotation
-    chord = distance * np.sinc(rotation / (2.0 * np.pi))
-    return np.stack([chord * np.cos(mid), chord * np.sin(mid)], -1)
+        mid, chord = theta, distance
+    elif method == "midpoint":
+        mid, chord = theta + 0.5 * rotation, distance
+    else:
+        # The arc: chord D·sin(φ/2)/(φ/2) along the mid heading θ + φ/2 (exact for any φ).
+        half = 0.5 * rotation
+        mid = theta + half
+        small = np.abs(half) < 1e-4
+        safe = np.where(small, 1.0, half)
+        chord = distance * np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
+    out = np.empty((*mid.shape, 2))
+    out[..., 0] = chord * np.cos(mid)
+    out[..., 1] = chord * np.sin(mid)
+    return out
 
 
 def integrate_increments(
@@ -235,9 +242,13 @@ class WheelOdometry:
 
     def wheel_distances(self, ticks: ArrayLike) -> np.ndarray:
         """Distances (D_L, D_R) [m] rolled for tick differences ``(..., 2)`` (doc 003 eq. 7)."""
-        ticks = as_float_array("ticks", ticks, 2)
-        distance = ticks_to_distance(ticks, self.pulses_per_revolution, self.wheel_radius)
-        return distance * np.array([self.scale_left, self.scale_right])
+        if not (
+            isinstance(ticks, np.ndarray) and ticks.dtype == np.int64 and ticks.shape[-1:] == (2,)
+        ):
+            ticks = as_float_array("ticks", ticks, 2)  # integer counts need no finiteness check
+        # eq. 7, 2π·r·Δn/P per wheel (P and r were checked when the odometry was made)
+        scale = 2.0 * math.pi * self.wheel_radius / self.pulses_per_revolution
+        return ticks * (scale * np.array([self.scale_left, self.scale_right]))
 
     def increments(self, ticks: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Axle distance D_C [m] and heading change φ [rad] (document 003 eqs. 1–2).
