@@ -18,7 +18,7 @@ from wheelbase.localization import (
     run_amcl,
     wander,
 )
-from wheelbase.localization.likelihood import scan_log_likelihood, square_distance
+from wheelbase.localization.likelihood import likelihood_field, scan_log_likelihood
 from wheelbase.localization.particles import _kld_bound, clusters
 from wheelbase.planning import OccupancyGrid, load_map
 from wheelbase.sensors import Lidar
@@ -102,9 +102,42 @@ def test_likelihood_field_is_highest_at_the_true_pose():
             lidar.beam_angles[idx][keep], amcl._outside, product,
         )  # fmt: skip
         assert np.argmax(log_p) == 0 and np.all(np.diff(log_p[[0, 4]]) < 0)
-    # the distance to the nearest occupied square: half a cell next to a wall
-    d = square_distance(OccupancyGrid.from_array(np.eye(3, dtype=bool)[:, :1].repeat(3, 1).T, 1.0))
-    assert d[0, 1] == 0.5 and d[0, 2] == 1.5 and d[0, 0] == 0.0
+
+
+def test_likelihood_field_is_the_distance_to_the_surface_the_same_on_every_side_of_a_wall():
+    """One beam's p_z is z_hit·exp(−d²/2σ²) + z_rand/max_range with d the end point's distance
+    to the wall's surface, outside or inside it, tabulated on cells 4 times finer than the
+    map's: exact at their centres, within half a fine cell elsewhere, and the same for a wall
+    below, above, left and right (the cell-centre look-up of Nav2 charged half a cell on two
+    sides only, and d = 0 inside, which biased the closed-loop estimate)."""
+    occupied = np.zeros((21, 21), bool)
+    occupied[10, 10] = True  # one occupied square [1.0, 1.1] x [1.0, 1.1] m
+    grid = OccupancyGrid.from_array(occupied, 0.1)
+    field = likelihood_field(grid, 0.9, 0.1, 0.05, 2.0, 8.0)
+    assert field.resolution == 0.025 and field.table.shape == (84, 84)
+    beam = np.array([0.5]), np.array([0.0])  # one beam 0.5 m straight ahead
+
+    def p_z(gap):
+        """p_z of an end point ``gap`` outside (negative: inside) each face of the square."""
+        sides = np.array([
+            [1.05, 1.0 - gap - 0.5, math.pi / 2],  # end point below the square
+            [1.05, 1.1 + gap + 0.5, -math.pi / 2],  # above
+            [1.0 - gap - 0.5, 1.05, 0.0],  # left
+            [1.1 + gap + 0.5, 1.05, math.pi],  # right
+        ])  # fmt: skip
+        log_p = scan_log_likelihood(field.log(), grid, sides, np.zeros(3), *beam, -10.0, True)
+        return np.exp(log_p)
+
+    def exact(d):
+        return 0.9 * math.exp(-(d**2) / (2 * 0.05**2)) + 0.1 / 8.0
+
+    for centre in (-0.0375, -0.0125, 0.0125, 0.0375, 0.2125):  # fine-cell centres
+        np.testing.assert_allclose(p_z(centre), exact(abs(centre)), rtol=1e-12)
+    for gap in (-0.03, -0.013, 0.001, 0.013, 0.04, 0.19):  # off the fine-cell edges
+        sides = p_z(gap)
+        assert np.all(sides == sides[0])
+        d = math.sqrt(-2 * 0.05**2 * math.log((sides[0] - 0.1 / 8.0) / 0.9))
+        assert abs(d - abs(gap)) <= 0.0125 + 1e-12
 
 
 def tracking_setup(seed):

@@ -68,8 +68,9 @@ from wheelbase._validate import (
 from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.localization.likelihood import (
-    field_table,
+    LikelihoodField,
     landmark_log_likelihood,
+    likelihood_field,
     scan_log_likelihood,
 )
 from wheelbase.localization.motion import OdometryMotion, VelocityMotion, odometry_delta
@@ -347,16 +348,16 @@ class AMCL:
 
     # ------------------------------------------------------------------ derived maps
     @cached_property
-    def _field(self) -> np.ndarray:
+    def _field(self) -> LikelihoodField:
         assert self.grid is not None and self.lidar is not None
-        return field_table(
+        return likelihood_field(
             self.grid, self.z_hit, self.z_rand, self.sigma_hit, self.likelihood_max_dist,
             self.lidar.max_range,
         )  # fmt: skip
 
     @cached_property
-    def _log_field(self) -> np.ndarray:
-        return np.log(self._field)
+    def _log_field(self) -> LikelihoodField:
+        return self._field.log()
 
     @cached_property
     def _beam_model(self) -> BeamModel:

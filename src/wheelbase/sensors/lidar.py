@@ -148,11 +148,36 @@ class Lidar:
         ranges = scan_rays(
             grid, sensor[:, :2], sensor[:, 2], self.beam_angles, self.max_range, method
         )
+        ranges = self.readings(ranges, rng, noise=noise)
+        return ranges.reshape(*poses.shape[:-1], self.beams)
+
+    def readings(
+        self, true_ranges: ArrayLike, rng: np.random.Generator | int | None = None, *,
+        noise: bool = True,
+    ) -> np.ndarray:  # fmt: skip
+        """What the lidar reports for true ranges: the beam model's noise, then NaN in the
+        blind zone below ``min_range`` (the second half of :meth:`scan`).
+
+        Parameters
+        ----------
+        true_ranges : array_like, shape (..., beams)
+            Ray-cast ranges [m] in ``[0, max_range]``.
+        rng : numpy.random.Generator, int or None
+            Randomness of the noise.
+        noise : bool
+            Apply the beam model; False keeps the true ranges.
+
+        Returns
+        -------
+        numpy.ndarray
+            Readings [m], of the shape of ``true_ranges`` (a new array).
+        """
+        ranges = np.array(true_ranges, dtype=np.float64)
         if noise and (self.range_std > 0.0 or self.beam_model.z_hit < 1.0):
             ranges = self.beam_model.sample(ranges, self.range_std, self.max_range, as_rng(rng))
         if self.min_range > 0.0:
             ranges[ranges < self.min_range] = np.nan
-        return ranges.reshape(*poses.shape[:-1], self.beams)
+        return ranges
 
     def endpoints(self, poses: ArrayLike, ranges: ArrayLike) -> np.ndarray:
         """World points ``(x, y)`` [m] at the end of each beam.

@@ -2,6 +2,8 @@
 
 - :mod:`wheelbase.sim.plants`: what moves (kinematic or dynamic), and its encoder axle;
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
+- :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
+- :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
 - :mod:`wheelbase.sim.engine`: the step (estimator → controller → limits → rules → plant →
   encoders) and the run;
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.
@@ -14,9 +16,11 @@ from wheelbase._lazy import attach
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
     from wheelbase.sim.drive_train import DriveTrainPlant, run_go_to_goal
     from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
+    from wheelbase.sim.localizers import KalmanLocalizer, ParticleLocalizer
     from wheelbase.sim.log import STATUSES, Log, status_code
     from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
+    from wheelbase.sim.sensors import Readings, SensorSuite
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
 
 _EXPORTS = {
@@ -26,6 +30,8 @@ _EXPORTS = {
     "Engine": "wheelbase.sim.engine",
     "EngineState": "wheelbase.sim.engine",
     "closed_loop": "wheelbase.sim.engine",
+    "KalmanLocalizer": "wheelbase.sim.localizers",
+    "ParticleLocalizer": "wheelbase.sim.localizers",
     "STATUSES": "wheelbase.sim.log",
     "Log": "wheelbase.sim.log",
     "status_code": "wheelbase.sim.log",
@@ -34,6 +40,8 @@ _EXPORTS = {
     "WheelAxle": "wheelbase.sim.plants",
     "EncoderOdometry": "wheelbase.sim.sensing",
     "PerfectState": "wheelbase.sim.sensing",
+    "Readings": "wheelbase.sim.sensors",
+    "SensorSuite": "wheelbase.sim.sensors",
     "track_trajectory": "wheelbase.sim.tracking",
     "tune_computed_torque": "wheelbase.sim.tracking",
 }
@@ -47,9 +55,13 @@ __all__ = [
     "EncoderOdometry",
     "Engine",
     "EngineState",
+    "KalmanLocalizer",
     "KinematicPlant",
     "Log",
+    "ParticleLocalizer",
     "PerfectState",
+    "Readings",
+    "SensorSuite",
     "WheelAxle",
     "closed_loop",
     "run_go_to_goal",

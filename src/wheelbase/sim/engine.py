@@ -6,7 +6,7 @@ rule, the collision check, ``dt``) live in an :class:`Engine`; what evolves live
 code. Each :meth:`Engine.step`, for every robot still running:
 
 1. *estimator*: the estimate the controller will see (odometry from the last step's encoder
-   ticks, or the true state);
+   ticks and the sensors read at the end of the last step, or the true state);
 2. *controller*: ``controller(t, estimate, reference)`` → command ``(N, k)`` (a learning agent
    may pass the command instead: the hook before the plant);
 3. *command limits*: the plant turns the command into its inputs (steering stops); a
@@ -16,12 +16,16 @@ code. Each :meth:`Engine.step`, for every robot still running:
    robot stops → ``arrived`` if the *true* pose is within tolerance too, else ``missed_goal``;
    the time limit → ``timeout``;
 5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
-6. *encoders*: the wheel angles' change becomes tick differences for the estimator.
+6. *encoders and sensors*: the wheel angles' change becomes tick differences, and the sensors
+   that are due (:class:`~wheelbase.sim.sensors.SensorSuite`: a lidar, landmarks) are read at
+   the new true poses; both go to the estimator, whose estimate the controller sees next.
 
 Finished robots are frozen (masks, not branches); a controller's own per-step status (MPPI's
 ``ok``/``all_collide``/``arrived``) is recorded beside the engine's status. Nothing a robot does
-raises: a collision or a NaN is a status. Bad *set-up* (shapes, a command of the wrong width
-for the plant) raises a :class:`~wheelbase.errors.WheelbaseError` before the first step.
+raises: a collision or a NaN is a status (a non-finite estimate, from an estimator that failed
+for that robot, ends it ``diverged`` too, and the controller keeps seeing its last estimate).
+Bad *set-up* (shapes, a command of the wrong width for the plant) raises a
+:class:`~wheelbase.errors.WheelbaseError` before the first step.
 
 Controllers that keep per-robot memory and do not batch (MPPI: its warm-started control
 sequence) declare ``per_robot = True``; the engine then runs one copy per robot.
@@ -155,6 +159,8 @@ class EngineState:
     estimator : object or None
         What an estimator keeps besides the estimate (a covariance, particles), from
         ``estimator.start``.
+    sensors : SensorStreams or None
+        The per-robot random streams of the sensors.
     """
 
     step: int
@@ -171,6 +177,7 @@ class EngineState:
     encoders: EncoderReadings | None = None
     plant: Any = None
     estimator: Any = None
+    sensors: Any = None
 
     @property
     def running(self) -> np.ndarray:
@@ -192,6 +199,8 @@ class _Row:
     ticks: np.ndarray
     controller_status: list[str | None]
     signals: dict[str, np.ndarray]
+    scan: np.ndarray | None = None  # read after the step, at the next row's true poses
+    scan_index: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -214,8 +223,10 @@ class Engine:
         Control and integration step [s], > 0.
     duration : float
         Time limit [s], > 0.
-    estimator : PerfectState or EncoderOdometry
-        How the controller learns the state (default: perfectly).
+    estimator : object
+        How the controller learns the state (default: perfectly): :class:`PerfectState`,
+        :class:`EncoderOdometry`, or a filter of :mod:`wheelbase.sim.localizers` that also
+        reads the sensors.
     arrival : Arrival or None
         The arrival rule (None: run to the time limit; the status is then ``timeout``).
     collides : callable, optional
@@ -230,6 +241,12 @@ class Engine:
         that has them (``last_plan.samples`` and ``predict``, as MPPI).
     fan_size : int
         Rollouts kept per fan.
+    sensors : SensorSuite, optional
+        A lidar and/or a landmark sensor read at the true poses at their rates; the readings
+        go to ``estimator.update(..., readings=...)``.
+    record_sensors : bool
+        Keep the lidar scans and, every ``fan_every`` steps, the particles of a particle
+        filter in the log (for drawing); off for batches that only want metrics.
     """
 
     plant: Any
@@ -244,6 +261,8 @@ class Engine:
     progress: Callable[[float], None] | None = None
     fan_every: int = 0
     fan_size: int = 20
+    sensors: Any = None
+    record_sensors: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -257,6 +276,13 @@ class Engine:
                 "wheel-encoder odometry needs the plant's encoder axle (WheelAxle); "
                 "run this plant with perfect state"
             )
+        if self.sensors is not None:
+            from wheelbase.sim.sensors import SensorSuite
+
+            if not isinstance(self.sensors, SensorSuite):
+                raise ConfigError(
+                    f"sensors must be a SensorSuite (got {type(self.sensors).__name__})"
+                )
 
     # ------------------------------------------------------------------ public
     @property
@@ -334,6 +360,7 @@ class Engine:
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
             estimator=self.estimator.start(start, seeds),
+            sensors=None if self.sensors is None else self.sensors.start(seeds),
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -404,8 +431,10 @@ class Engine:
         moved, rates = self.plant.motion(state.twist, command, self.command_names, state.plant)
         reference = self._reference_pose(t, n, state.goal)
         signals = self.plant.signals(state.plant) if state.plant is not None else {}
-        row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
-                   state.ticks, controller_status, signals)  # fmt: skip
+        estimator_signals = getattr(self.estimator, "signals", None)
+        if estimator_signals is not None and state.estimator is not None:
+            signals = {**signals, **estimator_signals(state.estimator)}
+        scan = scan_index = None
 
         active = status == RUNNING
         if self.collides is not None and active.any():
@@ -454,13 +483,28 @@ class Engine:
             else:
                 delta = None
             pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
+            extra = {}
+            if self.sensors is not None:
+                readings = self.sensors.read(state.step, self.dt, new_pose, state.sensors, moving)
+                extra["readings"] = readings
+                if readings.scan is not None and self.record_sensors:
+                    scan, scan_index = readings.scan, moving
             est, est_twist, estimator_state = self.estimator.update(
                 state.estimate[moving], delta, self.dt, new_pose, new_twist,
-                state=state.estimator, index=moving,
+                state=state.estimator, index=moving, **extra,
             )  # fmt: skip
+            est = np.asarray(est, dtype=np.float64)
+            est_twist = np.asarray(est_twist, dtype=np.float64)
+            lost = ~(np.all(np.isfinite(est), axis=-1) & np.all(np.isfinite(est_twist), axis=-1))
+            if lost.any():  # the estimator failed for these robots: never a NaN to a controller
+                status[moving[lost]] = DIVERGED
+                est[lost] = state.estimate[moving[lost]]
+                est_twist[lost] = state.estimated_twist[moving[lost]]
             estimate[moving], estimated_twist[moving] = est, est_twist
         else:
             estimator_state = state.estimator
+        row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
+                   state.ticks, controller_status, signals, scan, scan_index)  # fmt: skip
         new_state = EngineState(
             step=state.step + 1,
             pose=pose,
@@ -476,6 +520,7 @@ class Engine:
             encoders=state.encoders,
             plant=plant_state,
             estimator=estimator_state,
+            sensors=state.sensors,
         )
         return new_state, row
 
@@ -506,10 +551,16 @@ class Engine:
         rows: list[_Row] = []
         last_row = np.zeros(n, dtype=np.int64)
         fans: dict[tuple[int, int], np.ndarray] = {}
+        particles: dict[tuple[int, int], np.ndarray] = {}
+        particles_of = getattr(self.estimator, "particles_of", None)
         status_names: list[str] = []
         while True:
             was_running = state.running
             fan_now = self.fan_every > 0 and state.step % self.fan_every == 0
+            if fan_now and particles_of is not None and self.record_sensors:
+                for i in np.flatnonzero(was_running):  # the belief of this row's estimate
+                    cloud = particles_of(state.estimator, int(i))
+                    particles[(int(i), len(rows))] = np.asarray(cloud, dtype=np.float32)
             state, row = self.step(state)
             rows.append(row)
             if fan_now:  # the plans the controllers just made for this row's poses
@@ -524,7 +575,7 @@ class Engine:
                 break
         if self.progress is not None:
             self.progress(rows[-1].t)
-        return self._log(rows, last_row, state, fans, tuple(status_names))
+        return self._log(rows, last_row, state, fans, tuple(status_names), particles)
 
     # ------------------------------------------------------------------ helpers
     def _reference_pose(self, t: float, n: int, goal: np.ndarray | None) -> np.ndarray:
@@ -545,7 +596,7 @@ class Engine:
             rollouts = law.predict(plan, plan.samples[: self.fan_size])
             fans[(i, row)] = np.asarray(rollouts)[..., :2]
 
-    def _log(self, rows, last_row, state, fans, status_names) -> Log:
+    def _log(self, rows, last_row, state, fans, status_names, particles) -> Log:
         n = state.pose.shape[0]
         t = np.array([row.t for row in rows])
         index = np.minimum(np.arange(len(rows))[None, :], last_row[:, None])  # frozen after end
@@ -568,6 +619,13 @@ class Engine:
         ).T.reshape(n, len(rows))  # fmt: skip
         controller_status = np.where(np.arange(len(rows))[None, :] <= last_row[:, None],
                                      controller_status, -1)  # fmt: skip
+        scans: dict[tuple[int, int], np.ndarray] = {}
+        for k, row in enumerate(rows):
+            if row.scan is None:
+                continue
+            for ranges, i in zip(row.scan, row.scan_index, strict=True):
+                if k + 1 <= last_row[i]:  # taken at the true pose of the next row
+                    scans[(int(i), k + 1)] = ranges
         return Log(
             t=t,
             true_pose=stack("pose"),
@@ -587,6 +645,8 @@ class Engine:
             controller_status_names=status_names,
             extras={name: frozen([row.signals[name] for row in rows]) for name in rows[0].signals},
             rollout_fans=fans,
+            scans=scans,
+            particles=particles,
         )
 
 

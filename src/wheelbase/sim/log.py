@@ -90,6 +90,12 @@ class Log:
     rollout_fans : dict of (int, int) to numpy.ndarray
         For a sampling controller (MPPI), some sampled rollouts ``(K, H + 1, 2)`` [m] keyed by
         (robot, row), for drawing.
+    scans : dict of (int, int) to numpy.ndarray
+        Lidar ranges ``(beams,)`` [m] keyed by (robot, row): the scan taken at that row's true
+        pose (read by the engine's sensors at the end of the step before it).
+    particles : dict of (int, int) to numpy.ndarray
+        A particle filter's particles ``(P, 3)`` keyed by (robot, row), now and then: the
+        belief behind that row's estimate.
     """
 
     t: np.ndarray
@@ -110,6 +116,8 @@ class Log:
     controller_status_names: tuple[str, ...] = ()
     extras: dict[str, np.ndarray] = field(default_factory=dict)
     rollout_fans: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+    scans: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+    particles: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
 
     # ------------------------------------------------------------------ picking robots
     @property
@@ -174,6 +182,8 @@ class Log:
             controller_status=pick(self.controller_status),
             extras={key: value[i : i + 1, :rows].copy() for key, value in self.extras.items()},
             rollout_fans={(0, row): fan for (r, row), fan in self.rollout_fans.items() if r == i},
+            scans={(0, row): scan for (r, row), scan in self.scans.items() if r == i},
+            particles={(0, row): cloud for (r, row), cloud in self.particles.items() if r == i},
         )
 
     def controller_status_counts(self, index: int = 0) -> dict[str, int]:
@@ -206,8 +216,9 @@ class Log:
             count as a direction), the largest and RMS wheel torque on a dynamic plant, tracking
             errors against the reference (RMS and max of the position error, RMS heading error
             in degrees), the final pose errors of the true and the estimated pose against the
-            goal (when there is one), and the odometry drift at the end (|true − estimated|) and
-            per metre travelled.
+            goal (when there is one), the odometry drift at the end (|true − estimated|) and
+            per metre travelled, and the localisation error |true − estimated| (position) over
+            the run, RMS and max.
         """
         rows = []
         for i in range(self.n_robots):
@@ -247,6 +258,9 @@ class Log:
                 row["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(torques**2)))
             row["odometry_drift_m"] = drift
             row["odometry_drift_per_m"] = drift / travelled if travelled > 0 else 0.0
+            error = np.hypot(*(true[:, :2] - est[:, :2]).T)
+            row["localization_rms_error_m"] = float(np.sqrt(np.mean(error**2)))
+            row["localization_max_error_m"] = float(np.max(error))
             counts = self.controller_status_counts(i)
             if counts:
                 row["controller_statuses"] = counts

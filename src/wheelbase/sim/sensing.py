@@ -7,7 +7,12 @@ at the next step. :class:`PerfectState` hands the controller the true state inst
 An estimator has ``encoder`` (the encoders it reads, or None), ``start(poses, seeds)`` (what it
 keeps besides the estimate: a covariance, particles; None here) and ``update(estimate, ticks,
 dt, pose, twist, state=..., index=...)`` returning the new estimate ``(M, 3)``, the estimated
-twist ``(M, 3)`` and its new state, for the robots ``index`` still running.
+twist ``(M, 3)`` and its new state, for the robots ``index`` still running. When the engine has
+sensors it also passes ``readings=`` (:class:`~wheelbase.sim.sensors.Readings`, rows as
+``index``); the filters that use them are in :mod:`wheelbase.sim.localizers`. An estimator may
+also have ``signals(state)`` (named per-robot arrays for the log, e.g. a covariance) and
+``particles_of(state, robot)`` (particles for drawing). A non-finite estimate for a robot ends
+that robot ``diverged``.
 
 Random encoder errors are drawn from one generator per robot, seeded by that robot's seed, so
 a robot's run does not depend on which batch it ran in: robot ``i`` of a batch equals the
@@ -100,7 +105,7 @@ class PerfectState:
         """
         return None
 
-    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None):
+    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None):
         """The true pose and twist.
 
         Parameters
@@ -115,6 +120,8 @@ class PerfectState:
             The true pose and body twist.
         state, index : optional
             What the estimator keeps, and which robots these are (unused).
+        readings : Readings, optional
+            Sensor readings (unused).
         """
         return pose.copy(), twist.copy(), state
 
@@ -156,7 +163,7 @@ class EncoderOdometry:
         """
         return None
 
-    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None):
+    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None):
         """Dead-reckon the estimate over one step, and the twist it implies.
 
         Parameters
@@ -171,6 +178,8 @@ class EncoderOdometry:
             The truth (unused: odometry only sees ticks).
         state, index : optional
             What the estimator keeps, and which robots these are (unused).
+        readings : Readings, optional
+            Sensor readings (unused: odometry alone).
         """
         from wheelbase.odometry.dead_reckoning import pose_increment
 

@@ -1,0 +1,441 @@
+"""Estimators of the closed loop that fuse wheel odometry with the lidar and the landmarks.
+
+Both follow the estimator protocol of :mod:`wheelbase.sim.sensing` (``encoder``, ``start``,
+``update``) and also take the step's sensor :class:`~wheelbase.sim.sensors.Readings`:
+
+:class:`KalmanLocalizer` (EKF or UKF, batched)
+    Every step predicts the belief of all running robots at once with the step's odometry
+    increments as the control (v, ω) = (Δs/dt, Δθ/dt) of the filter's velocity motion model;
+    landmark readings, when the sensor was read, correct it (χ² gate, Joseph form:
+    :mod:`wheelbase.localization.kalman`). The lidar is not used by these filters (they know
+    landmarks, not maps).
+
+:class:`ParticleLocalizer` (AMCL, one filter per robot)
+    As Nav2 runs AMCL beside odometry: the encoders dead-reckon a pose in the *odometry* frame
+    every step; the particle filter updates when a reading came and the odometry moved
+    ``update_min_d`` or turned ``update_min_a`` since its last update, and its estimate (the
+    mean of the heaviest cluster) fixes the correction map ← odom. Between updates the
+    estimate is that correction composed with the odometry pose, so the controller sees a
+    smooth pose that jumps only by the corrections.
+
+Random numbers: robot i's particle filter draws from ``default_rng([seed_i, 3])``, so robot i
+of a batch equals the single run with seed i.
+
+Failures: nothing a robot does raises. A filter that fails for a robot (an
+:class:`~wheelbase.errors.EstimationError`: a covariance that stops being positive definite,
+every particle weight zero) gives that robot a NaN estimate, and the engine ends it
+``diverged`` (the controller never sees a NaN); the other robots run on. The counts of used,
+gated and skipped measurements (NaN or negative ranges, unknown landmark identities) are
+signals of the log (``loc_*`` columns) and the run's metrics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from wheelbase._validate import as_float_array, nonnegative
+from wheelbase.errors import ConfigError, EstimationError, InputError
+from wheelbase.geometry import compose, inverse_pose, wrap_angle
+from wheelbase.sim.sensing import EncoderOdometry
+
+__all__ = [
+    "COUNTS",
+    "PARTICLE_STREAM",
+    "KalmanLocalizer",
+    "KalmanState",
+    "ParticleLocalizer",
+    "ParticleState",
+    "covariance_signals",
+]
+
+PARTICLE_STREAM = 3
+"""Second word of the seed of a robot's particle filter: ``default_rng([seed, 3])``."""
+
+COUNTS: tuple[str, ...] = (
+    "loc_updates",
+    "loc_landmarks_used",
+    "loc_landmarks_rejected",
+    "loc_landmarks_skipped",
+    "loc_beams_used",
+    "loc_beams_skipped",
+)
+"""Cumulative counts per robot in the estimators' signals: filter corrections, landmark
+measurements applied, rejected by the χ² gate, skipped (NaN or negative range, NaN bearing,
+unknown identity), lidar beams used and skipped (NaN or negative readings)."""
+
+_COV_NAMES = (("xx", 0, 0), ("xy", 0, 1), ("xtheta", 0, 2), ("yy", 1, 1), ("ytheta", 1, 2),
+              ("thetatheta", 2, 2))  # fmt: skip
+
+
+def covariance_signals(cov: np.ndarray) -> dict[str, np.ndarray]:
+    """The six distinct entries of pose covariances ``(N, 3, 3)`` as named signals ``(N,)``.
+
+    Parameters
+    ----------
+    cov : numpy.ndarray, shape (N, 3, 3)
+        Covariances of (x [m], y [m], θ [rad]).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``est_cov_xx`` [m²], ``est_cov_xy`` [m²], ``est_cov_xtheta`` [m·rad], ``est_cov_yy``,
+        ``est_cov_ytheta``, ``est_cov_thetatheta`` [rad²].
+    """
+    return {f"est_cov_{name}": cov[:, i, j].copy() for name, i, j in _COV_NAMES}
+
+
+def _initial_cov(std: Any, n: int) -> tuple[tuple[float, float, float], np.ndarray]:
+    values = as_float_array("initial_std", std, 3, max_ndim=1)
+    for name, value, unit in zip(("x", "y", "θ"), values, ("m", "m", "rad"), strict=True):
+        nonnegative(f"initial_std {name}", float(value), unit)
+    return tuple(float(v) for v in values), np.broadcast_to(np.diag(values**2), (n, 3, 3))
+
+
+def _check_odometry(odometry: Any) -> None:
+    if not isinstance(odometry, EncoderOdometry):
+        raise ConfigError(
+            f"odometry must be an EncoderOdometry (got {type(odometry).__name__}): the filters "
+            "fuse wheel-encoder odometry with the sensors"
+        )
+
+
+# --------------------------------------------------------------------------- Kalman filters
+@dataclass
+class KalmanState:
+    """What a :class:`KalmanLocalizer` keeps besides the estimate (the mean).
+
+    Attributes
+    ----------
+    cov : numpy.ndarray, shape (N, 3, 3)
+        Pose covariances.
+    counts : numpy.ndarray of int64, shape (N, len(COUNTS))
+        Cumulative counts (:data:`COUNTS`).
+    """
+
+    cov: np.ndarray
+    counts: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class KalmanLocalizer:
+    """EKF or UKF localisation on wheel odometry and landmarks, for a batch (module docstring).
+
+    Parameters
+    ----------
+    filter : EKF or UKF
+        The filter: its landmarks, motion noise, measurement noise and gate.
+    odometry : EncoderOdometry
+        The encoders and the dead reckoning whose increments drive the prediction.
+    initial_std : tuple of float
+        Standard deviations (x [m], y [m], θ [rad]) of the start pose's belief, >= 0.
+    """
+
+    filter: Any
+    odometry: EncoderOdometry
+    initial_std: tuple[float, float, float] = (0.01, 0.01, math.radians(1.0))
+
+    def __post_init__(self) -> None:
+        from wheelbase.localization import KalmanFilter
+
+        if not isinstance(self.filter, KalmanFilter):
+            raise ConfigError(f"filter must be an EKF or a UKF (got {type(self.filter).__name__})")
+        _check_odometry(self.odometry)
+        std, _ = _initial_cov(self.initial_std, 1)
+        object.__setattr__(self, "initial_std", std)
+
+    @property
+    def encoder(self) -> Any:
+        """The encoders read by the odometry."""
+        return self.odometry.encoder
+
+    def start(self, poses: np.ndarray, seeds: np.ndarray) -> KalmanState:
+        """The belief at the start poses: covariance ``diag(initial_std²)``.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray, shape (N, 3)
+            Start poses.
+        seeds : numpy.ndarray
+            The robots' seeds (unused: the filter draws no random numbers).
+        """
+        n = poses.shape[0]
+        _, cov = _initial_cov(self.initial_std, n)
+        return KalmanState(cov.copy(), np.zeros((n, len(COUNTS)), dtype=np.int64))
+
+    def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
+        """Predict with the step's odometry; correct with landmark readings when there are any.
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (M, 3)
+            The means at the start of the step, of robots ``index``.
+        ticks : numpy.ndarray, shape (M, 2)
+            Tick differences counted during the step.
+        dt : float
+            Step [s].
+        pose, twist : numpy.ndarray, shape (M, 3)
+            The truth (unused).
+        state : KalmanState
+            Every robot's covariance and counts.
+        index : numpy.ndarray of int, shape (M,)
+            Which robots these are.
+        readings : Readings, optional
+            What the sensors read after the step (rows as ``index``).
+
+        Returns
+        -------
+        estimate : numpy.ndarray, shape (M, 3)
+            The new means (NaN for a robot whose filter failed).
+        twist : numpy.ndarray, shape (M, 3)
+            The odometry's twist over the step.
+        state : KalmanState
+        """
+        _, odo_twist, _ = self.odometry.update(estimate, ticks, dt, pose, twist)
+        control = odo_twist[:, [0, 2]]
+        ids = z = None
+        if readings is not None and readings.landmark_ids is not None:
+            ids, z = readings.landmark_ids, readings.landmark_z
+        cov = state.cov.copy()
+        counts = state.counts.copy()
+        mean = np.empty_like(estimate)
+        try:
+            mean[:], cov[index], found = self._step(estimate, state.cov[index], control, dt, ids, z)
+            counts[index] += found
+        except (EstimationError, InputError):  # one robot at a time: only the failing ones stop
+            for row, i in enumerate(index):
+                one = (slice(row, row + 1),)
+                try:
+                    m, c, found = self._step(
+                        estimate[one], state.cov[i : i + 1], control[one], dt,
+                        None if ids is None else ids[one], None if z is None else z[one],
+                    )  # fmt: skip
+                    mean[row], cov[i] = m[0], c[0]
+                    counts[i] += found[0]
+                except (EstimationError, InputError):
+                    mean[row] = np.nan
+        return mean, odo_twist, KalmanState(cov, counts)
+
+    def _step(self, mean, cov, control, dt, ids, z):
+        found = np.zeros((mean.shape[0], len(COUNTS)), dtype=np.int64)
+        mean, cov = self.filter.predict(mean, cov, control, dt)
+        if ids is not None and ids.shape[1] > 0:
+            mean, cov, info = self.filter.update(mean, cov, ids, z)
+            found[:, 1] = info.accepted.sum(1)
+            found[:, 2] = info.gated.sum(1)
+            found[:, 3] = info.invalid.sum(1)
+            found[:, 0] = info.accepted.any(1)
+        return mean, cov, found
+
+    def signals(self, state: KalmanState) -> dict[str, np.ndarray]:
+        """The covariances and counts of every robot, for the log.
+
+        Parameters
+        ----------
+        state : KalmanState
+            The filter's state.
+        """
+        out = covariance_signals(state.cov)
+        out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
+        return out
+
+
+# --------------------------------------------------------------------------- particle filter
+@dataclass
+class ParticleState:
+    """What a :class:`ParticleLocalizer` keeps: one AMCL belief per robot and the odometry.
+
+    Attributes
+    ----------
+    filters : list of AMCLState
+        Each robot's particles.
+    generators : list of numpy.random.Generator
+        Each robot's random stream.
+    odom : numpy.ndarray, shape (N, 3)
+        Dead-reckoned poses in the odometry frame (which starts at the start pose).
+    correction : numpy.ndarray, shape (N, 3)
+        The transform map ← odom from each robot's last filter update.
+    cov : numpy.ndarray, shape (N, 3, 3)
+        Covariance of each robot's heaviest cluster at its last update.
+    particles : numpy.ndarray of int64, shape (N,)
+        Particles each filter holds.
+    counts : numpy.ndarray of int64, shape (N, len(COUNTS))
+        Cumulative counts (:data:`COUNTS`).
+    """
+
+    filters: list
+    generators: list
+    odom: np.ndarray
+    correction: np.ndarray
+    cov: np.ndarray
+    particles: np.ndarray
+    counts: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class ParticleLocalizer:
+    """AMCL on wheel odometry, the lidar and the landmarks, one filter per robot (module
+    docstring).
+
+    Parameters
+    ----------
+    amcl : AMCL
+        The particle filter (its map, lidar, landmarks, motion noise, particle counts).
+    odometry : EncoderOdometry
+        The encoders and the dead reckoning of the odometry frame.
+    initial_std : tuple of float
+        Standard deviations (x [m], y [m], θ [rad]) of the particles drawn around the start
+        pose, >= 0.
+    global_start : bool
+        Spread the particles over the map's free space instead (global localisation: the
+        start pose is unknown to the filter).
+    """
+
+    amcl: Any
+    odometry: EncoderOdometry
+    initial_std: tuple[float, float, float] = (0.02, 0.02, math.radians(1.0))
+    global_start: bool = False
+
+    def __post_init__(self) -> None:
+        from wheelbase.localization import AMCL
+
+        if not isinstance(self.amcl, AMCL):
+            raise ConfigError(f"amcl must be an AMCL (got {type(self.amcl).__name__})")
+        if self.amcl.lidar is None and self.amcl.landmarks is None:
+            raise ConfigError("the AMCL needs a lidar (and its map) or landmarks to correct with")
+        _check_odometry(self.odometry)
+        std, _ = _initial_cov(self.initial_std, 1)
+        object.__setattr__(self, "initial_std", std)
+        if self.global_start:
+            self.amcl.random_poses(1, 0)  # a map without free space fails here, at set-up
+
+    @property
+    def encoder(self) -> Any:
+        """The encoders read by the odometry."""
+        return self.odometry.encoder
+
+    def start(self, poses: np.ndarray, seeds: np.ndarray) -> ParticleState:
+        """Particles around each start pose (or over the free space), odometry at the start.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray, shape (N, 3)
+            Start poses.
+        seeds : numpy.ndarray of int, shape (N,)
+            The robots' seeds (their particle filters' random streams).
+        """
+        n = poses.shape[0]
+        generators = [np.random.default_rng([int(s), PARTICLE_STREAM]) for s in seeds]
+        _, cov = _initial_cov(self.initial_std, 1)
+        filters = []
+        for i in range(n):
+            if self.global_start:
+                filters.append(self.amcl.global_state(poses[i], generators[i]))
+            else:
+                filters.append(self.amcl.initial_state(poses[i], cov[0], poses[i], generators[i]))
+        return ParticleState(
+            filters=filters,
+            generators=generators,
+            odom=poses.copy(),
+            correction=np.zeros((n, 3)),
+            cov=np.broadcast_to(cov, (n, 3, 3)).copy(),
+            particles=np.array([f.particles.shape[0] for f in filters], dtype=np.int64),
+            counts=np.zeros((n, len(COUNTS)), dtype=np.int64),
+        )
+
+    def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
+        """Dead-reckon the odometry; run the filters of robots with readings that moved enough.
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (M, 3)
+            The estimates at the start of the step (unused: the odometry and the correction
+            make the estimate).
+        ticks : numpy.ndarray, shape (M, 2)
+            Tick differences counted during the step.
+        dt : float
+            Step [s].
+        pose, twist : numpy.ndarray, shape (M, 3)
+            The truth (unused).
+        state : ParticleState
+            Every robot's filter.
+        index : numpy.ndarray of int, shape (M,)
+            Which robots these are.
+        readings : Readings, optional
+            What the sensors read after the step (rows as ``index``).
+
+        Returns
+        -------
+        estimate : numpy.ndarray, shape (M, 3)
+            correction ∘ odometry (NaN for a robot whose filter failed).
+        twist : numpy.ndarray, shape (M, 3)
+            The odometry's twist over the step.
+        state : ParticleState
+        """
+        odom_now, odo_twist, _ = self.odometry.update(state.odom[index], ticks, dt, pose, twist)
+        odom = state.odom.copy()
+        odom[index] = odom_now
+        filters = list(state.filters)
+        correction, cov = state.correction.copy(), state.cov.copy()
+        particles, counts = state.particles.copy(), state.counts.copy()
+        failed = np.zeros(index.size, dtype=bool)
+        if readings is not None and not readings.empty:
+            amcl = self.amcl
+            use_scan = readings.scan is not None and amcl.lidar is not None
+            use_marks = readings.landmark_ids is not None and amcl.landmarks is not None
+            for row, i in enumerate(index):
+                if not (use_scan or use_marks) or not amcl.needs_update(filters[i], odom_now[row]):
+                    continue
+                try:
+                    new, info = amcl.update(
+                        filters[i], odom_now[row], state.generators[i], force=True,
+                        scan=readings.scan[row] if use_scan else None,
+                        landmark_ids=readings.landmark_ids[row] if use_marks else None,
+                        landmark_z=readings.landmark_z[row] if use_marks else None,
+                    )  # fmt: skip
+                    found = amcl.estimate(new)
+                except (EstimationError, InputError):
+                    failed[row] = True
+                    continue
+                filters[i] = new
+                correction[i] = compose(found.pose, inverse_pose(odom_now[row]))
+                cov[i] = found.cov
+                particles[i] = info.particles
+                counts[i] += (1, info.landmarks_used, 0, info.landmarks_skipped,
+                              info.beams_used, info.beams_skipped)  # fmt: skip
+        new_estimate = compose(correction[index], odom_now)
+        new_estimate[:, 2] = wrap_angle(new_estimate[:, 2])
+        new_estimate[failed] = np.nan
+        return (
+            new_estimate,
+            odo_twist,
+            ParticleState(filters, state.generators, odom, correction, cov, particles, counts),
+        )
+
+    def signals(self, state: ParticleState) -> dict[str, np.ndarray]:
+        """The covariances, particle counts and measurement counts of every robot.
+
+        Parameters
+        ----------
+        state : ParticleState
+            The filters' state.
+        """
+        out = covariance_signals(state.cov)
+        out["loc_particles"] = state.particles.copy()
+        out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
+        return out
+
+    def particles_of(self, state: ParticleState, robot: int) -> np.ndarray:
+        """Robot ``robot``'s particle poses ``(P, 3)`` in the map frame (for drawing).
+
+        Parameters
+        ----------
+        state : ParticleState
+            The filters' state.
+        robot : int
+            Which robot.
+        """
+        return state.filters[robot].particles
