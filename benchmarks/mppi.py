@@ -69,7 +69,8 @@ def cluttered():
 
 def rate(backend: str, grid, calls: int, samples: int = 2000, **options) -> float:
     mppi = MPPI(Unicycle(), 56, 0.05, samples, (0.2, 0.5), 0.03, None, LIMITS, seed=0,
-                backend=backend, grid=grid, footprint=ROBOT, **options)  # fmt: skip
+                backend=backend, grid=grid, footprint=ROBOT, max_sample_steps=samples * 56,
+                **options)  # fmt: skip
     pose = np.array([2.4, 3.9, 0.1])
     for _ in range(3):  # compile / warm up
         mppi.plan(pose, STRAIGHT)

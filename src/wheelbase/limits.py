@@ -15,8 +15,9 @@ limit                  what it bounds (default)                     raised by
                        distance field alone is 0.8 GB)
 ``MAX_STATE_BINS``     Hybrid A* state bins x × y × heading (5e7:   ``HybridAStar(...,
                        the search's arrays take ~0.5 GB)            max_state_bins=)``
-``MAX_SAMPLE_STEPS``   MPPI samples × horizon steps per call (1e8:  ``MPPI(...,
-                       the sampled commands take 1.6 GB)            max_sample_steps=)``
+``MAX_SAMPLE_STEPS``   MPPI samples × horizon steps per call (1e7:  ``MPPI(...,
+                       1.6 GB and ~4 s per NumPy call; a GPU         max_sample_steps=)``
+                       takes 1e8 when asked)
 ``MAX_COORDINATE``     |x|, |y| of poses in scenario files (1e10 m, fixed: float64 spacing
                        UTM-like and beyond)                         is 2 µm there
 =====================  ===========================================  ==========================
@@ -35,5 +36,5 @@ __all__ = [
 MAX_STEPS = 1_000_000
 MAX_MAP_CELLS = 100_000_000
 MAX_STATE_BINS = 50_000_000
-MAX_SAMPLE_STEPS = 100_000_000
+MAX_SAMPLE_STEPS = 10_000_000
 MAX_COORDINATE = 1.0e10  # m

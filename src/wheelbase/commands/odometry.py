@@ -24,6 +24,7 @@ import typer
 
 from wheelbase._validate import check_choice, finite, integer
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_COORDINATE
 
 __all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
 
@@ -71,6 +72,11 @@ def _goals(values: list[str] | None, extra: list[str], unit: str) -> list[tuple[
             except ValueError:
                 raise ConfigError(f"goal must be two numbers (got {text!r})") from None
             coords.append(finite("goal", number, unit) * scale)
+        if max(abs(coords[0]), abs(coords[1])) > MAX_COORDINATE:
+            raise ConfigError(
+                f"goal x and y must be within ±{MAX_COORDINATE:g} m (got ({x_text}, {y_text}) "
+                f"{unit})"
+            )
         goals.append((coords[0], coords[1]))
     return goals
 

@@ -169,7 +169,8 @@ class MPPI:
         Run the ``jax`` backend in float64 (default float32).
     max_sample_steps : int
         Most samples × horizon_steps per call (default :data:`wheelbase.limits.MAX_SAMPLE_STEPS`
-        = 1e8: the sampled commands alone take 1.6 GB); raise it on purpose.
+        = 1e7: the NumPy backend then holds about 1.6 GB of intermediates and takes ~4 s per
+        call); raise it on purpose, e.g. for the jax backend on a GPU.
 
     Examples
     --------
