@@ -193,7 +193,7 @@ def register(app: typer.Typer) -> None:
         from wheelbase.sim import run_go_to_goal
 
         goals = _goals(goal, list(ctx.args), unit)
-        seed = integer("seed", seed, minimum=0)
+        seed = integer("seed", seed, minimum=0, maximum=2**63 - 1)  # the engine's int64 seeds
         drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
         paths = _prepare(out, GOTO_FILES, force)
         log = run_go_to_goal(goals, drive=drive, seed=seed)  # every goal, one robot each
