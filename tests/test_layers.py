@@ -15,7 +15,7 @@ LAYERS = (
     {"sensors", "odometry"},
     {"control", "localization"},
     {"sim"},
-    {"runner", "batch", "scenario", "report", "dynamics_plot", "mcap_export"},
+    {"runner", "batch", "scenario", "scenario_sensors", "report", "dynamics_plot", "mcap_export"},
     {"gym"},
     {"cli", "commands", "__main__"},
 )

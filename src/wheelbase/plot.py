@@ -20,7 +20,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -433,7 +433,8 @@ def animate(
     title: str | None = None,
     center_offset: float = 0.0,
     background: Callable[[Axes], None] | None = None,
-    overlay: Callable[[int], Sequence[np.ndarray]] | None = None,
+    overlay: Callable[[int], Sequence[np.ndarray] | Mapping[str, Sequence[np.ndarray]]]
+    | None = None,
 ) -> Path:
     """Write a GIF of the robot footprint moving along its path, with the path trace.
 
@@ -468,7 +469,8 @@ def animate(
         ``background(ax)`` draws the static part (a map, a plan) once, after the axes limits
         are set from the path; it may change the limits.
     overlay : callable, optional
-        ``overlay(k)`` returns polylines ``(M, 2)`` [m] drawn thinly in the frame of recorded
+        ``overlay(k)`` returns polylines ``(M, 2)`` [m] (or a mapping of matplotlib colours to
+        polylines, each drawn in its colour) drawn thinly in the frame of recorded
         pose ``k`` (e.g. a controller's sampled rollouts); an empty sequence draws none.
 
     Returns
@@ -548,7 +550,14 @@ def animate(
             front = 0.5 * (corners[k, i, 1] + corners[k, i, 2])
             noses[i].set_data([poses[k, i, 0], front[0]], [poses[k, i, 1], front[1]])
         heading.set_text(f"{prefix}t = {t[k]:.1f} s")
-        extra.set_segments(list(overlay(int(k))) if overlay is not None else [])
+        drawn = overlay(int(k)) if overlay is not None else []
+        if isinstance(drawn, Mapping):
+            lines = [(line, colour) for colour, group in drawn.items() for line in group]
+            extra.set_segments([line for line, _ in lines])
+            extra.set_color([colour for _, colour in lines] or "tab:purple")
+        else:
+            extra.set_segments(list(drawn))
+            extra.set_color("tab:purple")
         for artist in moving:
             fig.draw_artist(artist)
         images.append(

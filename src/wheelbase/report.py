@@ -19,6 +19,7 @@ __all__ = [
     "figure_commands",
     "figure_errors",
     "figure_map",
+    "sensing_overlay",
     "write_report",
 ]
 
@@ -83,7 +84,7 @@ def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
     )
     ax.plot(
         log.estimated_pose[0][:, 0], log.estimated_pose[0][:, 1], ":", color="tab:green", lw=1.2,
-        label="odometry estimate",
+        label="estimate",
     )  # fmt: skip
     if polygon is not None:
         indices = np.unique(np.linspace(0, len(log.t) - 1, 12).astype(int))
@@ -113,7 +114,8 @@ def _zoom(ax, grid, plan_poses, log: Log, margin: float = 2.0) -> None:
 
 
 def figure_errors(log: Log):
-    """Tracking error (position, heading) and odometry drift against time.
+    """Tracking error (position, heading) and the estimate's error against time (with the
+    filter's 3σ bound of the position error when it has a covariance).
 
     Parameters
     ----------
@@ -130,12 +132,16 @@ def figure_errors(log: Log):
     axes[0].set_ylabel("position error [cm]")
     axes[1].plot(log.t, heading)
     axes[1].set_ylabel("heading error [deg]")
-    axes[2].plot(log.t, 100 * drift, color="tab:green")
-    axes[2].set_ylabel("odometry drift [cm]")
+    axes[2].plot(log.t, 100 * drift, color="tab:green", label="|true − estimate|")
+    if "est_cov_xx" in log.extras:
+        bound = 3.0 * np.sqrt(_largest_variance(log, 0))
+        axes[2].plot(log.t, 100 * bound, "--", color="0.5", lw=0.8, label="3σ (filter)")
+        axes[2].legend(fontsize=8)
+    axes[2].set_ylabel("estimate error [cm]")
     axes[2].set_xlabel("t [s]")
     for ax in axes:
         ax.grid(True, alpha=0.3)
-    axes[0].set_title("true pose vs reference, and odometry vs true pose")
+    axes[0].set_title("true pose vs reference, and estimate vs true pose")
     fig.tight_layout()
     return fig
 
@@ -174,10 +180,88 @@ def figure_commands(log: Log):
     return fig
 
 
+def _largest_variance(log: Log, robot: int) -> np.ndarray:
+    """Largest eigenvalue [m²] of the position covariance of each row of a robot."""
+    xx, yy = log.extras["est_cov_xx"][robot], log.extras["est_cov_yy"][robot]
+    xy = log.extras["est_cov_xy"][robot]
+    return 0.5 * (xx + yy) + np.sqrt(0.25 * (xx - yy) ** 2 + xy**2)
+
+
+def _ellipse(centre: np.ndarray, cov: np.ndarray, scale: float = 3.0) -> np.ndarray:
+    """The ``scale``-σ ellipse of a 2×2 covariance around ``centre``, a closed polyline."""
+    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
+    angle = np.linspace(0.0, 2.0 * np.pi, 41)
+    circle = np.stack([np.cos(angle), np.sin(angle)], -1) * (scale * np.sqrt(np.maximum(w, 0)))
+    return centre + circle @ v.T
+
+
+def sensing_overlay(log: Log, lidar=None, *, robot: int = 0):
+    """What the animation draws of sensing at each row: the latest lidar beams (within 0.5 s),
+    the latest particles (within 1.5 s, at most 300, as heading ticks) or else the 3σ
+    covariance ellipse of the estimate, and a sampling controller's rollouts.
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    lidar : Lidar, optional
+        The lidar whose scans ``log.scans`` holds (its beam angles and mount); without it no
+        beams are drawn.
+    robot : int
+        Which robot.
+
+    Returns
+    -------
+    callable
+        ``overlay(k)`` → mapping of colours to polylines (for :func:`wheelbase.plot.animate`).
+    """
+
+    def latest(table: dict, k: int, age: float):
+        rows = sorted(row for (r, row) in table if r == robot and row <= k)
+        if not rows or log.t[k] - log.t[rows[-1]] >= age:
+            return None, None
+        return rows[-1], table[(robot, rows[-1])]
+
+    has_cov = "est_cov_xx" in log.extras
+    cov = None
+    if has_cov:
+        e = log.extras
+        cov = np.stack(
+            [np.stack([e["est_cov_xx"][robot], e["est_cov_xy"][robot]], -1),
+             np.stack([e["est_cov_xy"][robot], e["est_cov_yy"][robot]], -1)], -2,
+        )  # fmt: skip
+
+    def overlay(k: int) -> dict[str, list[np.ndarray]]:
+        drawn: dict[str, list[np.ndarray]] = {}
+        _, fan = latest(log.rollout_fans, k, 1.5)
+        if fan is not None:
+            drawn["tab:purple"] = list(fan)
+        row, ranges = latest(log.scans, k, 0.5) if lidar is not None else (None, None)
+        if ranges is not None:
+            pose = log.true_pose[robot, row]
+            origin = lidar.sensor_poses(pose)[:2]
+            ends = lidar.endpoints(pose, ranges)
+            ends = ends[np.all(np.isfinite(ends), axis=-1)]
+            drawn["tab:red"] = [np.array([origin, end]) for end in ends]
+        _, cloud = latest(log.particles, k, 1.5)
+        if cloud is not None:
+            cloud = np.asarray(cloud, dtype=np.float64)[:: max(1, len(cloud) // 300)]
+            tips = cloud[:, :2] + 0.08 * np.stack([np.cos(cloud[:, 2]), np.sin(cloud[:, 2])], -1)
+            drawn["tab:green"] = list(np.stack([cloud[:, :2], tips], 1))
+        elif cov is not None:
+            drawn["tab:blue"] = [_ellipse(log.estimated_pose[robot, k, :2], cov[k])]
+        return drawn
+
+    return overlay
+
+
 def animate_run(
-    grid, plan_poses, log: Log, robot_footprint, path, *, frames: int = 120, fps: int = 15
-):
-    """GIF of the footprint moving over the map with the plan and the trace.
+    grid, plan_poses, log: Log, robot_footprint, path, *, frames: int = 120, fps: int = 15,
+    lidar=None,
+):  # fmt: skip
+    """GIF of the footprint moving over the map with the plan and the trace, and what the
+    robot senses (:func:`sensing_overlay`: lidar beams, particles or the covariance ellipse,
+    a sampling controller's rollouts).
 
     Parameters
     ----------
@@ -195,6 +279,8 @@ def animate_run(
         Number of frames (the run is subsampled evenly).
     fps : int
         Frames per second.
+    lidar : Lidar, optional
+        The lidar of ``log.scans`` (its beams are drawn).
     """
     from types import SimpleNamespace
 
@@ -208,16 +294,7 @@ def animate_run(
             ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.2)
         _zoom(ax, grid, plan_poses, log)
 
-    fans = {row: fan for (robot, row), fan in log.rollout_fans.items() if robot == 0}
-    fan_rows = np.array(sorted(fans))
-
-    def overlay(k: int) -> list[np.ndarray]:
-        # The latest fan at or before this frame, shown while it is younger than 1.5 s.
-        if fan_rows.size == 0 or k < fan_rows[0]:
-            return []
-        row = int(fan_rows[np.searchsorted(fan_rows, k, side="right") - 1])
-        return list(fans[row]) if log.t[k] - log.t[row] < 1.5 else []
-
+    overlay = sensing_overlay(log, lidar)
     run = SimpleNamespace(t=log.t, poses=log.true_pose[0])
     return animate(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
@@ -313,8 +390,11 @@ def write_report(
         written.append(folder / name)
     if gif:
         geometry = (*result.robot.footprint, result.robot.center_offset)
+        lidar = None if result.sensors is None else result.sensors.lidar
         written.append(
-            animate_run(result.grid, plan, result.log, geometry, folder / "animation.gif")
+            animate_run(
+                result.grid, plan, result.log, geometry, folder / "animation.gif", lidar=lidar
+            )
         )
     return written
 

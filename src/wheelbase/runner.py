@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -36,16 +36,7 @@ from wheelbase.models.bicycle import Ackermann
 from wheelbase.models.path import PoseTrajectory
 from wheelbase.polyline import distance_to_polyline
 from wheelbase.scenario import Scenario, load_scenario
-from wheelbase.sim import (
-    Arrival,
-    DynamicPlant,
-    EncoderOdometry,
-    Engine,
-    KinematicPlant,
-    Log,
-    PerfectState,
-    WheelAxle,
-)
+from wheelbase.sim import Arrival, DynamicPlant, Engine, KinematicPlant, Log, WheelAxle
 from wheelbase.timing import SpeedLimits, time_parametrize
 
 __all__ = [
@@ -377,6 +368,8 @@ class RunResult:
         The closed-loop record (None when planning failed).
     metrics : dict
         Planning and tracking figures (see ``metrics.json`` in the README).
+    sensors : SensorSuite or None
+        The sensors the robot read (a lidar, landmarks), for drawing.
     """
 
     scenario: Scenario
@@ -386,6 +379,7 @@ class RunResult:
     reference: PoseTrajectory | None
     log: Log | None
     metrics: dict[str, Any]
+    sensors: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -544,13 +538,18 @@ def prepare(
         track_scale=scenario.odometry.track_scale,
     )
     plant = DynamicPlant(robot.dynamics, axle) if dynamic else KinematicPlant(robot.model, axle)
+    from wheelbase.scenario_sensors import build_estimator, build_sensors
+
+    sensors = _field("sensors", lambda: build_sensors(scenario, grid))
+    estimator = _field("localization", lambda: build_estimator(scenario, robot, grid, sensors))
     engine = Engine(
         plant=plant,
         controller=controller,
         reference=reference if reference_kind == "trajectory" else plan,
         dt=scenario.dt,
         duration=scenario.duration,
-        estimator=_estimator(scenario, robot),
+        estimator=estimator,
+        sensors=sensors,
         arrival=Arrival(
             goals[-1],
             (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
@@ -616,6 +615,7 @@ def run(
         prepared.reference,
         log,
         run_metrics(prepared, log, 0),
+        prepared.engine.sensors,
     )
 
 
@@ -642,7 +642,8 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
     starts = np.tile(prepared.start, (len(seeds), 1))
-    log = prepared.engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
+    engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
+    log = engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
     return [run_metrics(prepared, log, i) for i in range(len(seeds))]
 
 
@@ -681,6 +682,10 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     every = max(1, len(one.t) // 400)
     clearance = _min_clearance(prepared.grid, _footprint(prepared.robot), true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
+    metrics["localization"] = prepared.scenario.localization.method
+    for key, value in one.extras.items():  # a filter's cumulative counts, at the end
+        if key.startswith("loc_") and key != "loc_particles":
+            metrics[f"localization_{key[4:]}"] = int(value[0, -1])
     return metrics
 
 
@@ -820,17 +825,3 @@ def _concatenate(legs, path_type):
 def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PoseTrajectory:
     """Time-parametrise each forward/backward run of the plan; stops at every goal."""
     return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
-
-
-def _estimator(scenario: Scenario, robot: Robot) -> Any:
-    spec = scenario.odometry
-    if spec.mode == "perfect":
-        return PerfectState()
-    from wheelbase.odometry import Encoder, WheelOdometry
-
-    return EncoderOdometry(
-        Encoder(spec.pulses_per_revolution, noise_std=spec.tick_noise_std),
-        WheelOdometry(
-            robot.wheel_radius, robot.half_track, spec.pulses_per_revolution, method=spec.method
-        ),
-    )

@@ -25,11 +25,15 @@ __all__ = [
     "EMPTY_MAP_MARGIN",
     "EMPTY_MAP_RESOLUTION",
     "ControllerSpec",
+    "LandmarkSpec",
+    "LidarSpec",
+    "LocalizationSpec",
     "OdometrySpec",
     "PlannerSpec",
     "ResourceSpec",
     "RobotSpec",
     "Scenario",
+    "SensorsSpec",
     "TrajectorySpec",
     "format_validation_error",
     "load_scenario",
@@ -189,6 +193,197 @@ class OdometrySpec(_Strict):
     track_scale: float = Field(1.0, gt=0, description="True track / nominal track.")
 
 
+class LidarSpec(_Strict):
+    """A simulated 2-D lidar (:class:`wheelbase.sensors.Lidar`) read at the true pose."""
+
+    beams: int = Field(60, gt=0, description="Beams per scan.")
+    fov_deg: float = Field(360.0, gt=0, le=360, description="Field of view [deg].")
+    max_range: float = Field(8.0, gt=0, description="Largest range [m].")
+    min_range: float = Field(
+        0.0, ge=0, description="Smallest valid range [m]; shorter readings are NaN."
+    )
+    range_std: float = Field(0.02, gt=0, description="σ of a hit [m].")
+    rate_hz: float = Field(10.0, gt=0, description="Scans per second.")
+    mount: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="Sensor pose in the body frame (x [m], y [m], yaw [deg])."
+    )
+    beam_model: dict[str, float] = Field(
+        default_factory=dict,
+        description="Weights z_hit, z_short, z_max, z_rand (adding up to 1) and lambda_short "
+        "[1/m] of the beam model (Thrun et al. §6.3); default: Gaussian hits only.",
+    )
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        if self.min_range >= self.max_range:
+            raise ValueError(
+                f"min_range must be < max_range = {self.max_range:g} m (got {self.min_range:g})"
+            )
+        allowed = {"z_hit", "z_short", "z_max", "z_rand", "lambda_short"}
+        unknown = sorted(set(self.beam_model) - allowed)
+        if unknown:
+            raise ValueError(
+                f"beam_model: unknown key {unknown[0]!r}; allowed: {', '.join(sorted(allowed))}"
+            )
+        return self
+
+
+class LandmarkSpec(_Strict):
+    """Identified landmarks and the range–bearing sensor that sees them
+    (:class:`wheelbase.sensors.LandmarkSensor`)."""
+
+    positions: tuple[tuple[float, float], ...] = Field(
+        ..., min_length=1, description="Landmark positions (x [m], y [m]); identity = index."
+    )
+    max_range: float = Field(6.0, gt=0, description="Largest range at which one is seen [m].")
+    fov_deg: float = Field(360.0, gt=0, le=360, description="Field of view [deg].")
+    range_std: float = Field(0.05, gt=0, description="σ of the range [m].")
+    bearing_std_deg: float = Field(2.0, gt=0, description="σ of the bearing [deg].")
+    detection_probability: float = Field(
+        1.0, gt=0, le=1, description="Probability that a landmark in view is detected."
+    )
+    false_rate: float = Field(
+        0.0, ge=0, description="Mean number of false detections per reading (clutter)."
+    )
+    rate_hz: float = Field(5.0, gt=0, description="Readings per second.")
+
+    @field_validator("positions")
+    @classmethod
+    def _finite_positions(cls, value):
+        for x, y in value:
+            if not (math.isfinite(x) and math.isfinite(y)) or max(abs(x), abs(y)) > MAX_COORDINATE:
+                raise ValueError(
+                    f"positions must be finite and within ±{MAX_COORDINATE:g} m (got ({x}, {y}))"
+                )
+        return value
+
+
+class SensorsSpec(_Strict):
+    """Exteroceptive sensors read at the true pose (none by default)."""
+
+    lidar: LidarSpec | None = Field(None, description="A 2-D lidar on the map.")
+    landmarks: LandmarkSpec | None = Field(None, description="Range–bearing landmarks.")
+
+
+# Options of each localisation method besides ``method`` and ``initial_std``.
+LOCALIZATION_OPTIONS: dict[str, frozenset[str]] = {
+    "odometry": frozenset(),
+    "ekf": frozenset({"range_std", "bearing_std_deg", "gate_probability", "motion"}),
+    "ukf": frozenset(
+        {"range_std", "bearing_std_deg", "gate_probability", "motion", "alpha", "beta", "kappa"}
+    ),
+    "amcl": frozenset(
+        {
+            "min_particles", "max_particles", "alpha1", "alpha2", "alpha3", "alpha4",
+            "sigma_hit", "z_hit", "z_rand", "max_beams", "likelihood_max_dist",
+            "update_min_d", "update_min_a_deg", "resample_interval", "kld_err", "kld_delta",
+            "recovery_alpha_slow", "recovery_alpha_fast", "range_std", "bearing_std_deg",
+            "global_start",
+        }
+    ),
+}  # fmt: skip
+
+
+class LocalizationSpec(_Strict):
+    """How the controller's estimate is made: wheel odometry alone, or a filter that fuses it
+    with the sensors. Options left unset take the defaults given here; options of another
+    method are errors."""
+
+    method: Literal["odometry", "ekf", "ukf", "amcl"] = Field(
+        "odometry",
+        description="odometry: dead reckoning alone; ekf, ukf: Kalman filters on the landmarks; "
+        "amcl: a particle filter on the lidar (likelihood field) and the landmarks.",
+    )
+    initial_std: tuple[float, float, float] | None = Field(
+        None,
+        description="σ (x [m], y [m], heading [deg]) of the belief at the start pose (default "
+        "ekf/ukf 0.01 m, 0.01 m, 1 deg; amcl 0.02 m, 0.02 m, 1 deg).",
+    )
+    range_std: float | None = Field(
+        None, gt=0, description="σ of a landmark range the filter assumes [m] (default: the "
+        "sensor's)."
+    )  # fmt: skip
+    bearing_std_deg: float | None = Field(
+        None, gt=0, description="σ of a landmark bearing the filter assumes [deg] (default: "
+        "the sensor's)."
+    )  # fmt: skip
+    gate_probability: float | None = Field(
+        None, gt=0, le=1, description="χ² gate of the Kalman filters (default 0.99)."
+    )
+    motion: dict[str, float] | None = Field(
+        None,
+        description="Kalman filters' motion noise (VelocityMotion: distance_per_m, "
+        "distance_per_rad, heading_per_m, heading_per_rad, distance_per_s, heading_per_s); "
+        "default: the encoders' tick noise per second plus 1e-4 m²/m, 1e-4 rad²/m, "
+        "1e-4 rad²/rad.",
+    )
+    alpha: float | None = Field(None, gt=0, description="UKF sigma-point spread (default 1).")
+    beta: float | None = Field(None, ge=0, description="UKF β (default 2).")
+    kappa: float | None = Field(None, description="UKF κ (default 0).")
+    min_particles: int | None = Field(None, gt=0, description="AMCL (default 500).")
+    max_particles: int | None = Field(None, gt=0, description="AMCL (default 2000).")
+    alpha1: float | None = Field(
+        None, ge=0, description="AMCL rotation noise from rotation (default 1e-3; Nav2 0.2)."
+    )
+    alpha2: float | None = Field(
+        None, ge=0, description="AMCL rotation noise from translation [rad²/m²] (default "
+        "5e-3; Nav2 0.2)."
+    )  # fmt: skip
+    alpha3: float | None = Field(
+        None, ge=0, description="AMCL translation noise from translation (default 1e-4; "
+        "Nav2 0.2)."
+    )  # fmt: skip
+    alpha4: float | None = Field(
+        None, ge=0, description="AMCL translation noise from rotation [m²/rad²] (default "
+        "1e-4; Nav2 0.2)."
+    )  # fmt: skip
+    sigma_hit: float | None = Field(
+        None, gt=0, description="AMCL likelihood-field σ [m] (default 0.05; Nav2 0.2)."
+    )
+    z_hit: float | None = Field(None, gt=0, description="AMCL (default 0.9; Nav2 0.5).")
+    z_rand: float | None = Field(None, ge=0, description="AMCL (default 0.1; Nav2 0.5).")
+    max_beams: int | None = Field(None, gt=0, description="AMCL beams used (default 60).")
+    likelihood_max_dist: float | None = Field(None, gt=0, description="AMCL [m] (default 2).")
+    update_min_d: float | None = Field(
+        None, ge=0, description="AMCL: update after this much travel [m] (default 0.25)."
+    )
+    update_min_a_deg: float | None = Field(
+        None, ge=0, description="AMCL: or after this much turn [deg] (default 11.5 = 0.2 rad)."
+    )
+    resample_interval: int | None = Field(None, gt=0, description="AMCL (default 1).")
+    kld_err: float | None = Field(None, gt=0, description="AMCL KLD ε (default 0.05).")
+    kld_delta: float | None = Field(None, gt=0, lt=1, description="AMCL KLD δ (default 0.01).")
+    recovery_alpha_slow: float | None = Field(
+        None, ge=0, le=1, description="AMCL recovery (default 0: off)."
+    )
+    recovery_alpha_fast: float | None = Field(
+        None, ge=0, le=1, description="AMCL recovery (default 0: off)."
+    )
+    global_start: bool | None = Field(
+        None, description="AMCL: spread the particles over the free space (unknown start)."
+    )
+
+    @field_validator("initial_std")
+    @classmethod
+    def _nonnegative_std(cls, value):
+        if value is not None and not all(math.isfinite(v) and v >= 0 for v in value):
+            raise ValueError(f"must be three finite values >= 0 (got {list(value)})")
+        return value
+
+    @model_validator(mode="after")
+    def _options_of_the_method(self):
+        allowed = LOCALIZATION_OPTIONS[self.method]
+        for name in sorted(self.model_fields_set - {"method", "initial_std"}):
+            if name not in allowed and getattr(self, name) is not None:
+                users = [m for m, keys in LOCALIZATION_OPTIONS.items() if name in keys]
+                raise ValueError(
+                    f"{name} is an option of {' and '.join(users)}, not of method {self.method!r}"
+                )
+        if self.method == "odometry" and self.initial_std is not None:
+            raise ValueError("initial_std is an option of the filters, not of method 'odometry'")
+        return self
+
+
 class ResourceSpec(_Strict):
     """Resource limits of a run (see :mod:`wheelbase.limits`): raise them on purpose."""
 
@@ -215,6 +410,14 @@ class Scenario(_Strict):
     trajectory: TrajectorySpec = Field(default_factory=TrajectorySpec)
     controller: ControllerSpec = Field(default_factory=ControllerSpec)
     odometry: OdometrySpec = Field(default_factory=OdometrySpec)
+    sensors: SensorsSpec = Field(
+        default_factory=SensorsSpec, description="A lidar and/or landmarks read at the true pose."
+    )
+    localization: LocalizationSpec = Field(
+        default_factory=LocalizationSpec,
+        description="odometry (default), ekf, ukf or amcl, with the filter's options beside "
+        "the method.",
+    )
     seed: int = Field(0, ge=0, le=2**64 - 1, description="Noise seed (a 64-bit unsigned integer).")
     start: tuple[float, float, float] = Field(..., description="(x [m], y [m], heading [deg]).")
     goals: tuple[tuple[float, float, float], ...] = Field(
@@ -271,6 +474,24 @@ class Scenario(_Strict):
         return value
 
     @model_validator(mode="after")
+    def _localization_needs(self):
+        method = self.localization.method
+        if method == "odometry":
+            return self
+        if self.odometry.mode != "encoders":
+            raise ValueError(
+                f"localization: {method} fuses wheel-encoder odometry with the sensors: set "
+                "odometry.mode: encoders"
+            )
+        if method in ("ekf", "ukf") and self.sensors.landmarks is None:
+            raise ValueError(
+                f"localization: {method} corrects with landmarks: give sensors.landmarks"
+            )
+        if method == "amcl" and self.sensors.lidar is None and self.sensors.landmarks is None:
+            raise ValueError("localization: amcl needs sensors.lidar or sensors.landmarks")
+        return self
+
+    @model_validator(mode="after")
     def _sizes(self):
         if self.dt > self.duration:
             raise ValueError(f"dt must be <= duration (got dt={self.dt}, duration={self.duration})")
@@ -296,6 +517,8 @@ class Scenario(_Strict):
     def to_yaml(self) -> str:
         """The resolved scenario (all defaults filled) as YAML, loadable again."""
         data = self.model_dump(mode="json")
+        # the filter options left unset: their defaults depend on the method (see the schema)
+        data["localization"] = {k: v for k, v in data["localization"].items() if v is not None}
         return yaml.safe_dump(data, sort_keys=False)
 
 
