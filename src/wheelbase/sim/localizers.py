@@ -95,12 +95,40 @@ def _initial_cov(std: Any, n: int) -> tuple[tuple[float, float, float], np.ndarr
     return tuple(float(v) for v in values), np.broadcast_to(np.diag(values**2), (n, 3, 3))
 
 
-def _check_odometry(odometry: Any) -> None:
-    if not isinstance(odometry, EncoderOdometry):
-        raise ConfigError(
-            f"odometry must be an EncoderOdometry (got {type(odometry).__name__}): the filters "
-            "fuse wheel-encoder odometry with the sensors"
-        )
+class _FusesOdometry:
+    """What both filters share: the wheel odometry they read, the spread of the start belief,
+    and their signals for the log."""
+
+    odometry: EncoderOdometry
+    initial_std: tuple[float, float, float]
+
+    def _check_odometry_and_std(self) -> None:
+        if not isinstance(self.odometry, EncoderOdometry):
+            raise ConfigError(
+                f"odometry must be an EncoderOdometry (got {type(self.odometry).__name__}): "
+                "the filters fuse wheel-encoder odometry with the sensors"
+            )
+        std, _ = _initial_cov(self.initial_std, 1)
+        object.__setattr__(self, "initial_std", std)
+
+    @property
+    def encoder(self) -> Any:
+        """The encoders read by the odometry."""
+        return self.odometry.encoder
+
+    def signals(self, state: Any) -> dict[str, np.ndarray]:
+        """Every robot's covariance and cumulative counts (and particles held), for the log.
+
+        Parameters
+        ----------
+        state : KalmanState or ParticleState
+            The filter's state.
+        """
+        out = covariance_signals(state.cov)
+        if hasattr(state, "particles"):
+            out["loc_particles"] = state.particles.copy()
+        out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
+        return out
 
 
 # --------------------------------------------------------------------------- Kalman filters
@@ -121,7 +149,7 @@ class KalmanState:
 
 
 @dataclass(frozen=True, eq=False)
-class KalmanLocalizer:
+class KalmanLocalizer(_FusesOdometry):
     """EKF or UKF localisation on wheel odometry and landmarks, for a batch (module docstring).
 
     Parameters
@@ -143,14 +171,7 @@ class KalmanLocalizer:
 
         if not isinstance(self.filter, KalmanFilter):
             raise ConfigError(f"filter must be an EKF or a UKF (got {type(self.filter).__name__})")
-        _check_odometry(self.odometry)
-        std, _ = _initial_cov(self.initial_std, 1)
-        object.__setattr__(self, "initial_std", std)
-
-    @property
-    def encoder(self) -> Any:
-        """The encoders read by the odometry."""
-        return self.odometry.encoder
+        self._check_odometry_and_std()
 
     def start(self, poses: np.ndarray, seeds: np.ndarray) -> KalmanState:
         """The belief at the start poses: covariance ``diag(initial_std²)``.
@@ -230,18 +251,6 @@ class KalmanLocalizer:
             found[:, 0] = info.accepted.any(1)
         return mean, cov, found
 
-    def signals(self, state: KalmanState) -> dict[str, np.ndarray]:
-        """The covariances and counts of every robot, for the log.
-
-        Parameters
-        ----------
-        state : KalmanState
-            The filter's state.
-        """
-        out = covariance_signals(state.cov)
-        out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
-        return out
-
 
 # --------------------------------------------------------------------------- particle filter
 @dataclass
@@ -276,7 +285,7 @@ class ParticleState:
 
 
 @dataclass(frozen=True, eq=False)
-class ParticleLocalizer:
+class ParticleLocalizer(_FusesOdometry):
     """AMCL on wheel odometry, the lidar and the landmarks, one filter per robot (module
     docstring).
 
@@ -306,16 +315,9 @@ class ParticleLocalizer:
             raise ConfigError(f"amcl must be an AMCL (got {type(self.amcl).__name__})")
         if self.amcl.lidar is None and self.amcl.landmarks is None:
             raise ConfigError("the AMCL needs a lidar (and its map) or landmarks to correct with")
-        _check_odometry(self.odometry)
-        std, _ = _initial_cov(self.initial_std, 1)
-        object.__setattr__(self, "initial_std", std)
+        self._check_odometry_and_std()
         if self.global_start:
             self.amcl.random_poses(1, 0)  # a map without free space fails here, at set-up
-
-    @property
-    def encoder(self) -> Any:
-        """The encoders read by the odometry."""
-        return self.odometry.encoder
 
     def start(self, poses: np.ndarray, seeds: np.ndarray) -> ParticleState:
         """Particles around each start pose (or over the free space), odometry at the start.
@@ -414,19 +416,6 @@ class ParticleLocalizer:
             odo_twist,
             ParticleState(filters, state.generators, odom, correction, cov, particles, counts),
         )
-
-    def signals(self, state: ParticleState) -> dict[str, np.ndarray]:
-        """The covariances, particle counts and measurement counts of every robot.
-
-        Parameters
-        ----------
-        state : ParticleState
-            The filters' state.
-        """
-        out = covariance_signals(state.cov)
-        out["loc_particles"] = state.particles.copy()
-        out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
-        return out
 
     def particles_of(self, state: ParticleState, robot: int) -> np.ndarray:
         """Robot ``robot``'s particle poses ``(P, 3)`` in the map frame (for drawing).
