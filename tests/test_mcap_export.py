@@ -251,3 +251,27 @@ def test_saved_foxglove_layout_names_topics_the_export_writes():
             topic, name = series["value"].split(".")
             assert name in fields[topic], (key, series)
     assert panels["RawMessages!metrics"]["topicPath"] in MCAP_TOPICS
+
+
+def test_lidar_scans_are_laser_scans_in_the_robot_frame(tmp_path):
+    scenario = {
+        **SCENARIO,
+        "plant": "kinematic",
+        "goals": [[5.0, 2.5, 0.0]],
+        "sensors": {"lidar": {"beams": 36, "fov_deg": 270, "max_range": 8.0, "rate_hz": 5}},
+        "localization": {"method": "amcl", "max_particles": 300, "min_particles": 100},
+    }
+    result = run(scenario)
+    path = write_mcap(result, tmp_path / "scan.mcap")
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        scans = [(m.log_time, p) for _, _, m, p in reader.iter_decoded_messages(topics=["/scan"])]
+    log = result.log
+    rows = sorted(row for _, row in log.scans)
+    assert len(scans) == len(rows) > 5
+    for (stamp, scan), row in zip(scans, rows, strict=True):
+        assert stamp == round(log.t[row] * 1e9) and scan.frame_id == "base_link"
+        np.testing.assert_array_equal(scan.ranges, log.scans[(0, row)])
+    assert scan.start_angle == pytest.approx(-math.radians(135))
+    assert scan.end_angle == pytest.approx(math.radians(135))
+    assert scan.pose.position.x == 0.0 and scan.pose.orientation.w == 1.0

@@ -19,6 +19,9 @@ topic                     schema                        content
                                                         (the estimate), every row
 ``/markers``              ``foxglove.SceneUpdate``      the footprint (frame ``base_link``) and the
                                                         goals (frame ``map``), t=0
+``/scan``                 ``foxglove.LaserScan``        the lidar's scans (frame ``base_link``, the
+                                                        scanner at its mount), at the rows where
+                                                        they were taken, when the log kept them
 ``/command``              JSON                          the command columns (``command_names``)
 ``/twist``                JSON                          true body twist ``u``, ``v``, ``r``
 ``/wheel_rates``          JSON                          ``left``, ``right`` [rad/s]
@@ -59,6 +62,7 @@ MCAP_TOPICS = (
     "/pose/estimated",
     "/tf",
     "/markers",
+    "/scan",
     "/command",
     "/twist",
     "/wheel_rates",
@@ -66,7 +70,7 @@ MCAP_TOPICS = (
     "/metrics",
 )
 """Topics an MCAP file of one robot can hold (``/torques`` on a dynamic plant only,
-``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`)."""
+``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`, ``/scan`` with a lidar)."""
 
 _EXTRA = "MCAP export needs the optional extra: pip install 'wheelbase[foxglove]'"
 
@@ -86,6 +90,7 @@ def require_foxglove() -> dict[str, Any]:
             FrameTransform_pb2,
             FrameTransforms_pb2,
             Grid_pb2,
+            LaserScan_pb2,
             LinePrimitive_pb2,
             PackedElementField_pb2,
             Point3_pb2,
@@ -107,6 +112,7 @@ def require_foxglove() -> dict[str, Any]:
         "FrameTransform": FrameTransform_pb2.FrameTransform,
         "FrameTransforms": FrameTransforms_pb2.FrameTransforms,
         "Grid": Grid_pb2.Grid,
+        "LaserScan": LaserScan_pb2.LaserScan,
         "LinePrimitive": LinePrimitive_pb2.LinePrimitive,
         "PackedElementField": PackedElementField_pb2.PackedElementField,
         "Point3": Point3_pb2.Point3,
@@ -287,6 +293,7 @@ def write_log_mcap(
     goals: ArrayLike | None = None,
     metrics: list[dict[str, Any]] | dict[str, Any] | None = None,
     overwrite: bool = False,
+    lidar: Any = None,
 ) -> Path:
     """Write a closed-loop :class:`~wheelbase.sim.Log` (one robot or N) to an MCAP file.
 
@@ -310,6 +317,8 @@ def write_log_mcap(
         row (default: :meth:`Log.metrics`).
     overwrite : bool
         Replace an existing file (default: raise FileExistsError).
+    lidar : Lidar, optional
+        The lidar of ``log.scans``: its scans go to ``/scan`` (without it they are left out).
 
     Returns
     -------
@@ -365,7 +374,7 @@ def write_log_mcap(
                 0.0,
                 _markers(pb, polygon, np.zeros((0, 3)) if goal is None else goal, frames[1]),
             )
-            _write_robot(out, log, i, prefix, frames)
+            _write_robot(out, log, i, prefix, frames, lidar)
             end = float(log.t[int(log.length[i]) - 1])
             row = {key: _metric_value(value) for key, value in metrics[i].items()}
             row.setdefault("status", STATUSES[int(log.status[i])])
@@ -374,8 +383,14 @@ def write_log_mcap(
     return path
 
 
-def _write_robot(out: _File, log: Log, i: int, prefix: str, frames: tuple[str, str]) -> None:
+def _write_robot(
+    out: _File, log: Log, i: int, prefix: str, frames: tuple[str, str], lidar: Any
+) -> None:
     pb = out.pb
+    scans = {} if lidar is None else {row: r for (robot, row), r in log.scans.items() if robot == i}
+    if scans:
+        angles = lidar.beam_angles
+        mount = np.asarray(lidar.mount, dtype=np.float64)
     rows = int(log.length[i])
     true, estimate = log.true_pose[i, :rows], log.estimated_pose[i, :rows]
     # map → odom is the pose that carries the estimate onto the truth: true ∘ estimate⁻¹.
@@ -395,6 +410,13 @@ def _write_robot(out: _File, log: Log, i: int, prefix: str, frames: tuple[str, s
             ]
         )
         out.protobuf(prefix + "/tf", t, tf)
+        if k in scans:
+            scan = pb["LaserScan"](
+                frame_id=frames[1], pose=_pose(pb, mount), start_angle=float(angles[0]),
+                end_angle=float(angles[-1]), ranges=[float(r) for r in scans[k]],
+            )  # fmt: skip
+            _stamp(scan, t)
+            out.protobuf(prefix + "/scan", t, scan)
         signals = [
             ("/command", command_names, log.command[i, k]),
             ("/twist", twist_names, log.twist[i, k]),
@@ -452,4 +474,5 @@ def write_mcap(result: Any, path: str | Path, *, overwrite: bool = False) -> Pat
         goals=goals,
         metrics=result.metrics,
         overwrite=overwrite,
+        lidar=None if result.sensors is None else result.sensors.lidar,
     )
