@@ -130,3 +130,15 @@ def test_segment_follower_gains_scale_with_the_speed():
     bad = scenario | {"controller": {"law": "segment", "gains": {"length_scale": 0.25}}}
     with pytest.raises(ScenarioError, match="k_heading must be >"):
         run(bad)
+
+
+def test_scenario_limits_reach_the_engine_and_gains_are_checked():
+    from wheelbase.errors import ScenarioError
+
+    tight = {**BASE, "resources": {"max_steps": 10}}
+    with pytest.raises(ScenarioError, match="max_steps"):
+        run(tight)
+    torque = {**BASE, "plant": "dynamic", "robot": {"model": "diffdrive", "preset": "rm100"},
+              "controller": {"law": "computed_torque", "gains": {"model_error": "abc"}}}  # fmt: skip
+    with pytest.raises(ScenarioError, match="model_error"):
+        run(torque)

@@ -83,14 +83,6 @@ def test_headings_are_wrapped_on_entry(given, wrapped):
     assert all(math.isclose(g[2], wrapped, abs_tol=1e-9) for g in scenario.goals)
 
 
-def test_empty_map_constants_match_the_runner():
-    # The validation sizes the map the runner builds: the same margin and resolution.
-    from wheelbase import runner, scenario
-
-    assert scenario.EMPTY_MAP_MARGIN == runner.EMPTY_MARGIN
-    assert scenario.EMPTY_MAP_RESOLUTION == runner.EMPTY_RESOLUTION
-
-
 @pytest.mark.parametrize(
     ("content", "match"),
     [

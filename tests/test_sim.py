@@ -244,3 +244,14 @@ def test_bad_input_is_a_clear_error():
         Arrival([0, 0, 0], (-0.1, 0.1))
     with pytest.raises(InputError, match="robot index"):
         run.run([0, 0, 0]).robot(3)
+
+
+def test_limits_and_seeds_are_clear_errors():
+    reference = straight_reference()
+    with pytest.raises(ConfigError, match="max_steps"):
+        engine(reference, dt=1e-300)  # would loop for 2e301 steps
+    assert engine(reference, duration=2.0, dt=1e-5, max_steps=200_000).steps == 200_000
+    run = engine(reference, duration=0.05)
+    for bad in (-1, 2**63, [2**64, 0]):
+        with pytest.raises(InputError, match="seeds"):
+            run.run(np.zeros((2, 3)), seeds=bad)

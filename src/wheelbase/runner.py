@@ -1,6 +1,6 @@
 """``wheelbase.run``: a scenario in, a closed-loop result out (the main job of wheelbase).
 
-The data flow of ``../shared/DESIGN.md``:
+The data flow of the design (one call on plain data per arrow):
 
     scenario → map + robot + limits → Hybrid A* plan → time-parametrised trajectory
              → controller(estimate) → plant → encoders → odometry → controller …
@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from wheelbase._validate import nonnegative
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
@@ -253,8 +254,9 @@ class TorqueTracking:
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
 
         model = robot.dynamics
+        model_error = nonnegative("model_error", model_error)
         if model_error:
-            factor = 1.0 + float(model_error)
+            factor = 1.0 + model_error
             model = model.with_body(model.body.scaled(factor, factor))
         self._pid = ComputedTorquePID(
             model,
@@ -469,7 +471,9 @@ def prepare(
     robot = _field("robot", lambda: build_robot(scenario.robot))
     start = _pose(scenario.start)
     goals = [_pose(goal) for goal in scenario.goals]
-    grid = _field("map", lambda: _load_map(scenario.map, [start, *goals]))
+    grid = _field(
+        "map", lambda: _load_map(scenario.map, [start, *goals], scenario.resources.max_map_cells)
+    )
     _check_free(grid, robot, start, "start")
     for index, goal in enumerate(goals):
         _check_free(grid, robot, goal, f"goals[{index}]")
@@ -560,6 +564,7 @@ def prepare(
         reference_pose=reference_pose,
         progress=None if progress is None else lambda t: progress(t, end_time),
         fan_every=max(1, round(FAN_PERIOD / scenario.dt)),
+        max_steps=scenario.resources.max_steps,
     )
     return Prepared(scenario, robot, grid, start, goals, plan, reference, planning, engine)
 
@@ -733,25 +738,21 @@ def _pose(values) -> np.ndarray:
     return np.array([values[0], values[1], math.radians(values[2])], dtype=np.float64)
 
 
-EMPTY_MAP = "empty"
-EMPTY_MARGIN = 3.0  # m around the start and the goals
-EMPTY_RESOLUTION = 0.05  # m/cell
-
-
-def _load_map(name: str, points: list[np.ndarray]):
+def _load_map(name: str, points: list[np.ndarray], max_cells: int):
     """A bundled map or a map file; ``empty`` is an obstacle-free field around the points,
-    walled by the map edge."""
+    walled by the map edge (sized as the scenario's validation sized it)."""
     from wheelbase.planning import OccupancyGrid
     from wheelbase.planning.maps import load_map
+    from wheelbase.scenario import EMPTY_MAP_MARGIN, EMPTY_MAP_RESOLUTION
 
-    if name != EMPTY_MAP:
-        return load_map(name)
+    if name != "empty":
+        return load_map(name, max_cells=max_cells)
     xy = np.array([point[:2] for point in points])
-    low = np.floor(xy.min(0) - EMPTY_MARGIN)
-    high = np.ceil(xy.max(0) + EMPTY_MARGIN)
-    cols, rows = np.ceil((high - low) / EMPTY_RESOLUTION).astype(int)
+    low = np.floor(xy.min(0) - EMPTY_MAP_MARGIN)
+    high = np.ceil(xy.max(0) + EMPTY_MAP_MARGIN)
+    cols, rows = np.ceil((high - low) / EMPTY_MAP_RESOLUTION).astype(int)
     return OccupancyGrid.from_array(
-        np.zeros((rows, cols), bool), EMPTY_RESOLUTION, origin=tuple(low)
+        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=tuple(low)
     )
 
 

@@ -42,9 +42,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, nonnegative, positive
+from wheelbase._validate import as_float_array, integer, nonnegative, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.limits import MAX_STEPS
 from wheelbase.sim.log import STATUSES, Log
 from wheelbase.sim.sensing import EncoderReadings, PerfectState
 
@@ -261,12 +262,20 @@ class Engine:
     progress: Callable[[float], None] | None = None
     fan_every: int = 0
     fan_size: int = 20
+    max_steps: int = MAX_STEPS
     sensors: Any = None
     record_sensors: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
         object.__setattr__(self, "duration", positive("duration", self.duration, "s"))
+        limit = integer("max_steps", self.max_steps, minimum=1)
+        steps = self.duration / self.dt
+        if steps - 1e-9 > limit:
+            raise ConfigError(
+                f"duration / dt = {steps:.4g} steps: more than max_steps = {limit}; use a "
+                "larger dt or a shorter duration, or raise max_steps"
+            )
         if not callable(self.controller):
             raise ConfigError(f"controller must be callable (got {type(self.controller).__name__})")
         names = tuple(getattr(self.controller, "command_names", ("v", "omega")))
@@ -653,15 +662,19 @@ class Engine:
 def _seeds(seeds: ArrayLike | int | None, n: int) -> np.ndarray:
     if seeds is None:
         return np.arange(n, dtype=np.int64)
+    largest = np.iinfo(np.int64).max
     if isinstance(seeds, (int, np.integer)) and not isinstance(seeds, bool):
-        if seeds < 0:
-            raise InputError(f"seeds must be >= 0 (got {seeds})")
-        return seeds + np.arange(n, dtype=np.int64)
-    array = np.asarray(seeds)
+        if not 0 <= int(seeds) <= largest - n:
+            raise InputError(f"seeds must be in [0, 2**63 - {n}] for {n} robots (got {seeds})")
+        return int(seeds) + np.arange(n, dtype=np.int64)
+    try:
+        array = np.asarray(seeds)
+    except (TypeError, ValueError, OverflowError):
+        array = np.asarray(None)
     if array.ndim != 1 or array.shape[0] != n or not np.issubdtype(array.dtype, np.integer):
         raise InputError(f"seeds must be an int or {n} integers, one per robot (got {seeds!r})")
-    if np.any(array < 0):
-        raise InputError("seeds must be >= 0")
+    if np.any(array < 0) or np.any(array > largest):
+        raise InputError(f"seeds must be in [0, 2**63 - 1] (got {seeds!r})")
     return array.astype(np.int64)
 
 
