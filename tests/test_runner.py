@@ -138,7 +138,8 @@ def test_scenario_limits_reach_the_engine_and_gains_are_checked():
     tight = {**BASE, "resources": {"max_steps": 10}}
     with pytest.raises(ScenarioError, match="max_steps"):
         run(tight)
+    gains = {"model_error": "abc"}
     torque = {**BASE, "plant": "dynamic", "robot": {"model": "diffdrive", "preset": "rm100"},
-              "controller": {"law": "computed_torque", "gains": {"model_error": "abc"}}}  # fmt: skip
+              "controller": {"law": "computed_torque", "gains": gains}}  # fmt: skip
     with pytest.raises(ScenarioError, match="model_error"):
         run(torque)
