@@ -210,7 +210,10 @@ class NavigateTask:
             _ActionHook(self.command_names),
             None,
             dt=self.dt,
-            duration=1e15,  # episodes end here, per robot; the engine's clock never does
+            # episodes end here, per robot; the engine's clock never does (it is stepped one
+            # call at a time, never run to its limit)
+            duration=1e15,
+            max_steps=10**17,
         )
         # Where a reference point may be sampled: cells whose centre clears the footprint's
         # circle by ``clearance`` (the distance field is to occupied cell centres: + ½ cell).
