@@ -143,3 +143,17 @@ def test_scenario_limits_reach_the_engine_and_gains_are_checked():
               "controller": {"law": "computed_torque", "gains": gains}}  # fmt: skip
     with pytest.raises(ScenarioError, match="model_error"):
         run(torque)
+
+
+def test_least_clearance_is_the_brute_force_minimum():
+    from wheelbase.runner import _min_clearance, prepare
+
+    prepared = prepare("demo")
+    rng = np.random.default_rng(3)
+    grid, footprint = prepared.grid, prepared.footprint
+    x0, x1, y0, y1 = grid.extent
+    for _ in range(5):
+        poses = np.column_stack([rng.uniform(x0, x1, 300), rng.uniform(y0, y1, 300),
+                                 rng.uniform(-np.pi, np.pi, 300)])  # fmt: skip
+        expected = float(np.min(grid.footprint_clearance(footprint, poses)))
+        assert _min_clearance(grid, footprint, poses) == expected

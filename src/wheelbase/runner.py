@@ -430,6 +430,8 @@ class Prepared:
         Planning figures (time, nodes, length, cusps, success, message).
     engine : Engine or None
         The closed loop, ready to run (None when planning failed).
+    footprint : Footprint or None
+        The robot's outline (for collisions and clearance).
     """
 
     scenario: Scenario
@@ -441,6 +443,7 @@ class Prepared:
     reference: PoseTrajectory | None
     planning: dict[str, Any]
     engine: Engine | None
+    footprint: Any = None
 
 
 def prepare(
@@ -566,7 +569,9 @@ def prepare(
         fan_every=max(1, round(FAN_PERIOD / scenario.dt)),
         max_steps=scenario.resources.max_steps,
     )
-    return Prepared(scenario, robot, grid, start, goals, plan, reference, planning, engine)
+    return Prepared(
+        scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint
+    )
 
 
 def run(
@@ -685,7 +690,7 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
     every = max(1, len(one.t) // 400)
-    clearance = _min_clearance(prepared.grid, _footprint(prepared.robot), true_pose[::every])
+    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end
@@ -697,18 +702,33 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
 def _min_clearance(grid, footprint, poses: np.ndarray) -> float:
     """The least footprint clearance [m] over ``poses``, exact, evaluating few poses.
 
-    The footprint lies within ``max_radius`` of the reference point, so the map's clearance
-    at that point minus ``max_radius`` bounds a pose's clearance from below: poses are
-    evaluated exactly in the order of that bound until the bound passes the best found.
+    Small disks tile the footprint's bounding box (cells of at most a quarter of its shorter
+    side, each covered by the disk through its corners), so the map's clearance at a disk's
+    centre minus its radius, the least over the disks, bounds a pose's clearance from below:
+    poses are evaluated exactly in the order of that bound until it passes the best found.
     """
-    bound = grid.clearance(poses[:, :2]) - footprint.max_radius
+    (xmin, ymin), (xmax, ymax) = footprint.polygon.min(0), footprint.polygon.max(0)
+    cell = 0.25 * min(xmax - xmin, ymax - ymin)
+    nx, ny = max(1, math.ceil((xmax - xmin) / cell)), max(1, math.ceil((ymax - ymin) / cell))
+    gx = xmin + (np.arange(nx) + 0.5) * (xmax - xmin) / nx
+    gy = ymin + (np.arange(ny) + 0.5) * (ymax - ymin) / ny
+    centres = np.stack(np.meshgrid(gx, gy), -1).reshape(-1, 2)  # body frame
+    radius = 0.5 * math.hypot((xmax - xmin) / nx, (ymax - ymin) / ny)
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    world = np.stack(
+        [poses[:, :1] + c * centres[:, 0] - s * centres[:, 1],
+         poses[:, 1:2] + s * centres[:, 0] + c * centres[:, 1]],
+        axis=-1,
+    )  # fmt: skip
+    bound = np.min(grid.clearance(world), axis=1) - radius
     best = math.inf
     order = np.argsort(bound)
-    for start in range(0, len(poses), 8):
-        batch = order[start : start + 8]
-        if bound[batch[0]] >= best:
-            break
+    start, size = 0, 1  # the lowest bound first: it is usually the least clearance
+    while start < len(poses) and bound[order[start]] < best:
+        batch = order[start : start + size]
+        batch = batch[bound[batch] < best]
         best = min(best, float(np.min(grid.footprint_clearance(footprint, poses[batch]))))
+        start, size = start + size, 4
     return best
 
 

@@ -433,7 +433,7 @@ class Engine:
             )  # fmt: skip
             controller_status = [None] * n
         status = state.status.copy()
-        finite = np.all(np.isfinite(command), axis=-1)
+        finite = _finite_rows(command)
         status[running & ~finite] = DIVERGED
         command = np.where(finite[:, None], command, 0.0)
         command[~running] = 0.0
@@ -479,7 +479,7 @@ class Engine:
                 state.pose[index], state.twist[index], command[index], moved[index],
                 rates[index], self.dt, plant_state, index,
             )  # fmt: skip
-            ok = np.all(np.isfinite(new_pose), axis=-1) & np.all(np.isfinite(new_twist), axis=-1)
+            ok = _finite_rows(new_pose) & _finite_rows(new_twist)
             status[index[~ok]] = DIVERGED
             moving, new_pose, new_twist = index[ok], new_pose[ok], new_twist[ok]
             new_angle = state.wheel_angle[moving] + turned[ok]
@@ -504,7 +504,7 @@ class Engine:
             )  # fmt: skip
             est = np.asarray(est, dtype=np.float64)
             est_twist = np.asarray(est_twist, dtype=np.float64)
-            lost = ~(np.all(np.isfinite(est), axis=-1) & np.all(np.isfinite(est_twist), axis=-1))
+            lost = ~(_finite_rows(est) & _finite_rows(est_twist))
             if lost.any():  # the estimator failed for these robots: never a NaN to a controller
                 status[moving[lost]] = DIVERGED
                 est[lost] = state.estimate[moving[lost]]
@@ -608,26 +608,28 @@ class Engine:
     def _log(self, rows, last_row, state, fans, status_names, particles) -> Log:
         n = state.pose.shape[0]
         t = np.array([row.t for row in rows])
-        index = np.minimum(np.arange(len(rows))[None, :], last_row[:, None])  # frozen after end
+        early = np.flatnonzero(last_row < len(rows) - 1)  # robots that finished before the end
 
         def frozen(arrays: list[np.ndarray]) -> np.ndarray:
             values = np.stack(arrays, axis=1)  # (N, T, …), each robot's rows held after its end
-            return np.take_along_axis(
-                values, index.reshape(index.shape + (1,) * (values.ndim - 2)), axis=1
-            )
+            for i in early:
+                values[i, last_row[i] + 1 :] = values[i, last_row[i]]
+            return values
 
         def stack(name: str) -> np.ndarray:
             return frozen([getattr(row, name) for row in rows])
 
         command = stack("command")
-        codes = {name: k for k, name in enumerate(status_names)}
-        controller_status = np.array(
-            [[codes.get(name, -1) if name is not None else -1 for name in row.controller_status]
-             for row in rows],
-            dtype=np.int16,
-        ).T.reshape(n, len(rows))  # fmt: skip
-        controller_status = np.where(np.arange(len(rows))[None, :] <= last_row[:, None],
-                                     controller_status, -1)  # fmt: skip
+        controller_status = None
+        if status_names:  # only controllers that report one (MPPI) pay for this table
+            codes = {name: k for k, name in enumerate(status_names)}
+            controller_status = np.array(
+                [[codes.get(name, -1) if name is not None else -1
+                  for name in row.controller_status] for row in rows],
+                dtype=np.int16,
+            ).T.reshape(n, len(rows))  # fmt: skip
+            controller_status = np.where(np.arange(len(rows))[None, :] <= last_row[:, None],
+                                         controller_status, -1)  # fmt: skip
         scans: dict[tuple[int, int], np.ndarray] = {}
         for k, row in enumerate(rows):
             if row.scan is None:
@@ -650,13 +652,18 @@ class Engine:
             goal=state.goal,
             seeds=state.seeds,
             command_names=self.command_names,
-            controller_status=controller_status if status_names else None,
+            controller_status=controller_status,
             controller_status_names=status_names,
             extras={name: frozen([row.signals[name] for row in rows]) for name in rows[0].signals},
             rollout_fans=fans,
             scans=scans,
             particles=particles,
         )
+
+
+def _finite_rows(values: np.ndarray) -> np.ndarray:
+    """Which rows ``(N, k)`` hold only finite numbers."""
+    return np.isfinite(values).all(axis=-1)
 
 
 def _seeds(seeds: ArrayLike | int | None, n: int) -> np.ndarray:

@@ -90,7 +90,10 @@ class WheelAxle:
         left = self.wheel_radius * (self.radius_scale[0] if true else 1.0)
         right = self.wheel_radius * (self.radius_scale[1] if true else 1.0)
         u, r = twist[..., 0], twist[..., 2]
-        return np.stack([(u - half * r) / left, (u + half * r) / right], -1)
+        out = np.empty((*u.shape, 2))
+        out[..., 0] = (u - half * r) / left
+        out[..., 1] = (u + half * r) / right
+        return out
 
     def twist(self, wheel_rates: np.ndarray) -> np.ndarray:
         """Body twist ``(..., 3)`` that true wheel rates (left, right) produce.
