@@ -266,7 +266,19 @@ def test_lidar_scans_are_laser_scans_in_the_robot_frame(tmp_path):
     with path.open("rb") as handle:
         reader = make_reader(handle, decoder_factories=[DecoderFactory()])
         scans = [(m.log_time, p) for _, _, m, p in reader.iter_decoded_messages(topics=["/scan"])]
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        messages = reader.iter_decoded_messages(topics=["/particles"])
+        clouds = [(m.log_time, p) for _, _, m, p in messages]
     log = result.log
+    # the particle clouds the log kept, as PosesInFrame in the map frame, poses to 1e-9 m
+    kept = sorted(row for _, row in log.particles)
+    assert len(clouds) == len(kept) > 0
+    for (stamp, cloud), row in zip(clouds, kept, strict=True):
+        particles = np.asarray(log.particles[(0, row)])
+        assert stamp == round(log.t[row] * 1e9) and cloud.frame_id == "map"
+        xy = np.array([[p.position.x, p.position.y] for p in cloud.poses])
+        np.testing.assert_allclose(xy, particles[:, :2], atol=1e-9)
     rows = sorted(row for _, row in log.scans)
     assert len(scans) == len(rows) > 5
     for (stamp, scan), row in zip(scans, rows, strict=True):

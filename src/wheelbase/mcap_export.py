@@ -22,6 +22,8 @@ topic                     schema                        content
 ``/scan``                 ``foxglove.LaserScan``        the lidar's scans (frame ``base_link``, the
                                                         scanner at its mount), at the rows where
                                                         they were taken, when the log kept them
+``/particles``            ``foxglove.PosesInFrame``     a particle filter's particles in ``map``,
+                                                        at the rows the log kept them (AMCL)
 ``/command``              JSON                          the command columns (``command_names``)
 ``/twist``                JSON                          true body twist ``u``, ``v``, ``r``
 ``/wheel_rates``          JSON                          ``left``, ``right`` [rad/s]
@@ -63,6 +65,7 @@ MCAP_TOPICS = (
     "/tf",
     "/markers",
     "/scan",
+    "/particles",
     "/command",
     "/twist",
     "/wheel_rates",
@@ -70,7 +73,8 @@ MCAP_TOPICS = (
     "/metrics",
 )
 """Topics an MCAP file of one robot can hold (``/torques`` on a dynamic plant only,
-``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`, ``/scan`` with a lidar)."""
+``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`, ``/scan`` with a lidar,
+``/particles`` with a particle filter)."""
 
 _EXTRA = "MCAP export needs the optional extra: pip install 'wheelbase[foxglove]'"
 
@@ -391,6 +395,7 @@ def _write_robot(
     if scans:
         angles = lidar.beam_angles
         mount = np.asarray(lidar.mount, dtype=np.float64)
+    clouds = {row: cloud for (robot, row), cloud in log.particles.items() if robot == i}
     rows = int(log.length[i])
     true, estimate = log.true_pose[i, :rows], log.estimated_pose[i, :rows]
     # map → odom is the pose that carries the estimate onto the truth: true ∘ estimate⁻¹.
@@ -417,6 +422,12 @@ def _write_robot(
             )  # fmt: skip
             _stamp(scan, t)
             out.protobuf(prefix + "/scan", t, scan)
+        if k in clouds:
+            cloud = pb["PosesInFrame"](
+                frame_id="map", poses=[_pose(pb, pose) for pose in np.asarray(clouds[k])[:, :3]]
+            )
+            _stamp(cloud, t)
+            out.protobuf(prefix + "/particles", t, cloud)
         signals = [
             ("/command", command_names, log.command[i, k]),
             ("/twist", twist_names, log.twist[i, k]),
