@@ -111,8 +111,24 @@ class WheelAxle:
         )
 
 
+class _PoseAndTwistOnly:
+    """A plant that keeps nothing between steps besides pose and twist."""
+
+    def start(self, n: int, seeds: np.ndarray) -> None:
+        """Nothing to keep (the plant's state is the pose and the twist).
+
+        Parameters
+        ----------
+        n : int
+            Number of robots.
+        seeds : numpy.ndarray
+            Their seeds (unused).
+        """
+        return None
+
+
 @dataclass(frozen=True)
-class KinematicPlant:
+class KinematicPlant(_PoseAndTwistOnly):
     """A kinematic robot: the command is held over the step and the model's twist integrated.
 
     Parameters
@@ -146,18 +162,6 @@ class KinematicPlant:
         """
         command_to_inputs(np.zeros(len(controller_names)), controller_names, self.model)
         return tuple(controller_names)
-
-    def start(self, n: int, seeds: np.ndarray) -> None:
-        """A kinematic robot keeps nothing besides pose and twist.
-
-        Parameters
-        ----------
-        n : int
-            Number of robots.
-        seeds : numpy.ndarray
-            Their seeds (unused).
-        """
-        return None
 
     def motion(
         self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
@@ -223,7 +227,7 @@ class KinematicPlant:
 
 
 @dataclass(frozen=True)
-class DynamicPlant:
+class DynamicPlant(_PoseAndTwistOnly):
     """A dynamic differential drive: wheel torques in, Lagrange–Euler dynamics integrated.
 
     The state (x, y, ψ, u, v, r) is integrated by RK4 under the torques held over the step
@@ -272,18 +276,6 @@ class DynamicPlant:
                 f"gives {tuple(controller_names)}: wrap it in control.TwistTorqueLoop"
             )
         return tuple(controller_names)
-
-    def start(self, n: int, seeds: np.ndarray) -> None:
-        """A rigid body keeps nothing besides pose and twist.
-
-        Parameters
-        ----------
-        n : int
-            Number of robots.
-        seeds : numpy.ndarray
-            Their seeds (unused).
-        """
-        return None
 
     def motion(
         self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
