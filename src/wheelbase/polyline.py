@@ -92,8 +92,10 @@ def _distances(points, vertices, block):
         )  # fmt: skip
         best = math.sqrt(best2)
         for k in range(blocks):
-            gap = math.hypot(px - centre[k, 0], py - centre[k, 1]) - radius[k]
-            if gap >= best:
+            # |p − c| − r >= best  ⇔  |p − c|² >= (best + r)²: no square root per block
+            dx, dy = px - centre[k, 0], py - centre[k, 1]
+            reach = best + radius[k]
+            if dx * dx + dy * dy >= reach * reach:
                 continue
             for j in range(k * block, min(segments, (k + 1) * block)):
                 d2 = _segment_distance2(
