@@ -531,9 +531,10 @@ def prepare(
     reference = _timed_reference(plan, limits, scenario.dt)
     end_time = float(reference.t[-1])
     ref_table = np.column_stack([reference.poses[:, :2], np.unwrap(reference.poses[:, 2])])
+    from wheelbase.control.torque import interpolate_rows
 
     def reference_pose(t: float) -> np.ndarray:
-        row = _interpolate_rows(reference.t, ref_table, t)
+        row = interpolate_rows(reference.t, ref_table, t)
         row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
         return row
 
@@ -730,17 +731,6 @@ def _min_clearance(grid, footprint, poses: np.ndarray) -> float:
         best = min(best, float(np.min(grid.footprint_clearance(footprint, poses[batch]))))
         start, size = start + size, 4
     return best
-
-
-def _interpolate_rows(times: np.ndarray, table: np.ndarray, t: float) -> np.ndarray:
-    """Row of ``table`` (T, k) linearly interpolated at time ``t``, held at the ends."""
-    index = int(np.searchsorted(times, t, side="right")) - 1
-    if index < 0:
-        return table[0].copy()
-    if index >= len(times) - 1:
-        return table[-1].copy()
-    weight = (t - times[index]) / (times[index + 1] - times[index])
-    return (1.0 - weight) * table[index] + weight * table[index + 1]
 
 
 def _field(name: str, build: Callable[[], Any]) -> Any:

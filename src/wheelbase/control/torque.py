@@ -52,6 +52,7 @@ __all__ = [
     "TimedRows",
     "TorqueGains",
     "TwistTorqueLoop",
+    "interpolate_rows",
     "velocity_torques",
 ]
 
@@ -170,6 +171,27 @@ def _control(ref, s, mp, g, tf, max_torque, ff, clamp, cst, dt):
 
 
 # --------------------------------------------------------------------------- reference rows
+def interpolate_rows(times: np.ndarray, table: np.ndarray, t: float) -> np.ndarray:
+    """Row of ``table`` ``(T, k)`` linearly interpolated at time ``t`` [s], held at the ends.
+
+    Parameters
+    ----------
+    times : numpy.ndarray, shape (T,)
+        Non-decreasing sample times [s].
+    table : numpy.ndarray, shape (T, k)
+        One row per time (unwrap angles before: the interpolation is linear).
+    t : float
+        Time [s].
+    """
+    index = int(np.searchsorted(times, t, side="right")) - 1
+    if index < 0:
+        return table[0].copy()
+    if index >= len(times) - 1:
+        return table[-1].copy()
+    weight = (t - times[index]) / (times[index + 1] - times[index])
+    return (1.0 - weight) * table[index] + weight * table[index + 1]
+
+
 class TimedRows:
     """A reference as rows (x, y, ψ, u, v, r, u̇, v̇, ṙ) at sample times, for the PID.
 
@@ -218,14 +240,7 @@ class TimedRows:
         t : float
             Time [s].
         """
-        index = int(np.searchsorted(self.times, t, side="right")) - 1
-        if index < 0:
-            row = self.rows[0].copy()
-        elif index >= self.times.size - 1:
-            row = self.rows[-1].copy()
-        else:
-            weight = (t - self.times[index]) / (self.times[index + 1] - self.times[index])
-            row = (1.0 - weight) * self.rows[index] + weight * self.rows[index + 1]
+        row = interpolate_rows(self.times, self.rows, t)
         row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
         return row
 

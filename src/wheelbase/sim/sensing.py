@@ -91,11 +91,8 @@ class EncoderReadings:
         )
 
 
-@dataclass(frozen=True)
-class PerfectState:
-    """The controller sees the true pose and twist; wheel angles are still logged."""
-
-    encoder: ClassVar[None] = None
+class _EstimateOnly:
+    """An estimator that keeps nothing between steps besides the estimate."""
 
     def start(self, poses: np.ndarray, seeds: np.ndarray) -> None:
         """Nothing to keep besides the estimate.
@@ -108,6 +105,13 @@ class PerfectState:
             The robots' seeds.
         """
         return None
+
+
+@dataclass(frozen=True)
+class PerfectState(_EstimateOnly):
+    """The controller sees the true pose and twist; wheel angles are still logged."""
+
+    encoder: ClassVar[None] = None
 
     def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None):
         """The true pose and twist.
@@ -131,7 +135,7 @@ class PerfectState:
 
 
 @dataclass(frozen=True)
-class EncoderOdometry:
+class EncoderOdometry(_EstimateOnly):
     """Wheel encoders and the dead reckoning that reads them (document 003 §III).
 
     Parameters
@@ -154,18 +158,6 @@ class EncoderOdometry:
             raise ConfigError(
                 f"odometry must be a WheelOdometry (got {type(self.odometry).__name__})"
             )
-
-    def start(self, poses: np.ndarray, seeds: np.ndarray) -> None:
-        """Nothing to keep besides the estimate.
-
-        Parameters
-        ----------
-        poses : numpy.ndarray, shape (N, 3)
-            Start poses.
-        seeds : numpy.ndarray
-            The robots' seeds.
-        """
-        return None
 
     def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None):
         """Dead-reckon the estimate over one step, and the twist it implies.
