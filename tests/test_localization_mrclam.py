@@ -117,6 +117,8 @@ def test_camera_range_inverts_the_depth_model_and_learns_its_scale():
     # with the learnt scale, the recovered ranges are the true ones (to the scale's error)
     np.testing.assert_allclose(cam.ranges(z[in_view])[:, 0], r[in_view], rtol=1e-3)
     np.testing.assert_array_equal(cam.ranges(z)[:, 1], beta)
+    # a bearing outside any field of view gives no range (the filters skip it)
+    assert np.isnan(cam.ranges(np.array([[2.0, 1.6]]))[0, 0])
     # a wild reading (a misread barcode) is left out, and time grows the variance
     before = cam.scale
     cam.per_s = 1e-6

@@ -303,10 +303,13 @@ class CameraRange:
         Returns
         -------
         numpy.ndarray, shape (M, 2)
-            (range [m], bearing [rad]).
+            (range [m], bearing [rad]); the range is NaN (a reading the filters skip and
+            count as invalid) where cos β < 0.1, a bearing no camera's field of view reaches.
         """
         out = z.copy()
-        out[:, 0] = z[:, 0] / (self.scale * np.cos(z[:, 1]))
+        cos = np.cos(z[:, 1])
+        with np.errstate(invalid="ignore"):
+            out[:, 0] = np.where(cos >= 0.1, z[:, 0] / (self.scale * np.maximum(cos, 0.1)), np.nan)
         return out
 
     def learn(
@@ -339,7 +342,8 @@ class CameraRange:
         r_hat = np.hypot(d[:, 0], d[:, 1])
         u = d / np.maximum(r_hat, 1e-9)[:, None]
         r_var = np.einsum("mi,ij,mj->m", u, cov[:2, :2], u)
-        for y, r, rv in zip(z[:, 0] / (r_hat * np.cos(z[:, 1])), r_hat, r_var, strict=True):
+        ratio = z[:, 0] / (r_hat * np.maximum(np.cos(z[:, 1]), 0.1))
+        for y, r, rv in zip(ratio, r_hat, r_var, strict=True):
             y_var = self.scale**2 * (self.range_std**2 + rv) / r**2
             s = y_var + self.var
             if not np.isfinite(y) or (y - self.scale) ** 2 > 9.0 * s:
