@@ -8,7 +8,13 @@ import pytest
 from shared_data import DATA as SHARED_DATA
 from shared_data import absent
 from wheelbase.errors import ConfigError, DataError
-from wheelbase.odometry import MrclamData, dead_reckoning_errors, load_mrclam, yaw_rate_fit
+from wheelbase.odometry import (
+    MrclamData,
+    command_response,
+    dead_reckoning_errors,
+    load_mrclam,
+    yaw_rate_fit,
+)
 
 DATA = SHARED_DATA / "mrclam"
 ODOMETRY = DATA / "Dataset6_Robot1_Odometry.dat"
@@ -76,6 +82,38 @@ def test_yaw_rate_fit_recovers_a_synthetic_lag_and_scale():
     fit = yaw_rate_fit(MrclamData(t, np.zeros_like(t), omega, pose))
     assert fit["lag_s"] == pytest.approx(lag, abs=0.051)
     assert fit["scale"] == pytest.approx(scale, rel=0.03)
+
+
+@needs_data
+def test_the_robot_follows_its_speed_command_later_than_its_yaw_rate_command(data):
+    # the forward speed needs the robot's mass accelerated: its mean delay is longer
+    fit = command_response(data)
+    assert 0.15 <= fit["yaw_rate_delay_s"] <= 0.25
+    assert 0.22 <= fit["speed_delay_s"] <= 0.36
+    assert 0.9 < fit["speed_gain"] < 1.0 and 0.9 < fit["yaw_rate_gain"] < 1.02
+
+
+def test_command_response_recovers_synthetic_delays_and_gains():
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 300.0, 0.01)
+    change = np.cumsum(rng.exponential(2.0, 400))  # commands held for ~2 s
+    which = np.searchsorted(change, t)
+    v_cmd = rng.uniform(0.0, 0.1, 401)[which]
+    w_cmd = rng.uniform(-0.4, 0.4, 401)[which]
+    (dv, gv), (dw, gw) = (0.3, 0.95), (0.1, 0.9)
+    v = gv * v_cmd[np.clip(np.arange(t.size) - round(dv / 0.01), 0, None)]
+    w = gw * w_cmd[np.clip(np.arange(t.size) - round(dw / 0.01), 0, None)]
+    heading = np.concatenate([[0.0], np.cumsum(w[:-1] * 0.01)])
+    mid = heading[:-1] + 0.5 * w[:-1] * 0.01
+    x = np.concatenate([[0.0], np.cumsum(v[:-1] * 0.01 * np.cos(mid))])
+    y = np.concatenate([[0.0], np.cumsum(v[:-1] * 0.01 * np.sin(mid))])
+    pose = np.column_stack([x, y, np.angle(np.exp(1j * heading))])
+    fit = command_response(MrclamData(t, v_cmd, w_cmd, pose))
+    assert fit["speed_delay_s"] == pytest.approx(dv, abs=0.02)
+    assert fit["yaw_rate_delay_s"] == pytest.approx(dw, abs=0.02)
+    assert fit["speed_gain"] == pytest.approx(gv, rel=0.02)
+    assert fit["yaw_rate_gain"] == pytest.approx(gw, rel=0.02)
+    assert fit["speed_response"].shape == (24,)
 
 
 def write(path, rows, header="# comment\n"):

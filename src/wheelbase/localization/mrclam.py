@@ -14,9 +14,11 @@ filter as unknown identities, which it skips and counts.
 :func:`localize` runs a filter over the whole recording, starting from the ground-truth pose at
 the first odometry sample with the covariance of :data:`MRCLAM_PARAMETERS`: between odometry
 samples it predicts with the logged (v, ω) held constant, and applies each measurement at its
-own time. The odometry is applied ``odometry_lag_s`` later than its time stamps: the
-logged velocities lead the Vicon (and camera) clock by about 0.2 s (the measurements need no
-shift: their bearing residuals against the ground truth are smallest at a lag of 0 s).
+own time. The odometry is the robot's velocity command, and the robot follows it late: its
+yaw rate by ``odometry_lag_s`` (0.2 s), its forward speed, which needs the robot's mass
+accelerated, by ``speed_lag_s`` (0.3 s) on average (:func:`wheelbase.odometry.command_response`);
+the logged ω is applied that much later than its time stamp, v likewise. The measurements need
+no shift: their bearing residuals against the ground truth are smallest at a lag of 0 s.
 
 The camera's "range" is not the Euclidean range. It comes from the landmark's apparent size,
 and a pinhole camera's image size gives the depth of the landmark along the optical axis,
@@ -91,9 +93,13 @@ MRCLAM_PARAMETERS: dict[str, float] = {
     "heading_per_rad": 2e-2,
     "distance_per_s": 1e-5,
     "heading_per_s": 1e-4,
-    # the odometry leads the Vicon and camera clocks by about 0.2 s (yaw_rate_fit on robot 1
-    # of data set 6); its samples are applied this much later
+    # the odometry (the velocity command) leads the Vicon and camera clocks: the robot's yaw
+    # rate follows it 0.2 s later, its forward speed (slower: the robot has mass to
+    # accelerate) 0.3 s later on average (the mean delays of the impulse responses of
+    # wheelbase.odometry.command_response on robot 1 of data set 6: 0.20-0.21 s and
+    # 0.27-0.30 s; yaw_rate_fit's lag agrees); the samples are applied so much later
     "odometry_lag_s": 0.2,
+    "speed_lag_s": 0.3,
     # χ² gate of the Kalman filters
     "gate_probability": 0.999,
     # initial standard deviations (the start is the ground truth)
@@ -558,9 +564,16 @@ def _run_pf(data, meas, landmarks, p, odom, rng):
     return est, covs, used, 0, invalid, camera.scale
 
 
-def _delay_odometry(data: MrclamData, groundtruth: Path, lag: float) -> MrclamData:
-    """The odometry with its time stamps moved ``lag`` seconds later, the ground truth
-    interpolated to the new times (samples outside the ground truth dropped)."""
+def _delay_odometry(
+    data: MrclamData, groundtruth: Path, lag: float, speed_lag: float
+) -> MrclamData:
+    """The odometry with its time stamps moved ``lag`` seconds later and its forward speed
+    ``speed_lag − lag`` seconds later again (the command held), the ground truth interpolated
+    to the new times (samples outside the ground truth dropped)."""
+    v = data.v
+    if speed_lag != lag:
+        index = np.searchsorted(data.t, data.t - (speed_lag - lag), side="right") - 1
+        v = v[np.clip(index, 0, data.t.size - 1)]
     truth = _table(Path(groundtruth), 4, "ground-truth")
     truth = truth[np.argsort(truth[:, 0], kind="stable")]
     t = data.t + lag
@@ -573,7 +586,7 @@ def _delay_odometry(data: MrclamData, groundtruth: Path, lag: float) -> MrclamDa
             wrap_angle(np.interp(t, truth[:, 0], np.unwrap(truth[:, 3]))),
         ]
     )
-    return MrclamData(t, data.v[keep], data.omega[keep], pose)
+    return MrclamData(t, v[keep], data.omega[keep], pose)
 
 
 def localize(
@@ -612,8 +625,8 @@ def localize(
     p.update(parameters or {})
     files = find_mrclam_files(data_dir, robot)
     data: MrclamData = load_mrclam(files["odometry"], files["groundtruth"])
-    if p["odometry_lag_s"] != 0.0:
-        data = _delay_odometry(data, files["groundtruth"], p["odometry_lag_s"])
+    if p["odometry_lag_s"] != 0.0 or p["speed_lag_s"] != 0.0:
+        data = _delay_odometry(data, files["groundtruth"], p["odometry_lag_s"], p["speed_lag_s"])
     landmarks = load_landmarks(files["landmarks"])
     meas = load_measurements(files["measurement"], files["barcodes"], landmarks)
     inside = (meas.t >= data.t[0]) & (meas.t <= data.t[-1])

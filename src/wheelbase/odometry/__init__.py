@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.odometry.error_model import OdometryErrors
     from wheelbase.odometry.mrclam import (
         MrclamData,
+        command_response,
         dead_reckoning_errors,
         load_mrclam,
         yaw_rate_fit,
@@ -62,6 +63,7 @@ _EXPORTS = {
     "dead_reckoning_errors": "wheelbase.odometry.mrclam",
     "load_mrclam": "wheelbase.odometry.mrclam",
     "yaw_rate_fit": "wheelbase.odometry.mrclam",
+    "command_response": "wheelbase.odometry.mrclam",
 }
 __getattr__, __dir__ = attach(__name__, _EXPORTS)
 
@@ -76,6 +78,7 @@ __all__ = [
     "UMBmarkResult",
     "WheelOdometry",
     "calibrate_umbmark",
+    "command_response",
     "dead_reckon",
     "dead_reckoning_errors",
     "drift_table",

@@ -27,7 +27,13 @@ from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import wrap_angle
 from wheelbase.odometry.dead_reckoning import DEAD_RECKONING_METHODS, dead_reckon
 
-__all__ = ["MrclamData", "dead_reckoning_errors", "load_mrclam", "yaw_rate_fit"]
+__all__ = [
+    "MrclamData",
+    "command_response",
+    "dead_reckoning_errors",
+    "load_mrclam",
+    "yaw_rate_fit",
+]
 
 
 @dataclass(frozen=True)
@@ -245,3 +251,56 @@ def yaw_rate_fit(data: MrclamData, max_lag: float = 1.0, step: float = 0.05) -> 
             best = (corr, lag, float(a @ b / (a @ a)), float(np.median(a - b)))
     corr, lag, scale, bias = best
     return {"lag_s": lag * step, "correlation": corr, "scale": scale, "bias_rad_per_s": bias}
+
+
+def command_response(
+    data: MrclamData, max_lag: float = 1.2, step: float = 0.05
+) -> dict[str, float | np.ndarray]:
+    """How the robot's motion follows its logged (v, ω): impulse responses and mean delays.
+
+    The ground truth is resampled every ``step`` seconds; its increments over each step, the
+    distance along the midpoint heading and the heading change, divided by ``step``, are
+    regressed by least squares on the logged v and ω (zero-order holds) ``0, step, …`` seconds
+    earlier: the coefficients h_k are the discrete impulse response of the robot's speed and
+    yaw rate to the command. A step's increment answers to the command at its midpoint, so
+    the mean delay is Σ k·step·h_k / Σ h_k + step/2 (a pure delay d gives d); the sum Σ h_k is
+    the gain of the response.
+
+    Parameters
+    ----------
+    data : MrclamData
+        Aligned odometry and ground truth.
+    max_lag : float
+        Length of the impulse responses [s], > 0.
+    step : float
+        Resampling period [s], > 0.
+
+    Returns
+    -------
+    dict
+        ``speed_delay_s`` and ``yaw_rate_delay_s`` (mean delays), ``speed_gain`` and
+        ``yaw_rate_gain``, and the responses ``speed_response`` and ``yaw_rate_response``
+        (arrays of ``round(max_lag / step)`` coefficients, the k-th for a delay of k·step).
+    """
+    step = positive("step", step, "s")
+    taps = max(round(positive("max_lag", max_lag, "s") / step), 1)
+    grid = np.arange(data.t[0], data.t[-1], step)
+    if grid.size < 4 * taps:
+        raise DataError(f"the log is too short for a {max_lag:g} s response at {step:g} s steps")
+    heading = np.interp(grid, data.t, np.unwrap(data.true_pose[:, 2]))
+    x = np.interp(grid, data.t, data.true_pose[:, 0])
+    y = np.interp(grid, data.t, data.true_pose[:, 1])
+    mid = heading[:-1] + 0.5 * np.diff(heading)
+    speed = (np.diff(x) * np.cos(mid) + np.diff(y) * np.sin(mid)) / step
+    yaw_rate = np.diff(heading) / step
+    lags = np.arange(taps) * step
+    out: dict[str, float | np.ndarray] = {}
+    for name, command, rate in (("speed", data.v, speed), ("yaw_rate", data.omega, yaw_rate)):
+        index = np.searchsorted(data.t, grid[:-1, None] - lags, side="right") - 1
+        design = command[np.clip(index, 0, data.t.size - 1)][taps:]
+        response = np.linalg.lstsq(design, rate[taps:], rcond=None)[0]
+        gain = float(response.sum())
+        out[f"{name}_delay_s"] = float(lags @ response / gain + 0.5 * step)
+        out[f"{name}_gain"] = gain
+        out[f"{name}_response"] = response
+    return out
