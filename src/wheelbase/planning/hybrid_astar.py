@@ -62,7 +62,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_STATE_BINS
 from wheelbase.planning._heap import _heap_pop, _heap_push
 from wheelbase.planning.astar import _dijkstra_kernel
-from wheelbase.planning.collision import _circles_clearance, _collides_one
+from wheelbase.planning.collision import _circles_clearance, _collides_one, _scratch
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
 from wheelbase.planning.dubins import _dubins_all
 from wheelbase.planning.footprint import Footprint
@@ -809,7 +809,7 @@ def _next_sample(k, clear, per):
     return k + max(1, math.ceil(min(clear / per, 1.0e15)))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _shot_free(
     x,
     y,
@@ -823,6 +823,8 @@ def _shot_free(
     poly,
     circles,
     cradius,
+    wp,
+    near,
 ):
     for i in range(5):
         ell = lengths[i]
@@ -842,22 +844,25 @@ def _shot_free(
         while k <= n:
             px, py, pth = _advance(x, y, th, kind, ell * k / n, radius)
             clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
-            if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth):
+            if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth, wp, near):
                 return False
             k = _next_sample(k, clear, per)
         x, y, th = _advance(x, y, th, kind, ell, radius)
     return True
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False)
 def _free_prefix(
-    world, dist, res, x0, y0, poly, circles, cradius, x, y, th, offsets, p, ns, sweep, clear0
-):
+    world, dist, res, x0, y0, poly, circles, cradius, x, y, th, offsets, p, ns, sweep, clear0,
+    wp, near,
+):  # fmt: skip
     """How many leading samples ``offsets[p, :ns]`` of primitive ``p`` from pose ``(x, y, th)``
-    are free (``ns``: all); ``sweep`` bounds how far a covering circle moves along the whole
-    primitive and ``clear0`` is the clearance of the circles at the pose (see
-    :func:`_circles_clearance`; ``dist``, ``res``, ``x0``, ``y0`` are the world's distance
-    field and raster geometry)."""
+    are free (``ns``: all). Not inlined and without reference counting, as the collision
+    kernels (see :mod:`wheelbase.planning.collision`): inlined, it took and released a
+    reference to each of its 15 array arguments at every call. ``sweep`` bounds how far a
+    covering circle moves along the whole primitive and ``clear0`` is the clearance of the
+    circles at the pose (see :func:`_circles_clearance`; ``dist``, ``res``, ``x0``, ``y0``
+    are the world's distance field and raster geometry; ``wp``, ``near``: scratch)."""
     c = math.cos(th)
     s = math.sin(th)
     per = sweep / ns
@@ -867,7 +872,7 @@ def _free_prefix(
         py = y + s * offsets[p, k, 0] + c * offsets[p, k, 1]
         pth = th + offsets[p, k, 2]
         clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
-        if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth):
+        if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth, wp, near):
             return k
         k = _next_sample(k, clear, per)
     return ns
@@ -989,7 +994,6 @@ def _search(
     exact_h = np.empty(capacity, dtype=np.bool_)
     nbins = nx * ny * nh
     best_g = np.full(nbins, np.inf)
-    closed = np.zeros(nbins, dtype=np.bool_)
     gx, gy, gth = goal[0], goal[1], goal[2]
     reverse_ok = False
     for p in range(pdir.shape[0]):
@@ -1035,6 +1039,7 @@ def _search(
     shot_types = np.zeros(5, dtype=np.int64)
     shot_lengths = np.zeros(5)
     n_prims = pdir.shape[0]
+    placed, listed = _scratch(world, poly)  # scratch buffers of the exact collision check
 
     # The node arrays grow in the outer loop only: reassigning them inside the search loop
     # makes Numba reference-count all eight at every accepted child (a third of the time).
@@ -1062,7 +1067,7 @@ def _search(
             f, node, hsize = _heap_pop(hkeys, hids, hsize)
             x, y, th, g = xs[node], ys[node], ths[node], gs[node]
             b = _bin(x, y, th, x0, y0, xy_res, nx, ny, nh)
-            if closed[b] or g > best_g[b] + 1e-9:
+            if g > best_g[b] + 1e-9:  # closed (-inf) or reached more cheaply since
                 continue
             if not exact_h[node]:
                 exact_h[node] = True
@@ -1075,7 +1080,7 @@ def _search(
                     key = (1.0 - _DEEPER) * g + hweight * hfull
                     hsize = _heap_push(hkeys, hids, hsize, key, node)
                     continue
-            closed[b] = True
+            best_g[b] = -np.inf  # closed
             expanded += 1
             if expanded > max_iter:
                 status = 2
@@ -1117,6 +1122,8 @@ def _search(
                     poly,
                     circles,
                     cradius,
+                    placed,
+                    listed,
                 ):
                     status = 0
                     goal_node = node
@@ -1145,7 +1152,7 @@ def _search(
                 nyp = y + s * offsets[p, ns - 1, 0] + c * offsets[p, ns - 1, 1]
                 nth = _wrap(th + offsets[p, ns - 1, 2])
                 nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-                full_open = nb >= 0 and not closed[nb] and g + (pc + extra) < best_g[nb]
+                full_open = nb >= 0 and g + (pc + extra) < best_g[nb]
                 near = psweep[p] >= free_sweep
                 if not full_open and not (cut_moves and near):
                     continue
@@ -1153,7 +1160,7 @@ def _search(
                 if near:
                     use = _free_prefix(
                         world, dist, res, x0, y0, poly, circles, cradius, x, y, th,
-                        offsets, p, ns, psweep[p], free_sweep,
+                        offsets, p, ns, psweep[p], free_sweep, placed, listed,
                     )  # fmt: skip
                     if use == 0 or (use < ns and not cut_moves) or (use == ns and not full_open):
                         continue
@@ -1162,7 +1169,7 @@ def _search(
                         nyp = y + s * offsets[p, use - 1, 0] + c * offsets[p, use - 1, 1]
                         nth = _wrap(th + offsets[p, use - 1, 2])
                         nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-                        if nb < 0 or closed[nb]:
+                        if nb < 0 or best_g[nb] == -np.inf:
                             continue
                 ng = g + ((pc if use == ns else pc * use / ns) + extra)
                 if ng >= best_g[nb]:
