@@ -182,23 +182,50 @@ def _close_end(start, end, ds, kappa, direction, basis, kmax):
     scale = max(length, 1e-9)
     tolerance = 1e-9 * max(length, 1.0)  # [m]: relative to the segment, at least 1e-9 m
 
-    def residual(c):
-        p = _integrate(start, ds, kappa + phi @ c, direction)[-1]
-        return np.array([p[0] - end[0], p[1] - end[1], scale * float(wrap_angle(p[2] - end[2]))])
+    step_s = direction * ds  # signed distance of each interval along the body x axis
 
-    r = residual(coef)
+    def residual_and_jacobian(c):
+        """The end-pose error and its exact derivative with respect to ``c``.
+
+        Interval i moves the pose by the chord ``v_i = c_i·(cos m_i, sin m_i)``, with the
+        chord length ``c_i = t_i·sinc(a_i)``, ``a_i = κ_i·t_i/2`` and the mid heading
+        ``m_i = θ_i + a_i``. Raising κ_i by dκ turns every later chord by ``t_i·dκ`` and
+        the chord ``i`` itself by ``t_i·dκ/2`` (J: a quarter turn), and changes its length:
+        ``∂p/∂κ_i = t_i·J·(Σ_{k>i} v_k + v_i/2) + ∂c_i/∂κ_i·(cos m_i, sin m_i)`` and
+        ``∂θ/∂κ_i = t_i``. (Finite differences needed one integration per basis term.)"""
+        k = kappa + phi @ c
+        half = k * step_s / 2.0
+        theta = start[2] + np.concatenate([[0.0], np.cumsum(2.0 * half)])
+        mid = theta[:-1] + half
+        chord = step_s * np.sinc(half / np.pi)
+        cos_m, sin_m = np.cos(mid), np.sin(mid)
+        vx, vy = chord * cos_m, chord * sin_m
+        after_x = np.cumsum(vx[::-1])[::-1] - vx / 2.0  # Σ_{k>i} v_k + v_i/2
+        after_y = np.cumsum(vy[::-1])[::-1] - vy / 2.0
+        # d(sin a / a)/da = (a cos a − sin a)/a², → −a/3 near 0; da/dκ = t/2
+        small = np.abs(half) < 1e-4
+        safe = np.where(small, 1.0, half)
+        dsinc = np.where(small, -half / 3.0, (half * np.cos(half) - np.sin(half)) / safe**2)
+        dchord = step_s * dsinc * step_s / 2.0
+        d_x = -step_s * after_y + dchord * cos_m
+        d_y = step_s * after_x + dchord * sin_m
+        r = np.array(
+            [
+                vx.sum() - end[0],
+                vy.sum() - end[1],
+                scale * float(wrap_angle(theta[-1] - end[2])),
+            ]
+        )
+        jac = np.stack([d_x @ phi, d_y @ phi, scale * (step_s @ phi)])
+        return r, jac
+
+    r, jac = residual_and_jacobian(coef)
     for _ in range(12):
         if np.max(np.abs(r)) < 1e-2 * tolerance:
             break
-        jac = np.empty((3, basis))
-        h = 1e-7
-        for j in range(basis):
-            dc = coef.copy()
-            dc[j] += h
-            jac[:, j] = (residual(dc) - r) / h
         step, *_ = np.linalg.lstsq(jac, -r, rcond=None)
         coef = coef + step
-        r = residual(coef)
+        r, jac = residual_and_jacobian(coef)
     if np.max(np.abs(r)) > tolerance:
         return None
     new_k = kappa + phi @ coef
