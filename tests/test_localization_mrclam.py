@@ -77,9 +77,9 @@ def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_fi
     result = localize(first_five_minutes, 1, kind)
     m = result.metrics()
     assert m["duration_s"] > 100
-    # measured: EKF 0.114 / 0.51 m, UKF 0.108 / 0.48 m, PF 0.117 / 0.51 m (RMSE / max); most
+    # measured: EKF 0.114 / 0.51 m, UKF 0.108 / 0.48 m, PF 0.112 / 0.49 m (RMSE / max); most
     # of it in the 53 s without a sighting (125-178 s)
-    assert m["position_rmse_m"] < 0.135 and m["position_max_m"] < 0.6
+    assert m["position_rmse_m"] < 0.13 and m["position_max_m"] < 0.58
     assert m["position_rmse_m"] < 0.3 * m["dead_reckoning_rmse_m"]
     assert m["measurements_used"] > 200
     assert m["robot_sightings_skipped"] > 0

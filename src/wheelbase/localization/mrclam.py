@@ -41,6 +41,7 @@ turns by up to 20 %.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -109,6 +110,10 @@ MRCLAM_PARAMETERS: dict[str, float] = {
     # the weight of the likelihood's uniform floor bounds what one misread barcode can do)
     "particles": 2000,
     "landmark_z_rand": 0.02,
+    # the particle filter moves its particles (without resampling) at least every
+    # pf_motion_step_s of odometry, so that their spread grows along the path driven between
+    # two sightings, as the Kalman filters' covariance does, not along its chord
+    "pf_motion_step_s": 0.1,
 }
 """The one parameter set used for every robot of every data set. Noise figures are the
 residuals of robot 1 of data set 6 against its ground truth; the odometry lag is the lag of
@@ -500,6 +505,16 @@ def _run_kalman(kind, data, meas, landmarks, p):
     return est, covs, used, gated, invalid, camera.scale
 
 
+def _particle_moments(state) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted mean (circular in θ) and covariance of the particles."""
+    w = state.weights
+    theta = math.atan2(w @ np.sin(state.particles[:, 2]), w @ np.cos(state.particles[:, 2]))
+    mean = np.array([w @ state.particles[:, 0], w @ state.particles[:, 1], theta])
+    dev = state.particles - mean
+    dev[:, 2] = wrap_angle(dev[:, 2])
+    return mean, (dev * w[:, None]).T @ dev
+
+
 def _run_pf(data, meas, landmarks, p, odom, rng):
     pf = AMCL(
         landmarks=landmarks,
@@ -515,6 +530,8 @@ def _run_pf(data, meas, landmarks, p, odom, rng):
         update_min_a=0.0,
     )
     state = pf.initial_state(data.true_pose[0], _initial_cov(p), odom[0], rng)
+    state = dataclasses.replace(state, time=float(data.t[0]))
+    step = p["pf_motion_step_s"]
     n = data.t.size
     # odometry poses at the measurement times (interpolating the dead reckoning on its arc)
     index = np.clip(np.searchsorted(data.t, meas.t, side="right") - 1, 0, n - 1)
@@ -551,14 +568,15 @@ def _run_pf(data, meas, landmarks, p, odom, rng):
             camera.learn(float(meas.t[k_meas]), prior, anchor_cov, landmarks[ids[known]], z[known])
             used += info.landmarks_used
             invalid += info.landmarks_skipped
-            w = state.weights
-            theta = math.atan2(w @ np.sin(state.particles[:, 2]), w @ np.cos(state.particles[:, 2]))
-            anchor_est = np.array([w @ state.particles[:, 0], w @ state.particles[:, 1], theta])
-            dev = state.particles - anchor_est
-            dev[:, 2] = wrap_angle(dev[:, 2])
-            anchor_cov = (dev * w[:, None]).T @ dev
+            anchor_est, anchor_cov = _particle_moments(state)
             anchor_odom = odom_meas[k_meas]
             k_meas = same
+        if data.t[k] - state.time >= step:
+            # move the particles without a measurement (no resampling) at least every `step`
+            # seconds: their spread then grows along the path, as the Kalman filters' does
+            state, _ = pf.update(state, odom[k], rng, force=True, time=float(data.t[k]))
+            anchor_est, anchor_cov = _particle_moments(state)
+            anchor_odom = odom[k]
         est[k] = compose(anchor_est, relative_pose(anchor_odom, odom[k]))
         covs[k] = anchor_cov
     return est, covs, used, 0, invalid, camera.scale
