@@ -149,6 +149,22 @@ def test_gate_rejects_outliers_and_invalid_measurements_are_counted():
     assert np.mean(nis > chi2_gate(0.99)) < 0.03
 
 
+@pytest.mark.parametrize("cls", [EKF, UKF])
+def test_range_noise_grows_with_the_predicted_range(cls):
+    # with a known pose (P = 0) the innovation covariance is R itself: σ_r = 0.01 + 0.02·r̂
+    f = cls([[4.0, 0.0], [0.0, -1.0]], MOTION, 0.01, 0.05, 1.0, range_std_per_m=0.02)
+    mean, cov = np.zeros(3), np.zeros((3, 3))
+    z = [[4.1, 0.05], [1.1, -math.pi / 2]]
+    _, _, info = f.update(mean, cov, [0, 1], z)
+    assert info.nis[0] == pytest.approx(0.1**2 / 0.09**2 + 1.0, rel=1e-9)
+    assert info.nis[1] == pytest.approx(0.1**2 / 0.03**2, rel=1e-9)
+    # without the growth, σ_r is range_std at any range
+    _, _, flat = cls([[4.0, 0.0]], MOTION, 0.01, 0.05, 1.0).update(mean, cov, [0], z[:1])
+    assert flat.nis[0] == pytest.approx(0.1**2 / 0.01**2 + 1.0, rel=1e-9)
+    with pytest.raises(ConfigError, match="range_std_per_m"):
+        cls([[4.0, 0.0]], MOTION, 0.01, 0.05, range_std_per_m=-0.1)
+
+
 def test_odometry_delta_reverses_and_composes():
     old = np.array([1.0, 2.0, 0.5])
     ahead = np.array([1.0 + math.cos(0.5), 2.0 + math.sin(0.5), 0.9])

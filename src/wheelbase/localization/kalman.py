@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
-from wheelbase._validate import as_float_array, positive
+from wheelbase._validate import as_float_array, nonnegative, positive
 from wheelbase.errors import ConfigError, EstimationError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.localization.motion import VelocityMotion
@@ -110,11 +110,16 @@ class KalmanFilter:
     motion : VelocityMotion
         Motion model and its noise.
     range_std : float
-        Standard deviation of a range measurement [m], > 0.
+        Standard deviation of a range measurement [m], > 0 (at zero range when
+        ``range_std_per_m`` > 0).
     bearing_std : float
         Standard deviation of a bearing measurement [rad], > 0.
     gate_probability : float
         Probability mass of the χ² gate, in (0, 1]; 1 accepts everything.
+    range_std_per_m : float
+        Growth of the range's standard deviation with the range [m/m], >= 0: σ_r = range_std +
+        range_std_per_m·r̂, r̂ the range predicted from the mean (a camera that ranges by the
+        landmark's size in the image errs in proportion to the range).
     """
 
     landmarks: np.ndarray
@@ -122,6 +127,7 @@ class KalmanFilter:
     range_std: float = 0.1
     bearing_std: float = 0.02
     gate_probability: float = 0.99
+    range_std_per_m: float = 0.0
 
     name = "Kalman filter"
 
@@ -133,6 +139,9 @@ class KalmanFilter:
             raise ConfigError(f"motion must be a VelocityMotion (got {type(self.motion).__name__})")
         object.__setattr__(self, "range_std", positive("range_std", self.range_std, "m"))
         object.__setattr__(self, "bearing_std", positive("bearing_std", self.bearing_std, "rad"))
+        object.__setattr__(
+            self, "range_std_per_m", nonnegative("range_std_per_m", self.range_std_per_m, "m/m")
+        )
         chi2_gate(self.gate_probability)
 
     @property
@@ -142,8 +151,18 @@ class KalmanFilter:
 
     @property
     def measurement_covariance(self) -> np.ndarray:
-        """R = diag(range_std², bearing_std²)."""
+        """R = diag(range_std², bearing_std²) (at zero range)."""
         return np.diag([self.range_std**2, self.bearing_std**2])
+
+    def _noise(self, mean: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
+        """R of each measurement, ``(N, 2, 2)`` (or ``(2, 2)`` when it does not vary)."""
+        if self.range_std_per_m == 0.0:
+            return self.measurement_covariance
+        r_hat = np.hypot(landmarks[:, 0] - mean[:, 0], landmarks[:, 1] - mean[:, 1])
+        r_mat = np.zeros((mean.shape[0], 2, 2))
+        r_mat[:, 0, 0] = (self.range_std + self.range_std_per_m * r_hat) ** 2
+        r_mat[:, 1, 1] = self.bearing_std**2
+        return r_mat
 
     # ------------------------------------------------------------------ the two steps
     def predict(
@@ -309,7 +328,8 @@ class KalmanFilter:
         """Gate and apply one measurement per robot of ``rows`` to ``mean``/``cov`` in place;
         return their NIS and which passed the gate."""
         mu, p = mean[rows], cov[rows]
-        z_hat, h, s = self._moments(mu, p, self.landmarks[ids], self.measurement_covariance)
+        marks = self.landmarks[ids]
+        z_hat, h, s = self._moments(mu, p, marks, self._noise(mu, marks))
         nu = z - z_hat
         nu[:, 1] = wrap_angle(nu[:, 1])
         s_inv = _inv2(s)
