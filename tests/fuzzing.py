@@ -643,6 +643,79 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
     def track(**kw):
         return wb.Kanayama(**kw)
 
+    room = OccupancyGrid.from_array(np.pad(np.zeros((20, 20), bool), 1, constant_values=True), 0.1)
+    marks = np.array([[0.5, 0.5], [1.5, 0.5], [1.0, 1.8]])
+
+    def finite(*arrays):
+        """A result that came back without an error must be finite (never a NaN estimate)."""
+        for array in arrays:
+            if not np.all(np.isfinite(array)):
+                raise RuntimeError(f"a non-finite result without an error: {array!r}")
+
+    def lidar(**kw):
+        from wheelbase.sensors import Lidar
+
+        ranges = Lidar(**kw).scan(room, (1.0, 1.0, 0.3), rng=0)
+        if np.any(ranges < 0):
+            raise RuntimeError(f"negative ranges: {ranges!r}")
+        return ranges
+
+    def lidar_poses(poses, method):
+        from wheelbase.sensors import Lidar
+
+        return Lidar(beams=8, max_range=3.0).scan(room, poses, rng=0, method=method)
+
+    def landmarks(**kw):
+        from wheelbase.sensors import LandmarkSensor
+
+        return LandmarkSensor(**kw).observe(marks, (1.0, 1.0, 0.3), rng=0)
+
+    def landmarks_args(landmarks, poses):
+        from wheelbase.sensors import LandmarkSensor
+
+        return LandmarkSensor(max_range=3.0, range_std=0.05).observe(landmarks, poses, rng=0)
+
+    def kalman(kind, **kw):
+        from wheelbase.localization import EKF, UKF
+
+        filt = (EKF if kind == "ekf" else UKF)(marks, **kw)
+        mean, cov = filt.predict((1.0, 1.0, 0.3), np.eye(3) * 0.01, (0.2, 0.1), 0.1)
+        mean, cov, _info = filt.update(mean, cov, [0, 2], [[0.7, -2.4], [0.8, 1.2]])
+        finite(mean, cov)
+        return mean
+
+    def kalman_args(kind, mean, cov, ids, z):
+        from wheelbase.localization import EKF, UKF
+
+        filt = (EKF if kind == "ekf" else UKF)(marks)
+        mean, cov, _info = filt.update(mean, cov, ids, z)
+        finite(mean, cov)
+        return mean
+
+    def amcl(**kw):
+        from wheelbase.localization import AMCL
+        from wheelbase.sensors import Lidar
+
+        sensor = Lidar(beams=12, max_range=3.0)
+        filt = AMCL(room, sensor, **kw)
+        state = filt.initial_state((1.0, 1.0, 0.3), np.eye(3) * 0.01, rng=0)
+        scan = sensor.scan(room, (1.0, 1.0, 0.3), noise=False)
+        state, _info = filt.update(state, (0.3, 0.0, 0.0), rng=1, scan=scan, force=True)
+        estimate = filt.estimate(state)
+        finite(estimate.pose, estimate.cov)
+        return estimate
+
+    def amcl_args(odom, scan, pose, cov):
+        from wheelbase.localization import AMCL
+        from wheelbase.sensors import Lidar
+
+        filt = AMCL(room, Lidar(beams=12, max_range=3.0), min_particles=50, max_particles=200)
+        state = filt.initial_state(pose, cov, rng=0)
+        state, _info = filt.update(state, odom, rng=1, scan=scan, force=True)
+        estimate = filt.estimate(state)
+        finite(estimate.pose, estimate.cov)
+        return estimate
+
     return {
         "DiffDrive": (wb.DiffDrive, {"wheel_radius": 0.05, "half_track": 0.2}),
         "Bicycle": (wb.Bicycle, {"wheel_base": 0.5, "max_steering": 0.6}),
@@ -721,6 +794,51 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
             {"start": (0.0, 0.0, 0.0), "goal": (2.0, 1.0, 1.0), "turning_radius": 1.0},
         ),
         "load_scenario": (wb.load_scenario, {"source": "demo"}),
+        "Lidar.scan": (
+            lidar,
+            {"beams": 16, "fov": 6.0, "max_range": 3.0, "min_range": 0.05, "range_std": 0.01,
+             "mount": (0.1, 0.0, 0.0)},
+        ),  # fmt: skip
+        "Lidar.scan(poses)": (lidar_poses, {"poses": [(1.0, 1.0, 0.3)], "method": "fast"}),
+        "LandmarkSensor.observe": (
+            landmarks,
+            {"max_range": 3.0, "fov": 3.0, "range_std": 0.05, "bearing_std": 0.02,
+             "detection_probability": 0.9, "false_rate": 0.5},
+        ),  # fmt: skip
+        "LandmarkSensor.observe(args)": (
+            landmarks_args,
+            {"landmarks": marks.tolist(), "poses": (1.0, 1.0, 0.3)},
+        ),
+        "EKF": (
+            kalman,
+            {"kind": "ekf", "range_std": 0.1, "bearing_std": 0.02, "gate_probability": 0.99},
+        ),
+        "UKF": (
+            kalman,
+            {"kind": "ukf", "range_std": 0.1, "bearing_std": 0.02, "gate_probability": 0.99},
+        ),
+        "EKF.update": (
+            kalman_args,
+            {"kind": "ekf", "mean": (1.0, 1.0, 0.3), "cov": np.eye(3) * 0.01, "ids": [0, 2],
+             "z": [[0.7, -2.4], [0.8, 1.2]]},
+        ),  # fmt: skip
+        "UKF.update": (
+            kalman_args,
+            {"kind": "ukf", "mean": (1.0, 1.0, 0.3), "cov": np.eye(3) * 0.01, "ids": [0, 2],
+             "z": [[0.7, -2.4], [0.8, 1.2]]},
+        ),  # fmt: skip
+        "AMCL": (
+            amcl,
+            {"min_particles": 50, "max_particles": 200, "kld_err": 0.05, "kld_delta": 0.01,
+             "max_beams": 12, "z_hit": 0.5, "z_rand": 0.5, "sigma_hit": 0.2,
+             "likelihood_max_dist": 2.0, "recovery_alpha_slow": 0.001,
+             "recovery_alpha_fast": 0.1, "update_min_d": 0.25, "resample_interval": 1},
+        ),  # fmt: skip
+        "AMCL.update": (
+            amcl_args,
+            {"odom": (0.3, 0.0, 0.0), "scan": np.full(12, 1.0), "pose": (1.0, 1.0, 0.3),
+             "cov": np.eye(3) * 0.01},
+        ),  # fmt: skip
     }
 
 

@@ -20,14 +20,23 @@ limit                  what it bounds (default)                     raised by
                        takes 1e8 when asked)
 ``MAX_COORDINATE``     |x|, |y| of poses in scenario files (1e10 m, fixed: float64 spacing
                        UTM-like and beyond)                         is 2 µm there
+``MAX_BEAMS``          beams of one lidar scan (1e5: 0.0036° apart, fixed: no lidar comes
+                       60× finer than a 0.2° scanner)               near it
+``MAX_PARTICLES``      particles of a particle filter (1e6: 24 MB;  fixed
+                       an update of 60 beams takes seconds)
+``MAX_FALSE_RATE``     mean false landmark detections per scan      fixed
+                       (1e3)
 =====================  ===========================================  ==========================
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "MAX_BEAMS",
     "MAX_COORDINATE",
+    "MAX_FALSE_RATE",
     "MAX_MAP_CELLS",
+    "MAX_PARTICLES",
     "MAX_SAMPLE_STEPS",
     "MAX_STATE_BINS",
     "MAX_STEPS",
@@ -38,3 +47,6 @@ MAX_MAP_CELLS = 100_000_000
 MAX_STATE_BINS = 50_000_000
 MAX_SAMPLE_STEPS = 10_000_000
 MAX_COORDINATE = 1.0e10  # m
+MAX_BEAMS = 100_000
+MAX_PARTICLES = 1_000_000
+MAX_FALSE_RATE = 1_000.0  # per scan

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, as_rng, nonnegative, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.limits import MAX_FALSE_RATE
 
 __all__ = ["LandmarkObservations", "LandmarkSensor", "range_bearing"]
 
@@ -136,16 +137,28 @@ class LandmarkSensor:
     false_rate: float = 0.0
 
     def __post_init__(self) -> None:
-        positive("max_range", self.max_range, "m")
-        fov = positive("fov", self.fov, "rad")
-        if fov > 2.0 * math.pi + 1e-12:
-            raise ConfigError(f"fov must be in (0, 2π] rad (got {fov:g})")
-        nonnegative("range_std", self.range_std, "m")
-        nonnegative("bearing_std", self.bearing_std, "rad")
-        p = nonnegative("detection_probability", self.detection_probability)
-        if p > 1.0:
-            raise ConfigError(f"detection_probability must be in [0, 1] (got {p:g})")
-        nonnegative("false_rate", self.false_rate, "per scan")
+        checked = {
+            "max_range": positive("max_range", self.max_range, "m"),
+            "fov": positive("fov", self.fov, "rad"),
+            "range_std": nonnegative("range_std", self.range_std, "m"),
+            "bearing_std": nonnegative("bearing_std", self.bearing_std, "rad"),
+            "detection_probability": nonnegative(
+                "detection_probability", self.detection_probability
+            ),
+            "false_rate": nonnegative("false_rate", self.false_rate, "per scan"),
+        }
+        if checked["fov"] > 2.0 * math.pi + 1e-12:
+            raise ConfigError(f"fov must be in (0, 2π] rad (got {checked['fov']:g})")
+        probability = checked["detection_probability"]
+        if probability > 1.0:
+            raise ConfigError(f"detection_probability must be in [0, 1] (got {probability:g})")
+        if checked["false_rate"] > MAX_FALSE_RATE:
+            raise ConfigError(
+                f"false_rate must be <= {MAX_FALSE_RATE:g} per scan "
+                f"(wheelbase.limits.MAX_FALSE_RATE; got {checked['false_rate']:g})"
+            )
+        for name, value in checked.items():  # the checked numbers, not what was given
+            object.__setattr__(self, name, value)
 
     def observe(
         self,

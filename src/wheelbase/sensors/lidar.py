@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, as_rng, nonnegative, positive
+from wheelbase._validate import as_float_array, as_rng, integer, nonnegative, positive
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_BEAMS
 from wheelbase.planning import OccupancyGrid, PolygonWorld
 from wheelbase.sensors.beam_model import BeamModel
 from wheelbase.sensors.raycast import scan_rays
@@ -69,8 +70,7 @@ class Lidar:
     def __post_init__(self) -> None:
         if isinstance(self.beams, bool) or not isinstance(self.beams, int | np.integer):
             raise ConfigError(f"beams must be an integer >= 1 (got {self.beams!r})")
-        if self.beams < 1:
-            raise ConfigError(f"beams must be >= 1 (got {self.beams})")
+        integer("beams", self.beams, minimum=1, maximum=MAX_BEAMS)
         fov = positive("fov", self.fov, "rad")
         if fov > 2.0 * math.pi + 1e-12:
             raise ConfigError(f"fov must be in (0, 2π] rad (got {fov:g})")
@@ -80,10 +80,13 @@ class Lidar:
             raise ConfigError(
                 f"min_range must be < max_range = {max_range:g} m (got {min_range:g} m)"
             )
-        nonnegative("range_std", self.range_std, "m")
+        range_std = nonnegative("range_std", self.range_std, "m")
         mount = as_float_array("mount", self.mount, 3, max_ndim=1)
-        object.__setattr__(self, "beams", int(self.beams))
-        object.__setattr__(self, "mount", tuple(float(v) for v in mount))
+        # the checked numbers are kept, not what was given ("8" or numpy scalars)
+        for name, value in (("beams", int(self.beams)), ("fov", fov), ("max_range", max_range),
+                            ("min_range", min_range), ("range_std", range_std),
+                            ("mount", tuple(float(v) for v in mount))):  # fmt: skip
+            object.__setattr__(self, name, value)
         if not isinstance(self.beam_model, BeamModel):
             raise ConfigError(
                 f"beam_model must be a BeamModel (got {type(self.beam_model).__name__})"
