@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 from hypothesis import strategies as st
 
+from shared_data import DATA
 from wheelbase.errors import WheelbaseError
 
 __all__ = [
@@ -796,15 +797,27 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
         "load_scenario": (wb.load_scenario, {"source": "demo"}),
         "Lidar.scan": (
             lidar,
-            {"beams": 16, "fov": 6.0, "max_range": 3.0, "min_range": 0.05, "range_std": 0.01,
-             "mount": (0.1, 0.0, 0.0)},
-        ),  # fmt: skip
+            {
+                "beams": 16,
+                "fov": 6.0,
+                "max_range": 3.0,
+                "min_range": 0.05,
+                "range_std": 0.01,
+                "mount": (0.1, 0.0, 0.0),
+            },
+        ),
         "Lidar.scan(poses)": (lidar_poses, {"poses": [(1.0, 1.0, 0.3)], "method": "fast"}),
         "LandmarkSensor.observe": (
             landmarks,
-            {"max_range": 3.0, "fov": 3.0, "range_std": 0.05, "bearing_std": 0.02,
-             "detection_probability": 0.9, "false_rate": 0.5},
-        ),  # fmt: skip
+            {
+                "max_range": 3.0,
+                "fov": 3.0,
+                "range_std": 0.05,
+                "bearing_std": 0.02,
+                "detection_probability": 0.9,
+                "false_rate": 0.5,
+            },
+        ),
         "LandmarkSensor.observe(args)": (
             landmarks_args,
             {"landmarks": marks.tolist(), "poses": (1.0, 1.0, 0.3)},
@@ -819,26 +832,51 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
         ),
         "EKF.update": (
             kalman_args,
-            {"kind": "ekf", "mean": (1.0, 1.0, 0.3), "cov": np.eye(3) * 0.01, "ids": [0, 2],
-             "z": [[0.7, -2.4], [0.8, 1.2]]},
-        ),  # fmt: skip
+            {
+                "kind": "ekf",
+                "mean": (1.0, 1.0, 0.3),
+                "cov": np.eye(3) * 0.01,
+                "ids": [0, 2],
+                "z": [[0.7, -2.4], [0.8, 1.2]],
+            },
+        ),
         "UKF.update": (
             kalman_args,
-            {"kind": "ukf", "mean": (1.0, 1.0, 0.3), "cov": np.eye(3) * 0.01, "ids": [0, 2],
-             "z": [[0.7, -2.4], [0.8, 1.2]]},
-        ),  # fmt: skip
+            {
+                "kind": "ukf",
+                "mean": (1.0, 1.0, 0.3),
+                "cov": np.eye(3) * 0.01,
+                "ids": [0, 2],
+                "z": [[0.7, -2.4], [0.8, 1.2]],
+            },
+        ),
         "AMCL": (
             amcl,
-            {"min_particles": 50, "max_particles": 200, "kld_err": 0.05, "kld_delta": 0.01,
-             "max_beams": 12, "z_hit": 0.5, "z_rand": 0.5, "sigma_hit": 0.2,
-             "likelihood_max_dist": 2.0, "recovery_alpha_slow": 0.001,
-             "recovery_alpha_fast": 0.1, "update_min_d": 0.25, "resample_interval": 1},
-        ),  # fmt: skip
+            {
+                "min_particles": 50,
+                "max_particles": 200,
+                "kld_err": 0.05,
+                "kld_delta": 0.01,
+                "max_beams": 12,
+                "z_hit": 0.5,
+                "z_rand": 0.5,
+                "sigma_hit": 0.2,
+                "likelihood_max_dist": 2.0,
+                "recovery_alpha_slow": 0.001,
+                "recovery_alpha_fast": 0.1,
+                "update_min_d": 0.25,
+                "resample_interval": 1,
+            },
+        ),
         "AMCL.update": (
             amcl_args,
-            {"odom": (0.3, 0.0, 0.0), "scan": np.full(12, 1.0), "pose": (1.0, 1.0, 0.3),
-             "cov": np.eye(3) * 0.01},
-        ),  # fmt: skip
+            {
+                "odom": (0.3, 0.0, 0.0),
+                "scan": np.full(12, 1.0),
+                "pose": (1.0, 1.0, 0.3),
+                "cov": np.eye(3) * 0.01,
+            },
+        ),
     }
 
 
@@ -876,6 +914,9 @@ def call_constructor(case: tuple[str, dict[str, Any]]) -> Any:
 
 
 # =========================================================================== CLI
+# MRCLAM data set 6 where the tests find real data (an absent folder is a clean error too)
+_MRCLAM = DATA / "mrclam"
+
 # command → (required arguments, optional flags with their number of values)
 CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
     "simulate": (
@@ -931,6 +972,14 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
     ),
     "schema": ([], {}),
     "scenarios": ([], {}),
+    "batch": (
+        ["demo", "--seeds", "2"],
+        {"--seeds": 1, "--workers": 1, "--chunk-size": 1},  # (--scheduler: a network wait)
+    ),
+    "localize": (
+        [str(_MRCLAM), "--robot", "1", "--filter", "ekf"],
+        {"--robot": 1, "--filter": 1, "--seed": 1},
+    ),
 }
 
 

@@ -75,6 +75,17 @@ def test_map_arrays(case):
 @given(fuzzing.constructor_cases())
 @example(("simulate", {"pose0": (0.0, 0.0, 0.0), "inputs": (1.0, 0.8), "t_end": 1e300,
                        "dt": 0.1, "method": "rk4"}))  # fmt: skip
+@example(("AMCL", {**fuzzing.constructors()["AMCL"][1], "max_particles": 1e10}))
+@example(("AMCL", {**fuzzing.constructors()["AMCL"][1], "z_rand": 0.0,
+                   "likelihood_max_dist": 1e9}))  # fmt: skip
+@example(("AMCL", {**fuzzing.constructors()["AMCL"][1], "sigma_hit": 1e-251}))
+@example(("AMCL.update", {**fuzzing.constructors()["AMCL.update"][1], "scan": "abc"}))
+@example(("EKF", {**fuzzing.constructors()["EKF"][1], "bearing_std": 1e300}))
+@example(("EKF.update", {**fuzzing.constructors()["EKF.update"][1], "z": {}}))
+@example(("LandmarkSensor.observe", {**fuzzing.constructors()["LandmarkSensor.observe"][1],
+                                     "false_rate": 1e127}))  # fmt: skip
+@example(("Lidar.scan", {**fuzzing.constructors()["Lidar.scan"][1], "beams": 2309998689321}))
+@example(("Lidar.scan", {**fuzzing.constructors()["Lidar.scan"][1], "max_range": "1e3"}))
 def test_constructors(case):
     check(fuzzing.call_constructor, case, "constructor")
 

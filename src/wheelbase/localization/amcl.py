@@ -67,6 +67,7 @@ from wheelbase._validate import (
 )
 from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
 from wheelbase.geometry import compose, relative_pose
+from wheelbase.limits import MAX_BEAMS, MAX_PARTICLES
 from wheelbase.localization.likelihood import (
     LikelihoodField,
     landmark_log_likelihood,
@@ -310,26 +311,46 @@ class AMCL:
                 "motion must be an OdometryMotion or a VelocityMotion "
                 f"(got {type(self.motion).__name__})"
             )
-        lo = integer("min_particles", self.min_particles, minimum=1)
-        hi = integer("max_particles", self.max_particles, minimum=1)
+        lo = integer("min_particles", self.min_particles, minimum=1, maximum=MAX_PARTICLES)
+        hi = integer("max_particles", self.max_particles, minimum=1, maximum=MAX_PARTICLES)
         if lo > hi:
             raise ConfigError(f"min_particles must be <= max_particles = {hi} (got {lo})")
-        positive("kld_err", self.kld_err)
         delta = positive("kld_delta", self.kld_delta)
-        if delta >= 1.0:
-            raise ConfigError(f"kld_delta must be in (0, 1) (got {delta:g})")
+        if not 1e-12 <= delta < 1.0:  # below 1e-12 the normal quantile is no longer finite
+            raise ConfigError(f"kld_delta must be in [1e-12, 1) (got {delta:g})")
         size = as_float_array("bin_size", self.bin_size, 3, max_ndim=1)
         if np.any(size <= 0):
             raise ConfigError(f"bin_size must be > 0 (x [m], y [m], θ [rad]) (got {size})")
         object.__setattr__(self, "bin_size", tuple(float(v) for v in size))
-        integer("max_beams", self.max_beams, minimum=1)
-        integer("resample_interval", self.resample_interval, minimum=1)
-        for name in ("z_hit", "landmark_range_std", "landmark_bearing_std", "sigma_hit",
-                     "likelihood_max_dist", "landmark_max_range"):  # fmt: skip
-            positive(name, getattr(self, name))
+        # the checked numbers are kept, not what was given (a string "2" passed and then
+        # failed inside NumPy; 1e10 as max_particles could not slice)
+        checked: dict[str, object] = {
+            "min_particles": lo,
+            "max_particles": hi,
+            "max_beams": integer("max_beams", self.max_beams, minimum=1, maximum=MAX_BEAMS),
+            "resample_interval": integer("resample_interval", self.resample_interval, minimum=1),
+            "kld_delta": delta,
+        }
+        positives = (
+            "kld_err",
+            "z_hit",
+            "landmark_range_std",
+            "landmark_bearing_std",
+            "sigma_hit",
+            "likelihood_max_dist",
+            "landmark_max_range",
+            "lambda_short",
+        )
+        for name in positives:
+            checked[name] = positive(name, getattr(self, name))
+        for name in ("sigma_hit", "landmark_range_std", "landmark_bearing_std"):
+            variance = checked[name] * checked[name]  # type: ignore[operator]
+            if not 0.0 < variance < math.inf:  # Gaussians divide by it
+                raise ConfigError(f"{name} must be in [1e-150, 1e150] (got {checked[name]:g})")
         for name in ("z_rand", "z_short", "update_min_d", "update_min_a"):
-            nonnegative(name, getattr(self, name))
-        positive("lambda_short", self.lambda_short, "1/m")
+            checked[name] = nonnegative(name, getattr(self, name))
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
         check_choice("sensor_model", self.sensor_model, SENSOR_MODELS)
         check_choice("beam_combination", self.beam_combination, BEAM_COMBINATIONS)
         ess = nonnegative("min_ess", self.min_ess)
@@ -374,7 +395,7 @@ class AMCL:
     def _outside(self) -> float:
         assert self.lidar is not None
         d = self.likelihood_max_dist
-        return self.z_hit * math.exp(-d * d / (2.0 * self.sigma_hit**2)) + (
+        return self.z_hit * math.exp(-d * d / (2.0 * self.sigma_hit * self.sigma_hit)) + (
             self.z_rand / self.lidar.max_range
         )
 
@@ -601,7 +622,12 @@ class AMCL:
             raise ConfigError(
                 "a scan needs the lidar that took it: pass lidar= (and grid=) to AMCL"
             )
-        ranges = np.asarray(scan, dtype=np.float64).reshape(-1)
+        try:
+            ranges = np.asarray(scan, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"scan must be {self.lidar.beams} ranges [m] (got {scan!r:.80})"
+            ) from None
         if ranges.size != self.lidar.beams:
             raise InputError(f"scan must have {self.lidar.beams} ranges (got {ranges.size})")
         bad = ~np.isfinite(ranges) & ~np.isposinf(ranges) | (ranges < 0.0)
@@ -628,7 +654,7 @@ class AMCL:
             log_p = scan_log_likelihood(
                 self._log_field if product else self._field, self.grid, particles,
                 np.asarray(self.lidar.mount), r[keep], angles,
-                math.log(self._outside) if product else self._outside, product,
+                math.log(max(self._outside, 2.2e-308)) if product else self._outside, product,
             )  # fmt: skip
         return log_p, int(keep.sum()), int(bad.sum())
 

@@ -25,6 +25,7 @@ are skipped and reported as ``invalid``; a covariance that stops being positive 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -137,8 +138,11 @@ class KalmanFilter:
         object.__setattr__(self, "landmarks", landmarks)
         if not isinstance(self.motion, VelocityMotion):
             raise ConfigError(f"motion must be a VelocityMotion (got {type(self.motion).__name__})")
-        object.__setattr__(self, "range_std", positive("range_std", self.range_std, "m"))
-        object.__setattr__(self, "bearing_std", positive("bearing_std", self.bearing_std, "rad"))
+        for name, unit in (("range_std", "m"), ("bearing_std", "rad")):
+            std = positive(name, getattr(self, name), unit)
+            if not 0.0 < std * std < math.inf:  # R holds the variance
+                raise ConfigError(f"{name} must be in [1e-150, 1e150] {unit} (got {std:g})")
+            object.__setattr__(self, name, std)
         object.__setattr__(
             self, "range_std_per_m", nonnegative("range_std_per_m", self.range_std_per_m, "m/m")
         )
@@ -277,7 +281,7 @@ class KalmanFilter:
         ids = ids.astype(np.int64).reshape((1, -1) if single else ids.shape)
         try:
             z = np.asarray(z, dtype=np.float64).reshape((*ids.shape, 2))
-        except ValueError:
+        except (TypeError, ValueError):
             raise InputError(
                 f"z must hold one (range, bearing) pair per id: shape {(*ids.shape, 2)} "
                 f"(got {np.shape(z)})"

@@ -55,6 +55,8 @@ __all__ = [
     "surface_distance",
 ]
 
+_TINY = float(np.finfo(np.float64).tiny)  # smallest normal float64, ~2.2e-308
+
 MAX_FIELD_CELLS = 1 << 22
 """Most fine cells of a likelihood field (about 4 million: 32 MB as float64); the default
 ``supersample`` is the largest of 4, 3, 2, 1 that stays under it."""
@@ -76,8 +78,10 @@ class LikelihoodField:
     resolution: float
 
     def log(self) -> LikelihoodField:
-        """The same field holding log p_z (for the product of the beams)."""
-        return LikelihoodField(np.log(self.table), self.resolution)
+        """The same field holding log p_z (for the product of the beams); p_z is floored at the
+        smallest normal float, so that with ``z_rand = 0`` a far cell's underflowed Gaussian
+        gives a very unlikely particle (log ≈ −708), not −inf and then NaN weights."""
+        return LikelihoodField(np.log(np.maximum(self.table, _TINY)), self.resolution)
 
 
 def surface_distance(grid: OccupancyGrid, supersample: int = 1) -> np.ndarray:
