@@ -178,6 +178,31 @@ def test_render_rgb_array():
     assert vector.render().shape == (500, 500, 3)
 
 
+def test_render_human_redraws_a_window_per_step(monkeypatch):
+    # Headless (Agg): the window is a figure; each reset and step redraws every robot's
+    # footprint, and close() closes it. The pause is skipped to keep the test quick.
+    import matplotlib.pyplot as plt
+
+    monkeypatch.setattr(plt, "pause", lambda interval: None)
+    for env, robots in ((NavigateEnv(render_mode="human"), 1),
+                        (NavigateVectorEnv(3, render_mode="human"), 3)):  # fmt: skip
+        env.reset(seed=0)
+        figure = env._figure
+        assert figure is not None and figure.number in plt.get_fignums()
+        single = isinstance(env, NavigateEnv)
+        env.step(np.zeros(2) if single else np.zeros((robots, 2)))
+        (ax,) = figure.axes  # redrawn, not stacked
+        footprints = [line for line in ax.lines if line.get_color() == "tab:blue"]
+        poses = env.task.state.pose[:, :2]
+        assert len(footprints) == robots
+        for line, pose in zip(footprints, poses, strict=True):  # drawn where the robots are
+            assert np.allclose(np.mean(line.get_xydata()[:-1], axis=0), pose, atol=0.5)
+        assert env.render() is None
+        env.close()
+        assert figure.number not in plt.get_fignums()
+    assert "human" in NavigateVectorEnv(1).metadata["render_modes"]
+
+
 def test_bad_input_is_a_clear_error():
     env = NavigateEnv()
     with pytest.raises(gymnasium.error.ResetNeeded):

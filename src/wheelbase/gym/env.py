@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from wheelbase.gym.task import NavigateTask, check_actions
 
-__all__ = ["NavigateEnv", "render_frame"]
+__all__ = ["NavigateEnv", "close_window", "render_frame", "show_window"]
 
 
 def render_frame(task: NavigateTask, robots: Any = None, size: float = 5.0) -> np.ndarray:
@@ -150,19 +150,50 @@ class NavigateEnv(gymnasium.Env):
             return None
         if self.render_mode == "rgb_array":
             return render_frame(self.task)
-        import matplotlib.pyplot as plt
-
-        if self._figure is None:
-            self._figure = plt.figure(figsize=(5, 5))
-        self._figure.clear()
-        self.task.draw(self._figure.add_axes((0, 0, 1, 1)))
-        plt.pause(1.0 / self.metadata["render_fps"])
+        self._figure = show_window(self._figure, self.task, self.metadata["render_fps"])
         return None
 
     def close(self) -> None:
         """Close the window of ``human`` rendering."""
-        if self._figure is not None:
-            import matplotlib.pyplot as plt
+        self._figure = close_window(self._figure)
 
-            plt.close(self._figure)
-            self._figure = None
+
+def show_window(figure: Any, task: NavigateTask, fps: float) -> Any:
+    """Redraw ``task`` (every robot) in a matplotlib window and let it show for one frame.
+
+    Parameters
+    ----------
+    figure : matplotlib.figure.Figure or None
+        The window of earlier frames; None opens one.
+    task : NavigateTask
+        What to draw.
+    fps : float
+        Frames per second: the window shows this frame for 1/fps s.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The window, for the next frame.
+    """
+    import matplotlib.pyplot as plt
+
+    if figure is None:
+        figure = plt.figure(figsize=(5, 5))
+    figure.clear()
+    task.draw(figure.add_axes((0, 0, 1, 1)))
+    plt.pause(1.0 / fps)
+    return figure
+
+
+def close_window(figure: Any) -> None:
+    """Close a window of :func:`show_window` (None: nothing to close); returns None.
+
+    Parameters
+    ----------
+    figure : matplotlib.figure.Figure or None
+        The window.
+    """
+    if figure is not None:
+        import matplotlib.pyplot as plt
+
+        plt.close(figure)

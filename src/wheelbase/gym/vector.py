@@ -32,7 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.gym.env import render_frame
+from wheelbase.gym.env import close_window, render_frame, show_window
 from wheelbase.gym.task import NavigateTask, check_actions
 
 __all__ = ["NavigateVectorEnv"]
@@ -53,8 +53,9 @@ class NavigateVectorEnv(VectorEnv):
         Number of robots N, >= 1.
     autoreset_mode : str or AutoresetMode
         ``next_step`` (default), ``same_step`` or ``disabled`` (module docstring).
-    render_mode : {None, "rgb_array"}
-        ``rgb_array``: :meth:`render` returns one image with every robot.
+    render_mode : {None, "rgb_array", "human"}
+        ``rgb_array``: :meth:`render` returns one image with every robot; ``human``: every
+        reset and step redraws them in a matplotlib window (at ``render_fps``).
     **task : dict
         Keyword arguments of :class:`~wheelbase.gym.task.NavigateTask`, as for
         :class:`~wheelbase.gym.NavigateEnv`.
@@ -83,14 +84,16 @@ class NavigateVectorEnv(VectorEnv):
             raise ConfigError(
                 f"autoreset_mode must be one of {', '.join(_MODES)} (got {autoreset_mode!r})"
             )
-        if render_mode not in (None, "rgb_array"):
-            raise ConfigError(f"render_mode must be None or 'rgb_array' (got {render_mode!r})")
+        if render_mode not in (None, "rgb_array", "human"):
+            raise ConfigError(
+                f"render_mode must be None, 'rgb_array' or 'human' (got {render_mode!r})"
+            )
         self.task = NavigateTask(num_envs, **task)
         self.num_envs = self.task.n
         self.render_mode = render_mode
         self.metadata = {
             "autoreset_mode": mode,
-            "render_modes": ["rgb_array"],
+            "render_modes": ["rgb_array", "human"],
             "render_fps": round(1.0 / self.task.dt),
         }
         self.single_observation_space = spaces.Box(
@@ -100,6 +103,7 @@ class NavigateVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._restart_next = np.zeros(self.num_envs, dtype=bool)
+        self._figure: Any = None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -135,6 +139,8 @@ class NavigateVectorEnv(VectorEnv):
                 raise InputError("the first reset starts every robot: leave out reset_mask")
         self._restart(mask, options.get("start"), options.get("goal"))
         self._restart_next[mask] = False
+        if self.render_mode == "human":
+            self.render()
         return self.task.observations(), self._infos()
 
     def _restart(self, mask: np.ndarray, start: Any = None, goal: Any = None) -> None:
@@ -205,10 +211,20 @@ class NavigateVectorEnv(VectorEnv):
             infos.update(final_obs=final_obs, _final_obs=done.copy(),
                          final_info=final_info, _final_info=done.copy())  # fmt: skip
         self._restart_next = done if mode == AutoresetMode.NEXT_STEP else np.zeros_like(done)
+        if self.render_mode == "human":
+            self.render()
         return observations, reward, terminated, truncated, infos
 
     def render(self) -> np.ndarray | None:
-        """One RGB image of every robot (``rgb_array``), or None."""
-        if self.render_mode != "rgb_array" or self.task.state is None:
+        """One RGB image of every robot (``rgb_array``), the window redrawn (``human``), or
+        None."""
+        if self.render_mode is None or self.task.state is None:
             return None
-        return render_frame(self.task)
+        if self.render_mode == "rgb_array":
+            return render_frame(self.task)
+        self._figure = show_window(self._figure, self.task, self.metadata["render_fps"])
+        return None
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the window of ``human`` rendering (``VectorEnv.close`` calls this)."""
+        self._figure = close_window(self._figure)
