@@ -165,6 +165,29 @@ def test_range_noise_grows_with_the_predicted_range(cls):
         cls([[4.0, 0.0]], MOTION, 0.01, 0.05, range_std_per_m=-0.1)
 
 
+@pytest.mark.parametrize("cls", [EKF, UKF])
+def test_huber_weighting_equals_an_inflated_measurement_noise(cls):
+    mean, cov = np.zeros(3), np.diag([0.04, 0.04, 0.01])
+    z = [[4.3, 0.12]]
+    robust = cls([[4.0, 0.0]], MOTION, 0.1, 0.05, 1.0, huber_k=1.5)
+    m1, p1, info = robust.update(mean, cov, [0], z)
+    w = 1.5 / math.sqrt(info.nis[0])
+    assert w < 1.0  # the measurement lies beyond k standard deviations
+    # the same as a filter whose R is divided by the weight
+    plain = cls([[4.0, 0.0]], MOTION, 0.1 / math.sqrt(w), 0.05 / math.sqrt(w), 1.0)
+    m2, p2, _ = plain.update(mean, cov, [0], z)
+    np.testing.assert_allclose(m1, m2, atol=1e-12)
+    np.testing.assert_allclose(p1, p2, atol=1e-12)
+    # within k standard deviations nothing changes
+    near = [[4.02, 0.01]]
+    np.testing.assert_allclose(
+        robust.update(mean, cov, [0], near)[0],
+        cls([[4.0, 0.0]], MOTION, 0.1, 0.05, 1.0).update(mean, cov, [0], near)[0],
+    )
+    with pytest.raises(ConfigError, match="huber_k"):
+        cls([[4.0, 0.0]], MOTION, huber_k=0.0)
+
+
 def test_odometry_delta_reverses_and_composes():
     old = np.array([1.0, 2.0, 0.5])
     ahead = np.array([1.0 + math.cos(0.5), 2.0 + math.sin(0.5), 0.9])

@@ -10,7 +10,10 @@ other (the loop over features of Thrun, Burgard and Fox, Table 7.2).
 Each measurement's innovation ν = z − ẑ (bearing wrapped) and its covariance S give the
 normalised innovation squared NIS = νᵀS⁻¹ν; a measurement with NIS above the χ² quantile of
 ``gate_probability`` with 2 degrees of freedom (9.21 at 0.99) is rejected as an outlier
-(a misread barcode, a false detection). Accepted ones update the belief with the gain
+(a misread barcode, a false detection). With ``huber_k`` finite, an accepted measurement whose
+Mahalanobis distance √NIS exceeds it counts with the Huber weight k/√NIS (R divided by the
+weight, S recomputed), so heavy-tailed errors pull less. Accepted ones update the belief with the
+gain
 K = P Hᵀ S⁻¹ and the Joseph form P⁺ = (I − KH) P (I − KH)ᵀ + K R' Kᵀ, R' = S − H P Hᵀ, which stays
 symmetric and positive definite under rounding. For the EKF H is the Jacobian of the
 range–bearing model and R' = R; for the UKF H = P_xzᵀ P⁻¹ is the statistical linearisation of its
@@ -121,6 +124,10 @@ class KalmanFilter:
         Growth of the range's standard deviation with the range [m/m], >= 0: σ_r = range_std +
         range_std_per_m·r̂, r̂ the range predicted from the mean (a camera that ranges by the
         landmark's size in the image errs in proportion to the range).
+    huber_k : float
+        Huber weighting, > 0 (infinite: off): a measurement that passes the gate with a
+        Mahalanobis distance √NIS above ``huber_k`` counts with the weight huber_k/√NIS (its R
+        divided by it), which bounds the pull of heavy-tailed errors.
     """
 
     landmarks: np.ndarray
@@ -129,6 +136,7 @@ class KalmanFilter:
     bearing_std: float = 0.02
     gate_probability: float = 0.99
     range_std_per_m: float = 0.0
+    huber_k: float = math.inf
 
     name = "Kalman filter"
 
@@ -146,6 +154,8 @@ class KalmanFilter:
         object.__setattr__(
             self, "range_std_per_m", nonnegative("range_std_per_m", self.range_std_per_m, "m/m")
         )
+        if not self.huber_k > 0.0:  # also rejects NaN
+            raise ConfigError(f"huber_k must be > 0 (infinite: off) (got {self.huber_k!r})")
         chi2_gate(self.gate_probability)
 
     @property
@@ -333,12 +343,19 @@ class KalmanFilter:
         return their NIS and which passed the gate."""
         mu, p = mean[rows], cov[rows]
         marks = self.landmarks[ids]
-        z_hat, h, s = self._moments(mu, p, marks, self._noise(mu, marks))
+        r_mat = self._noise(mu, marks)
+        z_hat, h, s = self._moments(mu, p, marks, r_mat)
         nu = z - z_hat
         nu[:, 1] = wrap_angle(nu[:, 1])
         s_inv = _inv2(s)
         nis = np.einsum("ni,nij,nj->n", nu, s_inv, nu)
         ok = nis <= gate
+        heavy = ok & (nis > self.huber_k**2)
+        if heavy.any():  # Huber weight w = k/√NIS: the measurement's R is divided by w
+            w = self.huber_k / np.sqrt(nis[heavy])
+            r_heavy = np.broadcast_to(r_mat, (rows.size, 2, 2))[heavy]
+            s[heavy] = s[heavy] + (1.0 / w - 1.0)[:, None, None] * r_heavy
+            s_inv[heavy] = _inv2(s[heavy])
         if ok.any():
             rows, mu, p, h, s, s_inv, nu = (a[ok] for a in (rows, mu, p, h, s, s_inv, nu))
             ht = np.swapaxes(h, -1, -2)
