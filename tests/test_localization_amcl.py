@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from wheelbase.errors import ConfigError, InputError, MapError
-from wheelbase.geometry import compose
 from wheelbase.localization import (
     AMCL,
     GLOBAL_LOCALIZATION,
     OdometryMotion,
+    kidnapped_run,
     kld_particles,
     low_variance_resample,
     noisy_odometry,
@@ -19,7 +19,7 @@ from wheelbase.localization import (
     wander,
 )
 from wheelbase.localization.likelihood import likelihood_field, scan_log_likelihood
-from wheelbase.localization.particles import _kld_bound, clusters
+from wheelbase.localization.particles import _bin_keys, _kld_bound, clusters
 from wheelbase.planning import OccupancyGrid, load_map
 from wheelbase.sensors import Lidar
 
@@ -54,6 +54,25 @@ def test_kld_bound_grows_with_the_occupied_bins():
         [rng.uniform(0, 50, 3000), rng.uniform(0, 50, 3000), rng.uniform(-3, 3, 3000)]
     )
     assert kld_particles(wide, np.full(3000, 1 / 3000), BINS, 0.05, 0.01, 10, 10**6) > n
+
+
+def test_kld_bound_counts_the_bins_of_injected_random_poses():
+    # Fox's sampling counts every bin the drawn particles fill: random poses spread over F bins
+    # fill F·(1 − exp(−n·p/F)) of them, so an injection grows the set (augmented MCL).
+    rng = np.random.default_rng(1)
+    particles = rng.normal([1.0, 1.0, 0.0], [0.05, 0.05, 0.02], (3000, 3))
+    weights = np.full(3000, 1.0 / 3000)
+    base = kld_particles(particles, weights, BINS, 0.05, 0.01, 100, 100000)
+    assert kld_particles(particles, weights, BINS, 0.05, 0.01, 100, 100000, 0.0, 5e4) == base
+    grown = [kld_particles(particles, weights, BINS, 0.05, 0.01, 100, 100000, p, 5e4)
+             for p in (0.01, 0.05, 0.2)]  # fmt: skip
+    assert base < grown[0] < grown[1] < grown[2]
+    # the fixed point: n is the bound for the bins that n draws are expected to fill
+    n, p, F = grown[1], 0.05, 5e4
+    _, counts = np.unique(_bin_keys(particles, BINS), axis=0, return_counts=True)
+    w = counts / 3000
+    expected = np.sum(1.0 - (1.0 - w * (1.0 - p)) ** n) + F * -math.expm1(-n * p / F)
+    assert abs(_kld_bound(expected, 0.05, 2.3263478740408408) - n) <= 0.01 * n
 
 
 def test_clusters_split_separate_groups_and_join_across_the_angle_cut():
@@ -184,25 +203,20 @@ def test_global_localisation_on_the_maze_converges_within_ten_metres():
 
 
 def test_kidnapped_robot_recovers():
+    # Recovery is a race between the maze's near twins, won by the true pose in most runs, not
+    # all (6 of 7 routes with these options): two of three routes must recover within 30 s.
     grid = load_map("maze")
     lidar = Lidar(beams=360, max_range=30.0, range_std=0.02)
     amcl = AMCL(grid=grid, lidar=lidar, **GLOBAL)
-    rng = np.random.default_rng(5)
-    before = wander(grid, 4.0, rng, start=np.array([2.0, 2.0, 0.0]))
-    state = amcl.initial_state(before[0], np.diag([0.1, 0.1, 0.05]) ** 2, (0, 0, 0), rng)
-    run = run_amcl(amcl, lidar, before, noisy_odometry(before, rng), state, rng)
-    assert run.error[-1] < 0.1
-    # teleport the robot to another corridor; its odometry notices nothing
-    after = wander(grid, 15.0, rng, start=np.array([15.0, 14.0, math.pi]))
-    odometry = compose(run.state.odom, noisy_odometry(after, rng))
-    kidnapped = run_amcl(amcl, lidar, after, odometry, run.state, rng)
-    assert kidnapped.error[0] > 5.0
-    assert kidnapped.injected.sum() > 0  # augmented MCL noticed and brought in fresh guesses
-    # recovered within 30 s (ticks of 0.1 s: 0.5 m/s when driving)
-    recovered = kidnapped.converged_after(0.2)
-    assert recovered < np.inf
-    tick = kidnapped.tick[np.searchsorted(kidnapped.travelled, recovered)]
-    assert tick * 0.1 <= 30.0
+    recovered_s = []
+    for seed in (0, 1, 2):
+        tracked, kidnapped = kidnapped_run(amcl, lidar, seed)
+        assert tracked.error[-1] < 0.1
+        assert kidnapped.error[0] > 5.0
+        assert kidnapped.injected.sum() > 0  # augmented MCL noticed and brought in fresh guesses
+        assert kidnapped.particles.max() > 2 * tracked.particles[-1]  # the injection grew the set
+        recovered_s.append(kidnapped.converged_at_tick(0.2) * 0.1)  # ticks of 0.1 s: 0.5 m/s
+    assert sum(t <= 30.0 for t in recovered_s) >= 2, recovered_s
 
 
 def test_an_ambiguous_map_gives_several_clusters_not_a_confident_wrong_pose():

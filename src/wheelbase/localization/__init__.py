@@ -11,7 +11,13 @@ from wheelbase.localization.ekf import EKF
 from wheelbase.localization.kalman import KalmanFilter, UpdateInfo, chi2_gate
 from wheelbase.localization.motion import OdometryMotion, VelocityMotion, arc_move, odometry_delta
 from wheelbase.localization.particles import Cluster, kld_particles, low_variance_resample
-from wheelbase.localization.trials import AMCLRun, noisy_odometry, run_amcl, wander
+from wheelbase.localization.trials import (
+    AMCLRun,
+    kidnapped_run,
+    noisy_odometry,
+    run_amcl,
+    wander,
+)
 from wheelbase.localization.ukf import UKF
 
 __all__ = [
@@ -30,6 +36,7 @@ __all__ = [
     "VelocityMotion",
     "arc_move",
     "chi2_gate",
+    "kidnapped_run",
     "kld_particles",
     "low_variance_resample",
     "noisy_odometry",

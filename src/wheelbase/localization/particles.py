@@ -78,6 +78,8 @@ def kld_particles(
     delta: float,
     min_particles: int,
     max_particles: int,
+    random_fraction: float = 0.0,
+    random_bins: float = 0.0,
 ) -> int:
     """Number of particles the KLD bound asks for (module docstring).
 
@@ -95,6 +97,11 @@ def kld_particles(
         Probability of exceeding it, in (0, 1).
     min_particles, max_particles : int
         Limits of the answer.
+    random_fraction : float
+        Fraction of the drawn particles that will be replaced by random poses (augmented MCL),
+        in [0, 1]: as in Fox's sampling, the bins they fill count, so injection grows the set.
+    random_bins : float
+        Bins the random poses are spread over (uniformly), > 0 when ``random_fraction`` is.
 
     Returns
     -------
@@ -108,10 +115,12 @@ def kld_particles(
     bin_weight = np.bincount(inverse, weights=weights)
     bin_weight = bin_weight[bin_weight > 0.0]
     z = float(special.ndtri(1.0 - delta))
-    log_miss = np.log1p(-np.minimum(bin_weight, 1.0 - 1e-16))
+    log_miss = np.log1p(-np.minimum(bin_weight * (1.0 - random_fraction), 1.0 - 1e-16))
     n = min_particles
     for _ in range(100):  # the sequence increases to the fixed point; a few steps suffice
         expected_bins = np.sum(-np.expm1(n * log_miss))
+        if random_fraction > 0.0:  # random draws fill the bins of the free space
+            expected_bins += random_bins * -math.expm1(-n * random_fraction / random_bins)
         wanted = math.ceil(float(_kld_bound(expected_bins, epsilon, z)))
         wanted = min(max(wanted, min_particles), max_particles)
         if wanted <= n:

@@ -1,5 +1,6 @@
 """Simulated runs for testing localisation without the closed loop: a wandering robot, its
-odometry, and a driver that feeds a lidar and :class:`~wheelbase.localization.AMCL`.
+odometry, and a driver that feeds a lidar and :class:`~wheelbase.localization.AMCL`; the
+kidnapped robot (:func:`kidnapped_run`).
 
 :func:`wander` drives a point robot straight ahead at ``step`` metres per tick, turning in place
 away from anything its lidar sees within ``clearance`` in front; the heading takes a small random
@@ -15,14 +16,15 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_rng, positive
-from wheelbase.geometry import wrap_angle
+from wheelbase.geometry import compose, wrap_angle
 from wheelbase.localization.amcl import AMCL, AMCLState
 from wheelbase.planning import OccupancyGrid
 from wheelbase.sensors import Lidar
 
-__all__ = ["AMCLRun", "noisy_odometry", "run_amcl", "wander"]
+__all__ = ["AMCLRun", "kidnapped_run", "noisy_odometry", "run_amcl", "wander"]
 
 
 def wander(
@@ -177,6 +179,25 @@ class AMCLRun:
             return math.inf
         return float(self.travelled[above[-1] + 1])
 
+    def converged_at_tick(self, tolerance: float = 0.2) -> float:
+        """Tick of the route from which the error stayed below ``tolerance`` (``inf`` if never).
+
+        Parameters
+        ----------
+        tolerance : float
+            Position error [m].
+
+        Returns
+        -------
+        float
+        """
+        above = np.flatnonzero(self.error >= tolerance)
+        if above.size == 0:
+            return float(self.tick[0]) if self.tick.size else math.inf
+        if above[-1] == self.error.size - 1:
+            return math.inf
+        return float(self.tick[above[-1] + 1])
+
 
 def run_amcl(
     amcl: AMCL,
@@ -228,3 +249,45 @@ def run_amcl(
         )
     table = np.array(records, dtype=np.float64).reshape(-1, 7)
     return AMCLRun(*table.T, state=state)
+
+
+def kidnapped_run(
+    amcl: AMCL,
+    lidar: Lidar,
+    rng: np.random.Generator | int | None = None,
+    *,
+    start: ArrayLike = (2.0, 2.0, 0.0),
+    teleport: ArrayLike = (15.0, 14.0, math.pi),
+    before: float = 4.0,
+    after: float = 15.0,
+) -> tuple[AMCLRun, AMCLRun]:
+    """Track a wandering robot from a known pose, then teleport it; its odometry notices nothing.
+
+    Parameters
+    ----------
+    amcl : AMCL
+        The filter (with recovery enabled to recover).
+    lidar : Lidar
+        The simulated lidar.
+    rng : numpy.random.Generator, int or None
+        Randomness of the routes, the odometry, the scans and the filter.
+    start : array_like, shape (3,)
+        True (and initially believed) pose.
+    teleport : array_like, shape (3,)
+        Pose the robot is carried to.
+    before, after : float
+        Distances [m] driven before and after the teleport.
+
+    Returns
+    -------
+    tracked, kidnapped : AMCLRun
+        The runs before and after the teleport.
+    """
+    rng = as_rng(rng)
+    assert amcl.grid is not None
+    first = wander(amcl.grid, before, rng, start=np.asarray(start, dtype=np.float64))
+    state = amcl.initial_state(first[0], np.diag([0.1, 0.1, 0.05]) ** 2, (0, 0, 0), rng)
+    tracked = run_amcl(amcl, lidar, first, noisy_odometry(first, rng), state, rng)
+    second = wander(amcl.grid, after, rng, start=np.asarray(teleport, dtype=np.float64))
+    odometry = compose(tracked.state.odom, noisy_odometry(second, rng))
+    return tracked, run_amcl(amcl, lidar, second, odometry, tracked.state, rng)
