@@ -9,13 +9,16 @@ from typer.testing import CliRunner
 
 from wheelbase.cli import app
 from wheelbase.errors import ConfigError, DataError
+from wheelbase.geometry import compose
 from wheelbase.localization.mrclam import (
     CameraRange,
+    _retrodict,
     find_mrclam_files,
     load_landmarks,
     load_measurements,
     localize,
 )
+from wheelbase.sensors import range_bearing
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"
 needs_data = pytest.mark.skipif(
@@ -77,9 +80,9 @@ def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_fi
     result = localize(first_five_minutes, 1, kind)
     m = result.metrics()
     assert m["duration_s"] > 100
-    # measured: EKF 0.111 / 0.52 m, UKF 0.105 / 0.49 m, PF 0.110 / 0.50 m (RMSE / max); most
+    # measured: EKF 0.126 / 0.52 m, UKF 0.116 / 0.49 m, PF 0.108 / 0.46 m (RMSE / max); most
     # of it in the 53 s without a sighting (125-178 s)
-    assert m["position_rmse_m"] < 0.125 and m["position_max_m"] < 0.56
+    assert m["position_rmse_m"] < 0.14 and m["position_max_m"] < 0.56
     assert m["position_rmse_m"] < 0.3 * m["dead_reckoning_rmse_m"]
     assert m["measurements_used"] > 200
     assert m["robot_sightings_skipped"] > 0
@@ -91,16 +94,29 @@ def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_fi
 
 
 @needs_data
-@pytest.mark.parametrize(("kind", "rmse", "worst"), [("ekf", 0.108, 0.55), ("ukf", 0.104, 0.52)])
+@pytest.mark.parametrize(("kind", "rmse", "worst"), [("ekf", 0.112, 0.55), ("ukf", 0.106, 0.52)])
 def test_whole_recording_meets_the_targets(kind, rmse, worst):
-    """Robot 1 over the ground truth's 760 s: EKF 0.101 m RMSE, 0.52 m max (target <= 0.15 m);
-    UKF 0.098 m, 0.49 m (target <= 0.10 m); max target 0.7 m. The camera's range scale is
+    """Robot 1 over the ground truth's 760 s: EKF 0.107 m RMSE, 0.52 m max (target <= 0.15 m);
+    UKF 0.101 m, 0.49 m (target <= 0.10 m); max target 0.7 m. The camera's range scale is
     learnt online from 1 to about 1.02."""
-    m = localize(DATA, 1, kind).metrics()
+    result = localize(DATA, 1, kind)
+    m = result.metrics()
+    # every instant counts alike: the estimate is compared on a regular 10 ms grid
+    np.testing.assert_allclose(np.diff(result.t), 0.01, atol=1e-6)
     assert m["duration_s"] > 750
     assert m["position_rmse_m"] < rmse and m["position_max_m"] < worst
     assert m["dead_reckoning_rmse_m"] > 2.0
     assert 1.005 < m["camera_range_scale"] < 1.04
+
+
+def test_a_late_measurement_is_re_expressed_from_the_pose_at_its_stamp():
+    rng = np.random.default_rng(8)
+    taken = np.array([0.4, -0.3, 0.7])  # where the image was taken
+    moved = np.array([0.05, 0.01, 0.08])  # then the robot moved this much
+    stamp = compose(taken, moved)
+    marks = rng.uniform(-4.0, 4.0, (6, 2))
+    seen = range_bearing(taken, marks)
+    np.testing.assert_allclose(_retrodict(seen, moved), range_bearing(stamp, marks), atol=1e-12)
 
 
 def test_camera_range_inverts_the_depth_model_and_learns_its_scale():
