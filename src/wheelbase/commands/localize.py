@@ -43,6 +43,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Localise an MRCLAM robot with an EKF, UKF or particle filter; write metrics, figures."""
         from wheelbase.commands.odometry import _prepare
+        from wheelbase.localization.mrclam import find_mrclam_files
         from wheelbase.localization.mrclam import localize as run
         from wheelbase.localization.plot import plot_error, plot_paths
 
@@ -50,7 +51,10 @@ def register(app: typer.Typer) -> None:
         result = run(data_dir, integer("robot", robot, 1, 5), filter, seed=seed)
         paths = _prepare(out, LOCALIZE_FILES, force)
         metrics = result.metrics()
-        title = f"MRCLAM {Path(data_dir).name}, robot {robot}: {filter.upper()}"
+        # the data set's name: the files' prefix (Dataset6_Robot1_Odometry.dat), else the folder
+        odometry_file = find_mrclam_files(data_dir, robot)["odometry"].name
+        prefix = odometry_file[: -len(f"Robot{robot}_Odometry.dat")].rstrip("_")
+        title = f"MRCLAM {prefix or Path(data_dir).name}, robot {robot}: {filter.upper()}"
         plot_paths(result, paths["paths.png"], title)
         plot_error(result, paths["error.png"], title)
         report = {**metrics, "robot": robot, "data_dir": str(data_dir), "seed": seed,
