@@ -960,6 +960,11 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
             "--turning-radius": 1,
             "--footprint": 2,
             "--rear-axle-to-center": 1,
+            "--case": 1,
+            "--headings": 1,
+            "--xy-resolution": 1,
+            "--collision-step": 1,
+            "--time-limit": 1,
         },
     ),
     "goto": (

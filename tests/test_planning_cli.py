@@ -185,3 +185,51 @@ def test_plan_on_a_geojson_world_measures_clearance_on_the_polygons(tmp_path):
         return pixels[int(height - row), int(col)]
 
     assert shade(solid) < 60 and shade(hole_centre) > 200  # black polygon, white hole
+
+
+def test_plan_takes_a_bundled_case_and_the_search_settings(tmp_path):
+    # A slot 1.15 car lengths long needs moves of centimetres: with the planner's default bins
+    # the search is exhausted at once; with the case's settings, from --case or as flags, the
+    # car parks in 13 moves, the same path both ways, ending on the case's goal.
+    from wheelbase.planning.maps import bundled_scenarios
+
+    case = next(sc for sc in bundled_scenarios() if sc.name == "parallel_115_in")
+    poses = ["--start", "13.014", "3.61", "0", "--goal", "6.972", "1.17", "0"]
+    car = ["--turning-radius", "3.006", "--footprint", "4.69", "1.94",
+           "--rear-axle-to-center", "1.415"]  # fmt: skip
+    settings = ["--headings", "144", "--xy-resolution", "0.1", "--collision-step", "0.02",
+                "--moves-to-contact"]  # fmt: skip
+    runs = {
+        "case": ["--case", "parallel_115_in"],
+        "flags": ["parallel_115", *poses, *car, *settings],
+        "defaults": ["parallel_115", *poses, *car],
+    }
+    metrics = {}
+    for name, args in runs.items():
+        result = runner.invoke(app, ["plan", *args, "--out", str(tmp_path / name)])
+        assert result.exit_code == 0, result.output
+        metrics[name] = json.loads((tmp_path / name / "metrics.json").read_text())
+    assert metrics["defaults"]["success"] is False
+    assert metrics["case"]["success"] and metrics["case"]["cusps"] >= 5
+    assert metrics["flags"]["length_m"] == pytest.approx(metrics["case"]["length_m"], abs=1e-9)
+    with (tmp_path / "case" / "path.csv").open() as handle:
+        last = list(csv.DictReader(handle))[-1]
+    end = [float(last["x_m"]), float(last["y_m"]), float(last["theta_rad"])]
+    assert np.allclose(end, case.goal, atol=1e-9)
+    # a flag beside --case overrides it: a 5° lattice cannot find the 13 moves
+    coarse = runner.invoke(app, ["plan", "--case", "parallel_115_in", "--headings", "72",
+                                 "--out", str(tmp_path / "coarse")])  # fmt: skip
+    assert coarse.exit_code == 0, coarse.output
+    assert json.loads((tmp_path / "coarse" / "metrics.json").read_text())["success"] is False
+
+
+def test_plan_case_errors(tmp_path):
+    for args, words in (
+        (["--case", "nope"], "--case must be one of"),
+        (["warehouse", "--case", "maze_car"], "leave out MAP"),
+        (["--start", "1", "1", "0", "--goal", "2", "2", "0"], "give MAP"),
+        (["warehouse", "--goal", "2", "2", "0"], "give --start"),
+    ):
+        result = runner.invoke(app, ["plan", *args, "--out", str(tmp_path / "o")])
+        assert isinstance(result.exception, ConfigError), result.output
+        assert words in str(result.exception)

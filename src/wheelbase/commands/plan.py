@@ -10,6 +10,13 @@ ROS ``map_server`` YAML, a Moving AI ``.map`` (1 m cells), a polygon world (YAML
 figure draws them) or a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
 ``warehouse``, ``parallel_120``, ``perpendicular_bay``, …). Headings are in degrees unless
 written with ``rad`` (``1.57rad``); ``90deg`` is accepted too.
+
+The search's resolution is the planner's default unless ``--headings``, ``--xy-resolution``,
+``--collision-step``, ``--time-limit`` or ``--moves-to-contact`` say otherwise (tight parking
+needs them: moves of centimetres, cut at contact). ``--case NAME`` takes one of the bundled
+planning cases of ``benchmarks/planning.py`` whole (map, start, goal, robot and those
+settings, e.g. ``wheelbase plan --case parallel_115_in --out DIR``); flags given beside it
+override its values.
 """
 
 from __future__ import annotations
@@ -45,6 +52,46 @@ def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
     return np.array([coords[0], coords[1], _heading_deg(heading, name)])
 
 
+def _query(
+    case: str | None,
+    map_name: str | None,
+    start: tuple[str, str, str] | None,
+    goal: tuple[str, str, str] | None,
+) -> dict[str, Any]:
+    """Map, poses, robot and planner options of the command: a bundled case's, with the flags
+    given beside it in their place, or the flags alone (then MAP, --start and --goal are
+    required)."""
+    robot: dict[str, Any] = {"turning_radius": 0.0, "footprint": (0.66, 0.5),
+                             "rear_axle_to_center": 0.0}  # fmt: skip
+    options: dict[str, Any] = {}
+    poses: dict[str, Any] = {"start": None, "goal": None}
+    if case is not None:
+        from wheelbase.planning.maps import bundled_scenarios
+
+        cases = {sc.name: sc for sc in bundled_scenarios()}
+        if case not in cases:
+            raise ConfigError(f"--case must be one of {', '.join(sorted(cases))} (got {case!r})")
+        chosen = cases[case]
+        if map_name is not None and map_name != chosen.map_name:
+            raise ConfigError(
+                f"--case {case} plans on the bundled map {chosen.map_name!r}: leave out MAP "
+                f"(got {map_name!r})"
+            )
+        map_name = chosen.map_name
+        poses = {"start": chosen.start, "goal": chosen.goal}
+        robot = {"turning_radius": chosen.turning_radius, "footprint": chosen.footprint,
+                 "rear_axle_to_center": chosen.rear_axle_to_center}  # fmt: skip
+        options = dict(chosen.planner)
+    if map_name is None:
+        raise ConfigError("give MAP (a map file or bundled map name) or --case")
+    for name, values in (("start", start), ("goal", goal)):
+        if values is not None:
+            poses[name] = _pose(values, name)
+        elif poses[name] is None:
+            raise ConfigError(f"give --{name} X Y DEG (or --case)")
+    return {"map": map_name, **poses, "robot": robot, "options": options}
+
+
 def plan_to_files(
     map_name: str,
     start: np.ndarray,
@@ -56,6 +103,7 @@ def plan_to_files(
     rear_axle_to_center: float = 0.0,
     reverse: bool = True,
     force: bool = False,
+    planner_options: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Plan and write ``path.csv``, ``path.png`` and ``metrics.json`` into ``out``.
 
@@ -79,6 +127,9 @@ def plan_to_files(
         Allow reverse driving.
     force : bool
         Overwrite existing files.
+    planner_options : dict or None
+        Further :class:`~wheelbase.planning.HybridAStar` keywords (``headings``,
+        ``xy_resolution``, ``collision_step``, ``time_limit``, ``moves_to_contact``, …).
 
     Returns
     -------
@@ -106,6 +157,7 @@ def plan_to_files(
         turning_radius,
         reverse=reverse,
         rear_axle_to_center=rear_axle_to_center,
+        **(planner_options or {}),
     )
     path = planner.plan(start, goal)
     clearance = (
@@ -149,53 +201,99 @@ def register(app: typer.Typer) -> None:
 
     @app.command("plan")
     def plan(
-        map_name: Annotated[
-            str,
-            typer.Argument(
-                metavar="MAP",
-                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), or "
-                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ...",
-            ),
-        ],
-        start: Annotated[
-            tuple[str, str, str],
-            typer.Option(help="Start pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
-        ],
-        goal: Annotated[
-            tuple[str, str, str],
-            typer.Option(help="Goal pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
-        ],
         out: Annotated[
             Path, typer.Option(help="Output folder for path.csv, path.png, metrics.json.")
         ],
-        turning_radius: Annotated[
-            float, typer.Option(help="Minimum turning radius [m]; 0 turns in place.")
-        ] = 0.0,
-        footprint: Annotated[
-            tuple[float, float], typer.Option(help="Footprint length and width [m].")
-        ] = (0.66, 0.5),
-        rear_axle_to_center: Annotated[
-            float,
-            typer.Option(
-                help="Distance [m] from the reference point (rear axle) to the footprint centre."
+        map_name: Annotated[
+            str | None,
+            typer.Argument(
+                metavar="MAP",
+                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), or "
+                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ... "
+                "(optional with --case).",
             ),
-        ] = 0.0,
+        ] = None,
+        start: Annotated[
+            tuple[str, str, str] | None,
+            typer.Option(help="Start pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
+        ] = None,
+        goal: Annotated[
+            tuple[str, str, str] | None,
+            typer.Option(help="Goal pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
+        ] = None,
+        case: Annotated[
+            str | None,
+            typer.Option(
+                help="A bundled planning case (map, poses, robot, settings), e.g. "
+                "parallel_115_in, maze_car; flags given beside it override it."
+            ),
+        ] = None,
+        turning_radius: Annotated[
+            float | None,
+            typer.Option(help="Minimum turning radius [m]; 0 turns in place.  [default: 0]"),
+        ] = None,
+        footprint: Annotated[
+            tuple[float, float] | None,
+            typer.Option(help="Footprint length and width [m].  [default: 0.66, 0.5]"),
+        ] = None,
+        rear_axle_to_center: Annotated[
+            float | None,
+            typer.Option(
+                help="Distance [m] from the reference point (rear axle) to the footprint "
+                "centre.  [default: 0]"
+            ),
+        ] = None,
         reverse: Annotated[
             bool, typer.Option("--reverse/--no-reverse", help="Allow driving backwards.")
         ] = True,
+        headings: Annotated[
+            int | None, typer.Option(help="Heading bins (72 = 5°, the default).")
+        ] = None,
+        xy_resolution: Annotated[
+            float | None,
+            typer.Option(help="Position bin [m] (default: a quarter of the footprint's width)."),
+        ] = None,
+        collision_step: Annotated[
+            float | None,
+            typer.Option(help="Collision sample spacing [m] (default: half a map cell)."),
+        ] = None,
+        time_limit: Annotated[
+            float | None, typer.Option(help="Search time limit [s] (default 5).")
+        ] = None,
+        moves_to_contact: Annotated[
+            bool | None,
+            typer.Option(
+                "--moves-to-contact/--no-moves-to-contact",
+                help="Cut a motion at its last free sample near obstacles (tight parking).",
+                show_default=False,
+            ),
+        ] = None,
         force: Annotated[bool, typer.Option(help="Overwrite existing output files.")] = False,
     ) -> None:
         """Plan a path with Hybrid A* and write path.csv, path.png and metrics.json."""
+        given = {
+            "headings": headings,
+            "xy_resolution": xy_resolution,
+            "collision_step": collision_step,
+            "time_limit": time_limit,
+            "moves_to_contact": moves_to_contact,
+        }
+        query = _query(case, map_name, start, goal)
+        robot = query["robot"]
+        options = {**query["options"], **{k: v for k, v in given.items() if v is not None}}
         metrics = plan_to_files(
-            map_name,
-            _pose(start, "start"),
-            _pose(goal, "goal"),
-            turning_radius,
-            footprint,
+            query["map"],
+            query["start"],
+            query["goal"],
+            robot["turning_radius"] if turning_radius is None else turning_radius,
+            robot["footprint"] if footprint is None else footprint,
             out,
-            rear_axle_to_center=rear_axle_to_center,
+            rear_axle_to_center=(
+                robot["rear_axle_to_center"] if rear_axle_to_center is None else rear_axle_to_center
+            ),
             reverse=reverse,
             force=force,
+            planner_options=options,
         )
         from rich.console import Console
         from rich.table import Table
