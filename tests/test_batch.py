@@ -45,8 +45,10 @@ def test_failed_runs_are_rows_not_crashes():
 
 
 def test_bad_batch_arguments():
-    with pytest.raises(ConfigError, match="seeds must be an integer >= 1"):
+    with pytest.raises(ConfigError, match=r"seeds must be an integer in \[1, 1000000\]"):
         run_batch([SCENARIO], seeds=0)
+    with pytest.raises(ConfigError, match="MAX_SEEDS"):  # not a list of 1e20 seeds
+        run_batch([SCENARIO], seeds=10**20)
     with pytest.raises(ConfigError, match="at least one scenario"):
         run_batch([])
 

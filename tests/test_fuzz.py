@@ -45,6 +45,7 @@ def check(call, case, kind: str) -> None:
 @example({**fuzzing.BASES[0], "goal": [1e300, 0.0, 0.0]})
 @example({**fuzzing.BASES[3], "controller": {"law": "mppi", "gains": {"seed": 2**70}}})
 @example({**fuzzing.BASES[0], "planner": {"options": {"headings": float("inf")}}})
+@example({**fuzzing.BASES[0], "trajectory": {"max_speed": 1e-300}})  # 1e301 reference samples
 def test_scenario_fields(case):
     check(fuzzing.run_scenario, case, "scenario")
 
@@ -92,6 +93,8 @@ def test_constructors(case):
 
 @settings(**FAST, **_examples(12, 1000))
 @given(fuzzing.cli_cases())
+@example(["batch", "demo", "--seeds", "2", "--workers", "99999999999999999999"])
+@example(["batch", "demo", "--seeds", "99999999999999999999"])
 def test_cli_flags(case):
     check(fuzzing.run_cli, case, "cli")
 

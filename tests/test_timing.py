@@ -72,3 +72,28 @@ def test_bad_input():
         SpeedLimits(max_speed=0.0)
     with pytest.raises(ConfigError, match="dt must be > 0"):
         time_parametrize([[0, 0, 0], [1, 0, 0]], dt=-1)
+
+
+def test_a_path_stretched_past_max_samples_is_refused_not_allocated():
+    poses = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]])
+    slow = SpeedLimits(max_speed=1e-6, max_acceleration=1e-6)
+    with pytest.raises(ConfigError, match="more than max_samples = 1000000"):
+        time_parametrize(poses, limits=slow, dt=0.05)  # 10 m at 1 µm/s: 2e8 samples
+    fine = time_parametrize(poses, limits=SpeedLimits(max_speed=0.5), dt=0.05, max_samples=1000)
+    assert fine.t.size <= 1000 and fine.poses[-1, 0] == pytest.approx(10.0)
+    with pytest.raises(ConfigError, match="more than max_samples = 100"):
+        time_parametrize(poses, limits=SpeedLimits(max_speed=0.5), dt=0.05, max_samples=100)
+
+
+@pytest.mark.parametrize("samples", [2, 3, 11])
+def test_a_sparse_straight_path_gets_the_exact_trapezoid(samples):
+    # Two poses (one interval) used to give an infinite time (rest at both ends of the one
+    # interval); now the ramps are resolved: 10 m at 0.5 m/s with 0.5 m/s² takes L/v + v/a.
+    limits = SpeedLimits(max_speed=0.5, max_acceleration=0.5)
+    poses = np.column_stack([np.linspace(0.0, 10.0, samples), np.zeros(samples), np.zeros(samples)])
+    trajectory = time_parametrize(poses, limits=limits, dt=0.01)
+    assert trajectory.t[-1] == pytest.approx(10.0 / 0.5 + 0.5 / 0.5, rel=2e-3)
+    assert trajectory.v.max() == pytest.approx(0.5) and np.all(trajectory.v >= 0.0)
+    assert np.allclose(trajectory.poses[[0, -1]], poses[[0, -1]])
+    accel = np.diff(trajectory.v) / np.diff(trajectory.t)
+    assert np.abs(accel).max() <= 0.5 * (1 + 1e-6)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_SEEDS
 
 __all__ = ["JOURNAL", "BatchResult", "Journal", "run_batch", "run_chunk"]
 
@@ -265,8 +266,13 @@ def run_batch(
 
     from wheelbase.scenario import Scenario, load_scenario
 
-    if seeds is not None and (isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1):
-        raise ConfigError(f"seeds must be an integer >= 1 (got {seeds!r})")
+    if seeds is not None and (
+        isinstance(seeds, bool) or not isinstance(seeds, int) or not 1 <= seeds <= MAX_SEEDS
+    ):
+        raise ConfigError(
+            f"seeds must be an integer in [1, {MAX_SEEDS}] (wheelbase.limits.MAX_SEEDS; "
+            f"got {seeds!r})"
+        )
     if chunk_size is not None and (
         isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1
     ):

@@ -26,6 +26,7 @@ limit                  what it bounds (default)                     raised by
                        an update of 60 beams takes seconds)
 ``MAX_FALSE_RATE``     mean false landmark detections per scan      fixed
                        (1e3)
+``MAX_SEEDS``          seeds of one batch (1e6 runs per scenario)   fixed
 =====================  ===========================================  ==========================
 """
 
@@ -38,6 +39,7 @@ __all__ = [
     "MAX_MAP_CELLS",
     "MAX_PARTICLES",
     "MAX_SAMPLE_STEPS",
+    "MAX_SEEDS",
     "MAX_STATE_BINS",
     "MAX_STEPS",
 ]
@@ -50,3 +52,4 @@ MAX_COORDINATE = 1.0e10  # m
 MAX_BEAMS = 100_000
 MAX_PARTICLES = 1_000_000
 MAX_FALSE_RATE = 1_000.0  # per scan
+MAX_SEEDS = 1_000_000

@@ -528,7 +528,7 @@ def prepare(
     plan, planning = _plan(grid, robot, scenario, start, goals)
     if plan is None:
         return Prepared(scenario, robot, grid, start, goals, None, None, planning, None)
-    reference = _timed_reference(plan, limits, scenario.dt)
+    reference = _timed_reference(plan, limits, scenario.dt, scenario.resources.max_steps)
     end_time = float(reference.t[-1])
     ref_table = np.column_stack([reference.poses[:, :2], np.unwrap(reference.poses[:, 2])])
     from wheelbase.control.torque import interpolate_rows
@@ -833,6 +833,7 @@ def _concatenate(legs, path_type):
     return path_type(poses, directions, curvatures, np.concatenate(arc), True, legs[0].stats)
 
 
-def _timed_reference(plan, limits: SpeedLimits, dt: float) -> PoseTrajectory:
+def _timed_reference(plan, limits: SpeedLimits, dt: float, max_steps: int) -> PoseTrajectory:
     """Time-parametrise each forward/backward run of the plan; stops at every goal."""
-    return time_parametrize(plan.poses, np.where(plan.directions < 0, -1.0, 1.0), limits, dt=dt)
+    directions = np.where(plan.directions < 0, -1.0, 1.0)
+    return time_parametrize(plan.poses, directions, limits, dt=dt, max_samples=max_steps)

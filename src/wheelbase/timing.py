@@ -26,9 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, positive
+from wheelbase._validate import as_float_array, integer, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.limits import MAX_STEPS
 from wheelbase.models.path import PoseTrajectory
 
 __all__ = ["SpeedLimits", "time_parametrize"]
@@ -81,6 +82,8 @@ def time_parametrize(
     directions: ArrayLike | None = None,
     limits: SpeedLimits | None = None,
     dt: float = 0.05,
+    *,
+    max_samples: int = MAX_STEPS,
 ) -> PoseTrajectory:
     """Time-parametrise a path of poses into a trajectory sampled every ``dt`` seconds.
 
@@ -97,6 +100,9 @@ def time_parametrize(
         Speed, acceleration and yaw-rate limits (defaults of :class:`SpeedLimits`).
     dt : float
         Sampling period of the returned trajectory [s], > 0.
+    max_samples : int
+        Most samples the trajectory may have (default :data:`wheelbase.limits.MAX_STEPS`);
+        a path that slow limits stretch beyond it is refused, not allocated.
 
     Returns
     -------
@@ -110,10 +116,11 @@ def time_parametrize(
     InputError
         Fewer than two samples, wrong shapes, non-finite values, directions other than ±1.
     ConfigError
-        Non-positive ``dt`` or invalid limits.
+        Non-positive ``dt``, invalid limits, or more than ``max_samples`` samples.
     """
     limits = SpeedLimits() if limits is None else limits
     dt = positive("dt", dt, "s")
+    max_samples = integer("max_samples", max_samples, minimum=2)
     poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
     if poses.shape[0] < 2:
         raise InputError(f"poses must hold at least 2 samples (got {poses.shape[0]})")
@@ -135,6 +142,14 @@ def time_parametrize(
         else:
             pieces.append(_drive(poses[start : stop + 1], headings[start : stop + 1], kind, limits))
 
+    total = sum(piece.duration for piece in pieces)
+    samples = total / dt + 1.0
+    if not samples <= max_samples:  # also NaN
+        raise ConfigError(
+            f"the path takes {total:.3g} s at these limits: {samples:.3g} samples of dt = "
+            f"{dt:g} s, more than max_samples = {max_samples} (scenario resources.max_steps); "
+            "raise the speed limits or the limit"
+        )
     return _sample(pieces, poses, dt)
 
 
@@ -171,7 +186,35 @@ class _Piece:
         return float(self.times[-1])
 
 
+def _densify(
+    poses: np.ndarray, headings: np.ndarray, spacing: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The path with samples added (linearly) so that no interval is longer than ``spacing``."""
+    ds = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    parts = np.maximum(1, np.ceil(ds / spacing)).astype(np.int64)
+    if parts.max() == 1:
+        return poses, headings
+    index = np.repeat(np.arange(ds.size), parts)
+    first = np.repeat(np.cumsum(parts) - parts, parts)
+    frac = (np.arange(parts.sum()) - first) / np.repeat(parts, parts)
+    xy = poses[index, :2] + frac[:, None] * (poses[index + 1, :2] - poses[index, :2])
+    heading = headings[index] + frac * (headings[index + 1] - headings[index])
+    xy = np.vstack([xy, poses[-1:, :2]])
+    heading = np.append(heading, headings[-1])
+    return np.column_stack([xy, heading]), heading
+
+
 def _drive(poses: np.ndarray, headings: np.ndarray, direction: int, limits: SpeedLimits) -> _Piece:
+    # The speed profile lives on the path's samples (the robot is at rest at the first and the
+    # last): a path given by few samples (two: one straight interval) is resampled so that the
+    # ramps span several intervals and the robot can cruise between them; Hybrid A*'s paths,
+    # sampled every few centimetres, are left as they are.
+    top = limits.max_speed * (limits.reverse_speed_factor if direction < 0 else 1.0)
+    length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
+    ramp = top * top / (2.0 * limits.max_acceleration)
+    if length > 0.0:
+        spacing = min(ramp / 8.0, length / 2.0) if ramp > 0.0 else length / 2.0
+        poses, headings = _densify(poses, headings, max(spacing, length / 100_000))
     ds = np.hypot(*np.diff(poses[:, :2], axis=0).T)
     s = np.concatenate([[0.0], np.cumsum(ds)])
     curvature = np.zeros_like(s)
@@ -180,7 +223,6 @@ def _drive(poses: np.ndarray, headings: np.ndarray, direction: int, limits: Spee
         k_mid = np.where(ds > 0, np.diff(headings) / ds, 0.0)
     curvature[:-1] = np.abs(k_mid)
     curvature[1:] = np.maximum(curvature[1:], np.abs(k_mid))
-    top = limits.max_speed * (limits.reverse_speed_factor if direction < 0 else 1.0)
     # A straight (κ = 0) or all but straight (subnormal κ) stretch has no curvature limit:
     # the quotient is inf, and the minimum keeps the top speed.
     with np.errstate(divide="ignore", over="ignore"):

@@ -16,6 +16,10 @@ from wheelbase.errors import WheelbaseError
 
 __all__ = ["DEMO_SCENARIO", "register"]
 
+MAX_WORKERS = 1024
+"""Most local worker processes ``wheelbase batch --workers`` starts (far above any machine's
+cores; a typo of 1e20 was an OverflowError)."""
+
 DEMO_SCENARIO = "demo"
 DEMO_DIR = "wheelbase-demo"
 
@@ -197,8 +201,8 @@ def register(app: typer.Typer) -> None:
 
         from wheelbase.batch import JOURNAL, run_batch
 
-        if workers < 1:
-            raise WheelbaseError(f"--workers must be >= 1 (got {workers})")
+        if not 1 <= workers <= MAX_WORKERS:
+            raise WheelbaseError(f"--workers must be in [1, {MAX_WORKERS}] (got {workers})")
         if resume and force:
             raise WheelbaseError("--resume finishes the batch in --out; --force starts it again")
         for name in ("batch.csv", "batch.json", JOURNAL):
