@@ -87,6 +87,9 @@ def test_map_arrays(case):
                                      "false_rate": 1e127}))  # fmt: skip
 @example(("Lidar.scan", {**fuzzing.constructors()["Lidar.scan"][1], "beams": 2309998689321}))
 @example(("Lidar.scan", {**fuzzing.constructors()["Lidar.scan"][1], "max_range": "1e3"}))
+@example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
+                               "max_iterations": 2**70}))  # fmt: skip
+@example(("MPPI", {**fuzzing.constructors()["MPPI"][1], "path_spacing": 1e-9}))
 def test_constructors(case):
     check(fuzzing.call_constructor, case, "constructor")
 

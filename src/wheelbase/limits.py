@@ -27,6 +27,8 @@ limit                  what it bounds (default)                     raised by
 ``MAX_FALSE_RATE``     mean false landmark detections per scan      fixed
                        (1e3)
 ``MAX_SEEDS``          seeds of one batch (1e6 runs per scenario)   fixed
+``MAX_PATH_POINTS``    points of a densified reference path (1e7:   fixed
+                       500 km at MPPI's 5 cm)
 =====================  ===========================================  ==========================
 """
 
@@ -38,6 +40,7 @@ __all__ = [
     "MAX_FALSE_RATE",
     "MAX_MAP_CELLS",
     "MAX_PARTICLES",
+    "MAX_PATH_POINTS",
     "MAX_SAMPLE_STEPS",
     "MAX_SEEDS",
     "MAX_STATE_BINS",
@@ -53,3 +56,4 @@ MAX_BEAMS = 100_000
 MAX_PARTICLES = 1_000_000
 MAX_FALSE_RATE = 1_000.0  # per scan
 MAX_SEEDS = 1_000_000
+MAX_PATH_POINTS = 10_000_000

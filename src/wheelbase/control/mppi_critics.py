@@ -51,6 +51,7 @@ import numpy as np
 
 from wheelbase._validate import finite, positive
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_PATH_POINTS
 
 __all__ = ["MPPICritics"]
 
@@ -188,6 +189,13 @@ class PathTables:
         xy, heading, direction, arc, section = [points[:1]], [], [], [0.0], []
         seg = np.diff(points, axis=0)
         length = np.hypot(seg[:, 0], seg[:, 1])
+        needed = float(np.sum(np.maximum(1.0, np.ceil(length / spacing - 1e-9))))
+        if not needed <= MAX_PATH_POINTS:
+            raise ConfigError(
+                f"the reference path ({length.sum():.3g} m) at path_spacing = {spacing:g} m "
+                f"needs {needed:.3g} points: more than {MAX_PATH_POINTS:.0e} "
+                "(wheelbase.limits.MAX_PATH_POINTS); use a larger path_spacing"
+            )
         seg_heading = np.arctan2(seg[:, 1], seg[:, 0])
         run = 0
         for i in range(seg.shape[0]):

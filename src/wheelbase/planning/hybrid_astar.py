@@ -75,6 +75,7 @@ from wheelbase.planning.world import PolygonWorld
 __all__ = ["HybridAStar"]
 
 MAX_PRIMITIVE_SAMPLES = 10_000_000  # collision samples in the motion-primitive table (240 MB)
+_NO_LIMIT = 2**62  # an iteration limit above this is none (the kernel counts in int64)
 _FINITE = 1.0e300  # below this a cost is finite: the kernels compare with it, never with inf
 _DEEPER = 1.0e-6
 """The queue key is ``(1 − _DEEPER)·g + w·h``: of two states whose f = g + w·h differ by less
@@ -484,7 +485,7 @@ class HybridAStar:
             self.collision_step,
             self.xy_goal_tolerance,
             self.yaw_goal_tolerance,
-            self.max_iterations,
+            min(self.max_iterations, _NO_LIMIT),
             self.time_limit,
             self._turn_cost,
             self.moves_to_contact,
