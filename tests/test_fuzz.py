@@ -90,6 +90,9 @@ def test_map_arrays(case):
 @example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
                                "max_iterations": 2**70}))  # fmt: skip
 @example(("MPPI", {**fuzzing.constructors()["MPPI"][1], "path_spacing": 1e-9}))
+@example(("MPPI", {**fuzzing.constructors()["MPPI"][1], "samples": 10**400}))
+@example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
+                               "xy_resolution": 1e-320}))  # fmt: skip
 def test_constructors(case):
     check(fuzzing.call_constructor, case, "constructor")
 

@@ -18,6 +18,7 @@ __all__ = [
     "as_float_array",
     "as_rng",
     "check_choice",
+    "count_text",
     "finite",
     "flag",
     "integer",
@@ -218,3 +219,23 @@ def parse_angle(text: str | float, name: str = "angle", default_unit: str = "rad
 
 def _unit(unit: str) -> str:
     return f" {unit}" if unit else ""
+
+
+def count_text(number: float) -> str:
+    """A count for a message, to 3 digits; an int too large for a float stays readable
+    (``f"{10**400:.3g}"`` raises OverflowError).
+
+    Parameters
+    ----------
+    number : int or float
+        The count (a float estimate, possibly inf, is written as such).
+
+    Returns
+    -------
+    str
+    """
+    if isinstance(number, float) or abs(number) < 10**300:
+        return f"{number:.3g}"
+    digits = str(abs(number))
+    head = f"{digits[0]}.{digits[1:3]}".rstrip("0").rstrip(".")
+    return ("-" if number < 0 else "") + head + f"e+{len(digits) - 1}"

@@ -17,7 +17,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from wheelbase._validate import read_text
+from wheelbase._validate import count_text, read_text
 from wheelbase.errors import ScenarioError
 from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
 
@@ -508,7 +508,7 @@ class Scenario(_Strict):
             if rows * cols > limit:
                 raise ValueError(
                     f"map: empty around the start and goals would be {rows} × {cols} = "
-                    f"{rows * cols:.3g} cells of {EMPTY_MAP_RESOLUTION} m: more than "
+                    f"{count_text(rows * cols)} cells of {EMPTY_MAP_RESOLUTION} m: more than "
                     f"resources.max_map_cells = {limit}; bring them closer, use a map file, or "
                     "raise resources.max_map_cells"
                 )

@@ -49,7 +49,7 @@ from numpy.typing import ArrayLike
 from scipy.signal import savgol_filter
 
 from wheelbase._jax import X64, import_jax
-from wheelbase._validate import as_float_array, check_choice, flag, integer, positive
+from wheelbase._validate import as_float_array, check_choice, count_text, flag, integer, positive
 from wheelbase.control.base import (
     HOLONOMIC_COMMAND,
     STEERING_COMMAND,
@@ -215,7 +215,8 @@ class MPPI:
         limit = integer("max_sample_steps", max_sample_steps, minimum=1)
         if self.samples * self.horizon_steps > limit:
             raise ConfigError(
-                f"samples × horizon_steps = {self.samples * self.horizon_steps:.3g}: more than "
+                f"samples × horizon_steps = {count_text(self.samples * self.horizon_steps)}: "
+                "more than "
                 f"max_sample_steps = {limit}; use fewer samples or a shorter horizon, or raise "
                 "max_sample_steps"
             )

@@ -56,7 +56,15 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, check_choice, flag, integer, nonnegative, positive
+from wheelbase._validate import (
+    as_float_array,
+    check_choice,
+    count_text,
+    flag,
+    integer,
+    nonnegative,
+    positive,
+)
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_STATE_BINS
@@ -298,15 +306,19 @@ class HybridAStar:
             raise ConfigError("search_from='goal' needs reverse=True (a path driven backwards)")
         self.moves_to_contact = flag("moves_to_contact", moves_to_contact)
 
-        nx = math.ceil(grid.width_m / self.xy_resolution)
-        ny = math.ceil(grid.height_m / self.xy_resolution)
-        bins = nx * ny * self.headings
+        spans = (grid.width_m / self.xy_resolution, grid.height_m / self.xy_resolution)
+        if math.isfinite(spans[0]) and math.isfinite(spans[1]):
+            nx, ny = math.ceil(spans[0]), math.ceil(spans[1])
+            bins: float = nx * ny * self.headings
+        else:  # a subnormal xy_resolution: the quotient is inf, which ceil refuses
+            nx = ny = 0
+            bins = math.inf
         if bins > self.max_state_bins:
             raise ConfigError(
-                f"xy_resolution {self.xy_resolution:g} m and {_count(self.headings)} headings give "
-                f"{_count(bins)} state bins: more than max_state_bins = "
-                f"{self.max_state_bins}; use "
-                "a coarser xy_resolution or fewer headings, or raise max_state_bins"
+                f"xy_resolution {self.xy_resolution:g} m and {count_text(self.headings)} "
+                f"headings give {count_text(bins)} state bins: more than max_state_bins = "
+                f"{self.max_state_bins}; use a coarser xy_resolution or fewer headings, or "
+                "raise max_state_bins"
             )
         self._nx, self._ny = nx, ny
         self.primitive_length = min(
@@ -633,14 +645,6 @@ class HybridAStar:
 
 
 # ---------------------------------------------------------------------- helpers
-def _count(number: int) -> str:
-    """A count for a message, 3 digits (an int too large for a float stays readable)."""
-    if number < 10**300:
-        return f"{number:.3g}"
-    digits = str(number)
-    return f"{digits[0]}.{digits[1:3]}".rstrip("0").rstrip(".") + f"e+{len(digits) - 1}"
-
-
 def _driven_backwards(path: PlannedPath) -> PlannedPath:
     """The same curve traversed from its end to its start: every motion in the other gear,
     the curvature (dθ per signed metre) unchanged."""

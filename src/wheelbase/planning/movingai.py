@@ -9,7 +9,7 @@ from pathlib import Path as FilePath
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import read_text
+from wheelbase._validate import count_text, read_text
 from wheelbase.errors import DataError, MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
@@ -42,7 +42,8 @@ def _read_movingai_map(
     height, width = (_dimension(path, name, header[name]) for name in ("height", "width"))
     if height * width > max_cells:
         raise MapError(
-            f"{path}: {height} × {width} = {height * width:.3g} cells: more than max_cells = "
+            f"{path}: {height} × {width} = {count_text(height * width)} cells: more than "
+            "max_cells = "
             f"{max_cells}; raise max_cells (scenarios: resources.max_map_cells) if you mean it"
         )
     rows = lines[row0 : row0 + height]
