@@ -62,6 +62,8 @@ def test_scenario_files(case):
 @example((".pgm", b"P5\n100000000 100000000\n255\n\x00", {}))
 @example((".map", b"type octile\nheight abc\nwidth 2\nmap\n..\n", {}))
 @example((".yaml", b"image: m.pgm\nresolution: 0.1\norigin: [a, 0, 0]\n", {}))
+@example((".geojson", b'{"type": "Feature", "geometry": {"type": "Point"}, '
+                      b'"properties": {"radius": 1}}', {}))  # fmt: skip
 def test_map_files(case):
     check(fuzzing.load_map_file, case, "map_file")
 
@@ -91,6 +93,12 @@ def test_map_arrays(case):
                                "max_iterations": 2**70}))  # fmt: skip
 @example(("MPPI", {**fuzzing.constructors()["MPPI"][1], "path_spacing": 1e-9}))
 @example(("MPPI", {**fuzzing.constructors()["MPPI"][1], "samples": 10**400}))
+@example(
+    (
+        "Footprint.rectangle",
+        {**fuzzing.constructors()["Footprint.rectangle"][1], "length": 1e9, "width": 1e-9},
+    )
+)  # 4e9 covering circles
 @example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
                                "xy_resolution": 1e-320}))  # fmt: skip
 def test_constructors(case):

@@ -19,6 +19,11 @@ from wheelbase.limits import MAX_COORDINATE
 __all__ = ["Footprint"]
 
 
+MAX_COVER_CIRCLES = 10_000
+"""Most circles covering a footprint (:attr:`Footprint.circles`: twice the aspect ratio): a
+1e9 m × 1e-9 m footprint asked for 4e9 of them, 30 GB."""
+
+
 @dataclass(frozen=True, eq=False)
 class Footprint:
     """A convex robot outline in the body frame of its reference point.
@@ -60,6 +65,13 @@ class Footprint:
         nxt = np.roll(edges, -1, axis=0)
         if np.any(edges[:, 0] * nxt[:, 1] - edges[:, 1] * nxt[:, 0] < -1e-12):
             raise ConfigError("polygon must be convex")
+        extent = np.ptp(poly, axis=0)
+        if 2.0 * extent.max() / extent.min() > MAX_COVER_CIRCLES:  # see circles
+            raise ConfigError(
+                f"polygon is {extent[0]:.3g} m × {extent[1]:.3g} m: covering it needs more than "
+                f"{MAX_COVER_CIRCLES} circles (an aspect ratio above "
+                f"{MAX_COVER_CIRCLES // 2}); a robot is not that thin"
+            )
         poly = np.ascontiguousarray(poly)
         poly.setflags(write=False)
         object.__setattr__(self, "polygon", poly)

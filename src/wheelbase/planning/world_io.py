@@ -240,6 +240,8 @@ def _from_geojson(data: dict, label: str) -> dict:
         elif gtype == "Point":
             if "radius" not in props:
                 raise MapError(f"{label}: feature {i} (Point) needs a 'radius' property [m]")
+            if not isinstance(coords, list) or len(coords) < 2:
+                raise MapError(f"{label}: feature {i} (Point) needs coordinates [x, y]")
             discs.append([*coords[:2], props["radius"]])
             continue
         else:
