@@ -142,15 +142,7 @@ def time_parametrize(
         else:
             pieces.append(_drive(poses[start : stop + 1], headings[start : stop + 1], kind, limits))
 
-    total = sum(piece.duration for piece in pieces)
-    samples = total / dt + 1.0
-    if not samples <= max_samples:  # also NaN
-        raise ConfigError(
-            f"the path takes {total:.3g} s at these limits: {samples:.3g} samples of dt = "
-            f"{dt:g} s, more than max_samples = {max_samples} (scenario resources.max_steps); "
-            "raise the speed limits or the limit"
-        )
-    return _sample(pieces, poses, dt)
+    return _sample(pieces, poses, dt, max_samples)
 
 
 def _motions(poses: np.ndarray, directions: np.ndarray):
@@ -255,8 +247,15 @@ def _turn_in_place(pose: np.ndarray, heading0: float, heading1: float, limits: S
     return _Piece(times, swept, rates, ends, 0)
 
 
-def _sample(pieces: list[_Piece], path: np.ndarray, dt: float) -> PoseTrajectory:
+def _sample(pieces: list[_Piece], path: np.ndarray, dt: float, max_samples: int) -> PoseTrajectory:
     total = sum(piece.duration for piece in pieces)
+    samples = total / dt + 1.0
+    if not samples <= max_samples:  # also NaN; checked before ceil and the allocation
+        raise ConfigError(
+            f"the path takes {total:.3g} s at these limits: {samples:.3g} samples of dt = "
+            f"{dt:g} s, more than max_samples = {max_samples} (scenario resources.max_steps); "
+            "raise the speed limits or the limit"
+        )
     n = max(2, math.ceil(total / dt - 1e-9) + 1)
     t = dt * np.arange(n)
     t[-1] = max(t[-1], total) if n > 1 else total

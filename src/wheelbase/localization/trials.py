@@ -172,12 +172,7 @@ class AMCLRun:
         float
             ``inf`` if the last error is above it.
         """
-        above = np.flatnonzero(self.error >= tolerance)
-        if above.size == 0:
-            return float(self.travelled[0]) if self.travelled.size else math.inf
-        if above[-1] == self.error.size - 1:
-            return math.inf
-        return float(self.travelled[above[-1] + 1])
+        return self._settled(self.travelled, tolerance)
 
     def converged_at_tick(self, tolerance: float = 0.2) -> float:
         """Tick of the route from which the error stayed below ``tolerance`` (``inf`` if never).
@@ -191,12 +186,16 @@ class AMCLRun:
         -------
         float
         """
+        return self._settled(self.tick, tolerance)
+
+    def _settled(self, at: np.ndarray, tolerance: float) -> float:
+        """``at`` (one entry per update) where the error fell below ``tolerance`` for good."""
         above = np.flatnonzero(self.error >= tolerance)
         if above.size == 0:
-            return float(self.tick[0]) if self.tick.size else math.inf
+            return float(at[0]) if at.size else math.inf
         if above[-1] == self.error.size - 1:
             return math.inf
-        return float(self.tick[above[-1] + 1])
+        return float(at[above[-1] + 1])
 
 
 def run_amcl(
