@@ -203,8 +203,9 @@ def test_global_localisation_on_the_maze_converges_within_ten_metres():
 
 
 def test_kidnapped_robot_recovers():
-    # Recovery is a race between the maze's near twins, won by the true pose in most runs, not
-    # all (6 of 7 routes with these options): two of three routes must recover within 30 s.
+    # Carried into a corridor with a stub, every route recovers (10 of 10 in the benchmark, 20
+    # of 20 on seeds 10-29); before the fourth corridor had its stub, 3 of 10 settled on its
+    # half-turn twin.
     grid = load_map("maze")
     lidar = Lidar(beams=360, max_range=30.0, range_std=0.02)
     amcl = AMCL(grid=grid, lidar=lidar, **GLOBAL)
@@ -216,7 +217,7 @@ def test_kidnapped_robot_recovers():
         assert kidnapped.injected.sum() > 0  # augmented MCL noticed and brought in fresh guesses
         assert kidnapped.particles.max() > 2 * tracked.particles[-1]  # the injection grew the set
         recovered_s.append(kidnapped.converged_at_tick(0.2) * 0.1)  # ticks of 0.1 s: 0.5 m/s
-    assert sum(t <= 30.0 for t in recovered_s) >= 2, recovered_s
+    assert max(recovered_s) <= 30.0, recovered_s
 
 
 def test_an_ambiguous_map_gives_several_clusters_not_a_confident_wrong_pose():
