@@ -80,7 +80,7 @@ def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_fi
     result = localize(first_five_minutes, 1, kind)
     m = result.metrics()
     assert m["duration_s"] > 100
-    # measured: EKF 0.126 / 0.52 m, UKF 0.116 / 0.49 m, PF 0.108 / 0.46 m (RMSE / max); most
+    # measured: EKF 0.133 / 0.54 m, UKF 0.102 / 0.42 m, PF 0.094 / 0.39 m (RMSE / max); most
     # of it in the 53 s without a sighting (125-178 s)
     assert m["position_rmse_m"] < 0.14 and m["position_max_m"] < 0.56
     assert m["position_rmse_m"] < 0.3 * m["dead_reckoning_rmse_m"]
@@ -94,11 +94,14 @@ def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_fi
 
 
 @needs_data
-@pytest.mark.parametrize(("kind", "rmse", "worst"), [("ekf", 0.112, 0.55), ("ukf", 0.106, 0.52)])
+@pytest.mark.parametrize(
+    ("kind", "rmse", "worst"), [("ekf", 0.115, 0.56), ("ukf", 0.095, 0.44), ("pf", 0.1, 0.42)]
+)
 def test_whole_recording_meets_the_targets(kind, rmse, worst):
-    """Robot 1 over the ground truth's 760 s: EKF 0.107 m RMSE, 0.52 m max (target <= 0.15 m);
-    UKF 0.101 m, 0.49 m (target <= 0.10 m); max target 0.7 m. The camera's range scale is
-    learnt online from 1 to about 1.02."""
+    """Robot 1 over the ground truth's 760 s: EKF 0.111 m RMSE, 0.54 m max (target <= 0.15 m);
+    UKF 0.091 m, 0.42 m (target <= 0.10 m); max target 0.7 m. The camera's range scale is
+    learnt online from 1 to about 1.02. PF (seed 0) 0.095 m, 0.39 m; over 12 seeds
+    0.090-0.105 m, mean 0.097 m."""
     result = localize(DATA, 1, kind)
     m = result.metrics()
     # every instant counts alike: the estimate is compared on a regular 10 ms grid
