@@ -79,6 +79,7 @@ def test_barcodes_are_resolved_and_robot_sightings_left_out():
 def test_filters_follow_the_ground_truth_far_better_than_dead_reckoning(first_five_minutes, kind):
     result = localize(first_five_minutes, 1, kind)
     m = result.metrics()
+    assert result.dataset == first_five_minutes.name  # no prefix: the folder names the set
     assert m["duration_s"] > 100
     # measured: EKF 0.133 / 0.54 m, UKF 0.102 / 0.42 m, PF 0.094 / 0.39 m (RMSE / max); most
     # of it in the 53 s without a sighting (125-178 s)
@@ -104,6 +105,7 @@ def test_whole_recording_meets_the_targets(kind, rmse, worst):
     0.090-0.105 m, mean 0.097 m."""
     result = localize(DATA, 1, kind)
     m = result.metrics()
+    assert result.dataset == "Dataset6"
     # every instant counts alike: the estimate is compared on a regular 10 ms grid
     np.testing.assert_allclose(np.diff(result.t), 0.01, atol=1e-6)
     assert m["duration_s"] > 750

@@ -16,7 +16,7 @@ from typing import Annotated
 
 import typer
 
-from wheelbase._validate import integer
+from wheelbase._validate import check_choice, integer
 
 __all__ = ["LOCALIZE_FILES", "register"]
 
@@ -43,21 +43,21 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Localise an MRCLAM robot with an EKF, UKF or particle filter; write metrics, figures."""
         from wheelbase.commands.odometry import _prepare
-        from wheelbase.localization.mrclam import find_mrclam_files
+        from wheelbase.localization.mrclam import FILTERS
         from wheelbase.localization.mrclam import localize as run
         from wheelbase.localization.plot import plot_error, plot_paths
 
         seed = integer("seed", seed, minimum=0)
-        result = run(data_dir, integer("robot", robot, 1, 5), filter, seed=seed)
-        paths = _prepare(out, LOCALIZE_FILES, force)
+        robot = integer("robot", robot, 1, 5)
+        check_choice("filter", filter, FILTERS)
+        paths = _prepare(out, LOCALIZE_FILES, force)  # before the run, which takes seconds
+        result = run(data_dir, robot, filter, seed=seed)
         metrics = result.metrics()
-        # the data set's name: the files' prefix (Dataset6_Robot1_Odometry.dat), else the folder
-        odometry_file = find_mrclam_files(data_dir, robot)["odometry"].name
-        prefix = odometry_file[: -len(f"Robot{robot}_Odometry.dat")].rstrip("_")
-        title = f"MRCLAM {prefix or Path(data_dir).name}, robot {robot}: {filter.upper()}"
+        title = f"MRCLAM {result.dataset}, robot {robot}: {filter.upper()}"
         plot_paths(result, paths["paths.png"], title)
         plot_error(result, paths["error.png"], title)
-        report = {**metrics, "robot": robot, "data_dir": str(data_dir), "seed": seed,
+        report = {**metrics, "dataset": result.dataset, "robot": robot,
+                  "data_dir": str(data_dir), "seed": seed,
                   "parameters": result.parameters}  # fmt: skip
         paths["metrics.json"].write_text(json.dumps(report, indent=2) + "\n")
         typer.echo(

@@ -433,6 +433,9 @@ class LocalizationResult:
         unknown or malformed, and other robots' sightings left out.
     parameters : dict
         The parameters of the run.
+    dataset : str
+        The data set's name: the files' prefix (``Dataset6`` for ``Dataset6_Robot1_...``), or
+        the folder's name where the files carry none.
     """
 
     filter: str
@@ -448,6 +451,7 @@ class LocalizationResult:
     robot_sightings: int
     range_scale: float = math.nan
     parameters: dict = field(default_factory=dict)
+    dataset: str = ""
 
     def metrics(self) -> dict[str, float | int | str]:
         """The figures of ``metrics.json``.
@@ -753,4 +757,6 @@ def localize(
         robot_sightings=meas.robot_sightings,
         range_scale=scale,
         parameters=p,
+        dataset=files["odometry"].name[: -len(f"Robot{robot}_Odometry.dat")].rstrip("_")
+        or Path(data_dir).name,
     )
