@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from wheelbase.errors import ConfigError, PlanningError
-from wheelbase.geometry import wrap_angle
+from wheelbase.geometry import transform_points, wrap_angle
 from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, PlannedPath, smooth_path
+from wheelbase.planning.escape import escape
 from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
 
 
@@ -93,11 +94,7 @@ def test_differential_drive_turns_in_place():
     np.testing.assert_allclose(path.poses[idx, :2], path.poses[idx - 1, :2], atol=1e-12)
 
 
-# the 1.1-car-length slot is beyond the planner (benchmarks/planning.py reports it)
-UNSOLVED = ("parallel_110",)
-
-
-@pytest.mark.parametrize("name", [n for n in BUNDLED_MAPS if n not in UNSOLVED])
+@pytest.mark.parametrize("name", BUNDLED_MAPS)
 def test_bundled_scenarios_all_succeed_collision_free(name):
     grid = load_map(name)
     for sc in [s for s in bundled_scenarios() if s.map_name == name]:
@@ -131,6 +128,47 @@ def test_moves_to_contact_park_in_a_slot_1_15_car_lengths_long():
     bounds = [0, *path.cusp_indices, len(path.poses) - 1]
     moves = np.diff(path.arc_length[bounds])
     assert np.sum(moves < planner.primitive_length - 1e-9) >= 3
+
+
+def test_a_slot_1_10_car_lengths_long_is_left_by_moves_to_contact():
+    """The lattice cannot hold the centimetre moves out of a 1.10 slot (0.47 m to spare): the
+    escape searches them on continuous poses, each certified clear of the obstacles and of the
+    map's edge by the planner's margin, and the lattice goes on from outside, into the slot
+    (driven backwards) as out of it."""
+    sc = next(s for s in bundled_scenarios() if s.name == "parallel_110_out")
+    world = load_map(sc.map_name)
+    footprint = Footprint.rectangle(*sc.footprint, sc.rear_axle_to_center)
+    margin = 0.015
+    exits, expanded = escape(
+        world, footprint, sc.turning_radius, np.array(sc.start), np.array(sc.goal),
+        step=0.02, margin=margin,
+    )  # fmt: skip
+    way_out = exits[0]
+    np.testing.assert_array_equal(way_out.poses[0], sc.start)
+    assert np.all(world.footprint_clearance(footprint, way_out.poses[1:]) >= margin - 1e-12)
+    assert not world.in_collision(footprint, way_out.poses).any()
+    assert np.all(np.diff(way_out.arc_length) <= 0.02 + 1e-12)
+    assert way_out.cusps >= 30 and expanded > 100
+    # out: the footprint at the end reaches past the parked cars into the lane
+    corners = transform_points(way_out.poses[-1], footprint.polygon)
+    assert corners[:, 1].max() > 0.2 + sc.footprint[1] + 0.5
+    options = {k: v for k, v in sc.planner.items() if k != "moves_to_contact"}
+    # into the slot: the escape from the goal, driven backwards (the bundled-scenario test
+    # plans both cases with smoothing)
+    for name in ("parallel_110_in",):
+        case = next(s for s in bundled_scenarios() if s.name == name)
+        planner = HybridAStar(
+            world, case.footprint, case.turning_radius, moves_to_contact=True, smooth=False,
+            rear_axle_to_center=case.rear_axle_to_center, **options,
+        )  # fmt: skip
+        path = planner.plan(case.start, case.goal)
+        check_path(world, planner, path, case.start, case.goal, spacing=0.02)
+        assert path.cusps >= 30
+        without = HybridAStar(
+            world, case.footprint, case.turning_radius, moves_to_contact=False,
+            rear_axle_to_center=case.rear_axle_to_center, **options,
+        )  # fmt: skip
+        assert not without.plan(case.start, case.goal).success
 
 
 def test_search_from_goal_returns_the_same_kind_of_path():

@@ -11,7 +11,8 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   ``turning_radius=0`` (differential drive) straight moves plus turns in place; with
   ``moves_to_contact``, near obstacles a primitive that collides is kept up to its last free
   sample (the short back-and-forth moves of tight parking: a 1.15-car-length parallel slot
-  takes 13);
+  takes 13), and where the lattice still fails, the tight end is left by moves to contact on
+  continuous poses (:mod:`~wheelbase.planning.escape`: a 1.10 slot, 44 moves);
 * cost: distance × ``non_straight_penalty`` on arcs × ``reverse_penalty`` in reverse, plus
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
@@ -73,6 +74,7 @@ from wheelbase.planning.astar import _dijkstra_kernel
 from wheelbase.planning.collision import _circles_clearance, _collides_one, _scratch
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
 from wheelbase.planning.dubins import _dubins_all
+from wheelbase.planning.escape import escape
 from wheelbase.planning.footprint import Footprint
 from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import PlannedPath, PlanningStats
@@ -101,6 +103,9 @@ _HEURISTIC_NORMS = (
 """(axis, diagonal) move costs of three grid norms that never exceed the Euclidean length."""
 _ROTATE = 2  # segment type code for a turn in place (length = signed angle [rad])
 _MODE_RS, _MODE_DUBINS, _MODE_POINT = 0, 1, 2
+_ESCAPE_EXITS = 3
+"""Ways out of a tight end (:func:`~wheelbase.planning.escape.escape`) the lattice is tried from
+before the plan fails."""
 _STATUS = {
     0: "goal reached",
     1: "search space exhausted",
@@ -193,6 +198,10 @@ class HybridAStar:
         the shorter move (a move until contact, as a driver edges forward and back in a tight
         slot); default off. The tight parking scenarios need it: their manoeuvres are many
         moves shorter than a primitive. Every cut move is collision-checked like any motion.
+        Where the lattice still fails (for a car that may reverse), the plan leaves the
+        tight end by moves to contact searched on continuous poses
+        (:func:`~wheelbase.planning.escape.escape`: a slot 1.10 car lengths long, 44 moves)
+        and the lattice goes on from outside.
 
     Notes
     -----
@@ -460,15 +469,59 @@ class HybridAStar:
 
         t0 = time.perf_counter()
         hgrid, hres = self._holonomic_heuristic(goal)
-        grid = self._local
         mode = (
             _MODE_POINT
             if self.turning_radius == 0
             else (_MODE_RS if self.reverse else _MODE_DUBINS)
         )
         prims = self._prims_swapped if backwards else self._prims
-        out = _search(
-            grid._kernel_world,
+        out = self._lattice(start, goal, hgrid, hres, prims, mode)
+        way_out, escape_expanded = None, 0
+        if out[0] != 0 and self.moves_to_contact and self.turning_radius > 0 and self.reverse:
+            # the lattice cannot hold moves shorter than its bins: leave the tight end by short
+            # moves to contact (planning.escape), and let the lattice go on from outside
+            exits, escape_expanded = escape(
+                self._local, self.footprint, self.turning_radius, start, goal,
+                step=self.collision_step, margin=self.collision_margin,
+                time_limit=self.time_limit, exits=_ESCAPE_EXITS,
+            )  # fmt: skip
+            for candidate in exits:
+                attempt = self._lattice(candidate.poses[-1], goal, hgrid, hres, prims, mode)
+                escape_expanded += int(attempt[8])
+                if attempt[0] == 0:
+                    out, way_out = attempt, candidate
+                    break
+        status, goal_node, xs, ys, ths, parents, prim_of, used_of, expanded, shots, lengths = out
+        expanded = int(expanded) + escape_expanded
+        planning_time = time.perf_counter() - t0
+        stats = PlanningStats(expanded, planning_time, compile_time, _STATUS[int(status)])
+        if status != 0:
+            return PlannedPath.failure(stats)
+        root = start if way_out is None else way_out.poses[-1]
+        path = self._reconstruct(
+            goal_node, xs, ys, ths, parents, prim_of, used_of, shots, lengths, root, prims
+        )
+        if way_out is not None:
+            path = _joined(way_out, path)
+        if backwards:
+            path = _driven_backwards(path)
+        if self.smooth:
+            path = smooth_path(
+                path,
+                self._local,
+                self.footprint,
+                self.turning_radius,
+                collision_margin=self.collision_margin,
+            )
+        stats = PlanningStats(expanded, time.perf_counter() - t0, compile_time, _STATUS[0])
+        poses = path.poses + origin
+        poses[0], poses[-1] = ends  # exactly as given (headings wrapped)
+        return PlannedPath(poses, path.directions, path.curvatures, path.arc_length, True, stats)
+
+    def _lattice(self, start, goal, hgrid, hres, prims, mode) -> tuple:
+        """The lattice search (compiled) from ``start`` to ``goal`` in the grid's frame."""
+        return _search(
+            self._local._kernel_world,
             self._checked.polygon,
             self._checked.circles,
             self._checked.circle_radius,
@@ -502,28 +555,6 @@ class HybridAStar:
             self._turn_cost,
             self.moves_to_contact,
         )
-        status, goal_node, xs, ys, ths, parents, prim_of, used_of, expanded, shots, lengths = out
-        planning_time = time.perf_counter() - t0
-        stats = PlanningStats(int(expanded), planning_time, compile_time, _STATUS[int(status)])
-        if status != 0:
-            return PlannedPath.failure(stats)
-        path = self._reconstruct(
-            goal_node, xs, ys, ths, parents, prim_of, used_of, shots, lengths, start, prims
-        )
-        if backwards:
-            path = _driven_backwards(path)
-        if self.smooth:
-            path = smooth_path(
-                path,
-                self._local,
-                self.footprint,
-                self.turning_radius,
-                collision_margin=self.collision_margin,
-            )
-        stats = PlanningStats(int(expanded), time.perf_counter() - t0, compile_time, _STATUS[0])
-        poses = path.poses + origin
-        poses[0], poses[-1] = ends  # exactly as given (headings wrapped)
-        return PlannedPath(poses, path.directions, path.curvatures, path.arc_length, True, stats)
 
     def _holonomic_heuristic(self, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Admissible cost-to-go [m] around the obstacles on cells of ``xy_resolution``.
@@ -645,6 +676,16 @@ class HybridAStar:
 
 
 # ---------------------------------------------------------------------- helpers
+def _joined(first: PlannedPath, second: PlannedPath) -> PlannedPath:
+    """``first`` then ``second``, which starts where ``first`` ends."""
+    return PlannedPath(
+        np.concatenate([first.poses, second.poses[1:]]),
+        np.concatenate([first.directions, second.directions[1:]]),
+        np.concatenate([first.curvatures, second.curvatures[1:]]),
+        np.concatenate([first.arc_length, first.arc_length[-1] + second.arc_length[1:]]),
+    )
+
+
 def _driven_backwards(path: PlannedPath) -> PlannedPath:
     """The same curve traversed from its end to its start: every motion in the other gear,
     the curvature (dθ per signed metre) unchanged."""

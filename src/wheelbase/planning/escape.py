@@ -1,0 +1,207 @@
+"""Escape from a tight spot by short moves to contact: the last resort of Hybrid A*.
+
+In a parallel slot barely longer than the car (1.10 car lengths: 0.47 m to spare for a
+4.69 m car) the way out is dozens of back-and-forth moves of centimetres to decimetres, each
+driven at full lock or straight until the car nearly touches something, each turning the car
+a little further out (the manoeuvre of Paromtchik and Laugier, "Motion generation and control
+for parking an autonomous vehicle", ICRA 1996). Hybrid A*'s lattice cannot represent them:
+its bins are coarser than the moves, so every short move lands in its parent's bin and is
+pruned (the 1.10 slot exhausts the lattice after 24–76 expansions even at 0.05 m and 288
+headings).
+
+:func:`escape` searches those moves directly, on continuous poses: best first, from the tight
+end, six moves per pose (forward and reverse, at curvature −1/R, 0 and +1/R), each driven until
+contact, poses told apart at 0.01 m and 0.5°; the score is the straight-line distance left to
+the other end, plus a tenth of the arc still to turn to its heading, plus 0.01 m per move.
+It stops at the first pose from which a move runs a whole probe length (the footprint's
+length) without contact: the car is out, and the lattice takes over from there
+(:meth:`~wheelbase.planning.HybridAStar.plan`). The 1.10 slot takes 44 moves out, about
+3,500 expansions and 2.4 s in Python; the escape runs only where the lattice failed.
+
+Every move is certified collision-free along its whole length, not only at samples: the
+clearance c of the footprint at a pose bounds how far it may still drive, since no footprint
+point moves faster than (1 + ρ·|κ|) per metre of arc (ρ the farthest footprint point from the
+reference point), so a move stops at the last sample with clearance ≥ ``margin`` plus
+(c − margin)/(1 + ρ|κ|). The clearance is to the obstacles and to the map's edge (leaving
+the map is a collision). With ``margin`` the planner's collision margin, the returned moves
+are as safe as the lattice's.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+
+import numpy as np
+
+from wheelbase.geometry import se2_exp, transform_points
+from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.path import PlannedPath
+
+__all__ = ["escape"]
+
+_XY_KEY = 0.01
+"""Poses closer than this [m] (and than :data:`_TH_KEY`) count as one."""
+_TH_KEY = math.radians(0.5)
+_MOVE_COST = 0.01
+"""Score added per move [m]: of two poses equally far from the exit, the one reached in fewer
+moves first."""
+_HEADING_WEIGHT = 0.1
+"""Weight of the arc R·|Δθ| still to turn to the other end's heading, in the score. Without it
+(pure distance) the 1.10 slot's car turned past perpendicular before it left: 50 moves, 27 m
+in all; with 0.1, 44 moves and 20 m; with 0.2 the same for 1.5 times the search."""
+_MIN_MOVE = 1e-3
+_PREFIX = 16
+"""Samples of a move checked before the rest (most moves end within them)."""
+"""Moves shorter than this [m] are not taken (they gain nothing)."""
+
+
+def _arc(pose: np.ndarray, kappa: float, s: np.ndarray) -> np.ndarray:
+    """Poses after signed distances ``s`` [m] along curvature ``kappa`` (dθ per signed metre)."""
+    return se2_exp(pose, np.stack([s, np.zeros_like(s), kappa * s], -1), 1.0)
+
+
+def escape(
+    world,
+    footprint: Footprint,
+    turning_radius: float,
+    start: np.ndarray,
+    toward: np.ndarray,
+    *,
+    step: float,
+    margin: float,
+    max_expansions: int = 20_000,
+    time_limit: float = 5.0,
+    exits: int = 1,
+) -> tuple[list[PlannedPath], int]:
+    """Short moves to contact that take a car-like robot out of a tight spot (module docstring).
+
+    Parameters
+    ----------
+    world : OccupancyGrid or PolygonWorld
+        The obstacles.
+    footprint : Footprint
+        The robot's outline about its reference point.
+    turning_radius : float
+        Smallest turning radius R [m], > 0.
+    start : numpy.ndarray, shape (3,)
+        The tight pose (x [m], y [m], θ [rad]).
+    toward : numpy.ndarray, shape (3,)
+        The other end of the plan: the moves go towards its position.
+    step : float
+        Spacing [m] of the returned samples (and of the clearance samples of a move).
+    margin : float
+        Clearance [m] every pose of a move keeps.
+    max_expansions : int
+        Poses expanded at most.
+    time_limit : float
+        Seconds at most.
+    exits : int
+        Ways out to return, best first (the caller tries the lattice from each in turn).
+
+    Returns
+    -------
+    paths : list of PlannedPath
+        Up to ``exits`` escapes, each from ``start`` to a pose from which a whole probe
+        length is free; empty when none was found.
+    expanded : int
+        Poses expanded.
+    """
+    radius = float(turning_radius)
+    rho = footprint.max_radius
+    probe = float(np.ptp(footprint.polygon[:, 0]))  # the footprint's length
+    samples = np.arange(1, math.ceil(probe / step) + 1) * step
+    actions = [(d, k / radius) for d in (1, -1) for k in (1, 0, -1)]
+    goal_xy = np.asarray(toward, dtype=np.float64)[:2]
+    goal_th = float(toward[2])
+    start = np.asarray(start, dtype=np.float64)
+
+    def key(p: np.ndarray) -> tuple[int, int, int]:
+        return (round(p[0] / _XY_KEY), round(p[1] / _XY_KEY), round(p[2] / _TH_KEY))
+
+    # leaving the map is a collision, but the obstacle clearance does not see the map's edge
+    x0, x1, y0, y1 = getattr(world, "bounds", None) or world.extent
+    corners = footprint.polygon
+
+    def clearance(poses: np.ndarray) -> np.ndarray:
+        points = transform_points(poses, corners)  # (N, corners, 2)
+        edge = np.minimum(
+            np.minimum(points[..., 0] - x0, x1 - points[..., 0]),
+            np.minimum(points[..., 1] - y0, y1 - points[..., 1]),
+        ).min(axis=1)
+        return np.minimum(world.footprint_clearance(footprint, poses), np.maximum(edge, 0.0))
+
+    def move(p: np.ndarray, d: int, kappa: float) -> tuple[float, bool]:
+        """Certified length [m] of the move from p (d·s along κ), and whether it ran the whole
+        probe without contact."""
+        # most moves end within centimetres: look at a short prefix first, then the rest
+        clear = clearance(_arc(p, kappa, d * samples[:_PREFIX]))
+        bad = np.flatnonzero(clear < margin)
+        if bad.size == 0 and samples.size > _PREFIX:
+            clear = np.concatenate([clear, clearance(_arc(p, kappa, d * samples[_PREFIX:]))])
+            bad = np.flatnonzero(clear < margin)
+        if bad.size == 0:
+            return float(samples[-1]), True
+        k = int(bad[0])
+        last = float(clearance(p[None, :])[0]) if k == 0 else clear[k - 1]
+        reach = (float(last) - margin) / (1.0 + rho * abs(kappa))
+        return float(min(samples[k], (samples[k - 1] if k else 0.0) + max(reach, 0.0))), False
+
+    # nodes: (pose, parent, moves from the start, direction, curvature, length)
+    nodes: list[tuple[np.ndarray, int, int, int, float, float]] = [(start, -1, 0, 1, 0.0, 0.0)]
+    open_list = [(math.hypot(*(start[:2] - goal_xy)), 0)]
+    seen = {key(start)}
+    found: list[PlannedPath] = []
+    expanded = 0
+    deadline = time.perf_counter() + time_limit
+    while open_list and expanded < max_expansions and time.perf_counter() < deadline:
+        _, index = heapq.heappop(open_list)
+        pose, depth = nodes[index][0], nodes[index][2]
+        expanded += 1
+        for d, kappa in actions:
+            length, free = move(pose, d, kappa)
+            if length < _MIN_MOVE:
+                continue
+            if free:  # out: from this pose a whole probe length is clear
+                found.append(_path(nodes, index, step))
+                if len(found) >= exits:
+                    return found, expanded
+                break
+            end = _arc(pose, kappa, np.array([d * length]))[0]
+            nodes.append((end, index, depth + 1, d, kappa, length))
+            k = key(end)
+            if k in seen:
+                continue
+            seen.add(k)
+            score = (
+                math.hypot(*(end[:2] - goal_xy))
+                + _MOVE_COST * (depth + 1)
+                + _HEADING_WEIGHT * radius * abs(math.remainder(end[2] - goal_th, 2 * math.pi))
+            )
+            heapq.heappush(open_list, (score, len(nodes) - 1))
+    return found, expanded
+
+
+def _path(nodes: list, last: int, step: float) -> PlannedPath:
+    """The moves from the root to ``nodes[last]``, sampled at most ``step`` apart."""
+    chain = []
+    while last > 0:
+        chain.append(last)
+        last = nodes[last][1]
+    chain.reverse()
+    poses = [nodes[0][0][None, :]]
+    directions, curvatures, arc = [1], [0.0], [0.0]
+    for index in chain:
+        _, parent, _, d, kappa, length = nodes[index]
+        n = max(1, math.ceil(length / step))
+        s = length * np.arange(1, n + 1) / n
+        poses.append(_arc(nodes[parent][0], kappa, d * s))
+        directions += [d] * n
+        curvatures += [kappa] * n
+        arc += list(arc[-1] + s)
+    directions[0] = directions[1] if len(directions) > 1 else 1
+    curvatures[0] = curvatures[1] if len(curvatures) > 1 else 0.0
+    return PlannedPath(
+        np.concatenate(poses), np.array(directions), np.array(curvatures), np.array(arc)
+    )
