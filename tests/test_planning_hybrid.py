@@ -171,6 +171,24 @@ def test_a_slot_1_10_car_lengths_long_is_left_by_moves_to_contact():
         assert not without.plan(case.start, case.goal).success
 
 
+def test_escape_in_the_open_is_the_start_and_bad_settings_are_clear_errors():
+    grid = OccupancyGrid.from_array(np.zeros((50, 50), bool), 0.1)
+    footprint = Footprint.rectangle(1.0, 0.5, 0.2)
+    exits, expanded = escape(grid, footprint, 1.0, [2.0, 2.0, 0.0], [4.0, 4.0, 0.0],
+                             step=0.02, margin=0.01)  # fmt: skip
+    assert expanded == 1 and exits[0].poses.tolist() == [[2.0, 2.0, 0.0]]
+    for bad, words in (
+        ({"step": 1e-12}, "samples per move"),
+        ({"margin": -1.0}, "margin"),
+        ({"turning_radius": 0.0}, "turning_radius"),
+        ({"exits": 0}, "exits"),
+    ):
+        kwargs = {"turning_radius": 1.0, "step": 0.02, "margin": 0.01, **bad}
+        radius = kwargs.pop("turning_radius")
+        with pytest.raises(ConfigError, match=words):
+            escape(grid, footprint, radius, [2.0, 2.0, 0.0], [4.0, 4.0, 0.0], **kwargs)
+
+
 def test_search_from_goal_returns_the_same_kind_of_path():
     """Searching from the goal and driving the result backwards gives a valid path from the
     start with the same cost model (the gears' costs swapped in the search)."""

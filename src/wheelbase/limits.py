@@ -29,6 +29,9 @@ limit                  what it bounds (default)                     raised by
 ``MAX_SEEDS``          seeds of one batch (1e6 runs per scenario)   fixed
 ``MAX_PATH_POINTS``    points of a densified reference path (1e7:   fixed
                        500 km at MPPI's 5 cm)
+``MAX_PRIMITIVE_``     collision samples of Hybrid A*'s motion      fixed
+``SAMPLES``            primitives, and of one escape move (1e7:
+                       240 MB)
 =====================  ===========================================  ==========================
 """
 
@@ -41,6 +44,7 @@ __all__ = [
     "MAX_MAP_CELLS",
     "MAX_PARTICLES",
     "MAX_PATH_POINTS",
+    "MAX_PRIMITIVE_SAMPLES",
     "MAX_SAMPLE_STEPS",
     "MAX_SEEDS",
     "MAX_STATE_BINS",
@@ -57,3 +61,4 @@ MAX_PARTICLES = 1_000_000
 MAX_FALSE_RATE = 1_000.0  # per scan
 MAX_SEEDS = 1_000_000
 MAX_PATH_POINTS = 10_000_000
+MAX_PRIMITIVE_SAMPLES = 10_000_000

@@ -35,9 +35,14 @@ import time
 
 import numpy as np
 
+from wheelbase._validate import as_float_array, integer, nonnegative, positive
+from wheelbase.errors import ConfigError
 from wheelbase.geometry import se2_exp, transform_points
+from wheelbase.limits import MAX_PRIMITIVE_SAMPLES
 from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import PlannedPath
+from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["escape"]
 
@@ -63,7 +68,7 @@ def _arc(pose: np.ndarray, kappa: float, s: np.ndarray) -> np.ndarray:
 
 
 def escape(
-    world,
+    world: OccupancyGrid | PolygonWorld,
     footprint: Footprint,
     turning_radius: float,
     start: np.ndarray,
@@ -108,14 +113,24 @@ def escape(
     expanded : int
         Poses expanded.
     """
-    radius = float(turning_radius)
+    radius = positive("turning_radius", turning_radius, "m")
+    step = positive("step", step, "m")
+    margin = nonnegative("margin", margin, "m")
+    time_limit = positive("time_limit", time_limit, "s")
+    max_expansions = integer("max_expansions", max_expansions, minimum=1)
+    exits = integer("exits", exits, minimum=1)
+    start = as_float_array("start", start, 3, max_ndim=1)
+    toward = as_float_array("toward", toward, 3, max_ndim=1)
     rho = footprint.max_radius
     probe = float(np.ptp(footprint.polygon[:, 0]))  # the footprint's length
+    if probe / step > MAX_PRIMITIVE_SAMPLES:
+        raise ConfigError(
+            f"step {step:.3g} m asks for more than {MAX_PRIMITIVE_SAMPLES:g} samples per move "
+            f"of {probe:.3g} m; use a larger step"
+        )
     samples = np.arange(1, math.ceil(probe / step) + 1) * step
     actions = [(d, k / radius) for d in (1, -1) for k in (1, 0, -1)]
-    goal_xy = np.asarray(toward, dtype=np.float64)[:2]
-    goal_th = float(toward[2])
-    start = np.asarray(start, dtype=np.float64)
+    goal_xy, goal_th = toward[:2], float(toward[2])
 
     def key(p: np.ndarray) -> tuple[int, int, int]:
         return (round(p[0] / _XY_KEY), round(p[1] / _XY_KEY), round(p[2] / _TH_KEY))

@@ -68,7 +68,7 @@ from wheelbase._validate import (
 )
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
-from wheelbase.limits import MAX_STATE_BINS
+from wheelbase.limits import MAX_PRIMITIVE_SAMPLES, MAX_STATE_BINS
 from wheelbase.planning._heap import _heap_pop, _heap_push
 from wheelbase.planning.astar import _dijkstra_kernel
 from wheelbase.planning.collision import _circles_clearance, _collides_one, _scratch
@@ -84,7 +84,6 @@ from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["HybridAStar"]
 
-MAX_PRIMITIVE_SAMPLES = 10_000_000  # collision samples in the motion-primitive table (240 MB)
 _NO_LIMIT = 2**62  # an iteration limit above this is none (the kernel counts in int64)
 _FINITE = 1.0e300  # below this a cost is finite: the kernels compare with it, never with inf
 _DEEPER = 1.0e-6
