@@ -169,6 +169,12 @@ def test_a_slot_1_10_car_lengths_long_is_left_by_moves_to_contact():
             rear_axle_to_center=case.rear_axle_to_center, **options,
         )  # fmt: skip
         assert not without.plan(case.start, case.goal).success
+        # the one time limit covers the lattice, the escape and the lattice after it
+        hurried = HybridAStar(
+            world, case.footprint, case.turning_radius, moves_to_contact=True, time_limit=0.05,
+            rear_axle_to_center=case.rear_axle_to_center, **options,
+        )  # fmt: skip
+        assert hurried.plan(case.start, case.goal).stats.message == "time limit reached"
 
 
 def test_escape_in_the_open_is_the_start_and_bad_settings_are_clear_errors():

@@ -175,7 +175,8 @@ class HybridAStar:
     max_iterations : int
         Expansion limit.
     time_limit : float
-        Search time limit [s].
+        Time limit [s] of the whole search (the escape from a tight end and the lattice
+        search after it included).
     smooth : bool
         Smooth the found path with :func:`~wheelbase.planning.smoothing.smooth_path`
         (curvature profile low-pass; keeps cusps, clearance and the curvature limit).
@@ -474,22 +475,31 @@ class HybridAStar:
             else (_MODE_RS if self.reverse else _MODE_DUBINS)
         )
         prims = self._prims_swapped if backwards else self._prims
-        out = self._lattice(start, goal, hgrid, hres, prims, mode)
+        out = self._lattice(start, goal, hgrid, hres, prims, mode, self.time_limit)
         way_out, escape_expanded = None, 0
-        if out[0] != 0 and self.moves_to_contact and self.turning_radius > 0 and self.reverse:
+        exhausted = out[0] == 1
+        if exhausted and self.moves_to_contact and self.turning_radius > 0 and self.reverse:
             # the lattice cannot hold moves shorter than its bins: leave the tight end by short
-            # moves to contact (planning.escape), and let the lattice go on from outside
+            # moves to contact (planning.escape), and let the lattice go on from outside, all
+            # within the one time limit
+            def left() -> float:
+                return self.time_limit - (time.perf_counter() - t0)
+
             exits, escape_expanded = escape(
                 self._local, self.footprint, self.turning_radius, start, goal,
                 step=self.collision_step, margin=self.collision_margin,
-                time_limit=self.time_limit, exits=_ESCAPE_EXITS,
+                time_limit=max(left(), 1e-9), exits=_ESCAPE_EXITS,
             )  # fmt: skip
             for candidate in exits:
-                attempt = self._lattice(candidate.poses[-1], goal, hgrid, hres, prims, mode)
+                if left() <= 0.0:
+                    break
+                attempt = self._lattice(candidate.poses[-1], goal, hgrid, hres, prims, mode, left())
                 escape_expanded += int(attempt[8])
                 if attempt[0] == 0:
                     out, way_out = attempt, candidate
                     break
+            if way_out is None and left() <= 0.0:
+                out = (3, *out[1:])  # the time limit, not the space, ended the search
         status, goal_node, xs, ys, ths, parents, prim_of, used_of, expanded, shots, lengths = out
         expanded = int(expanded) + escape_expanded
         planning_time = time.perf_counter() - t0
@@ -517,7 +527,7 @@ class HybridAStar:
         poses[0], poses[-1] = ends  # exactly as given (headings wrapped)
         return PlannedPath(poses, path.directions, path.curvatures, path.arc_length, True, stats)
 
-    def _lattice(self, start, goal, hgrid, hres, prims, mode) -> tuple:
+    def _lattice(self, start, goal, hgrid, hres, prims, mode, time_limit) -> tuple:
         """The lattice search (compiled) from ``start`` to ``goal`` in the grid's frame."""
         return _search(
             self._local._kernel_world,
@@ -550,7 +560,7 @@ class HybridAStar:
             self.xy_goal_tolerance,
             self.yaw_goal_tolerance,
             min(self.max_iterations, _NO_LIMIT),
-            self.time_limit,
+            time_limit,
             self._turn_cost,
             self.moves_to_contact,
         )
