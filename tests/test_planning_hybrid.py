@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from wheelbase.errors import ConfigError, PlanningError
-from wheelbase.geometry import transform_points, wrap_angle
+from wheelbase.geometry import se2_exp, transform_points, wrap_angle
 from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, PlannedPath, smooth_path
-from wheelbase.planning.escape import escape
+from wheelbase.planning.escape import _arc, escape
 from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
 
 
@@ -178,6 +178,14 @@ def test_a_slot_1_10_car_lengths_long_is_left_by_moves_to_contact():
 
 
 def test_escape_in_the_open_is_the_start_and_bad_settings_are_clear_errors():
+    # its arcs are se2_exp's, written out for one pose and one curvature
+    s = np.linspace(-2.0, 2.0, 41)
+    for kappa in (0.0, 0.33, -1.2):
+        pose = np.array([1.0, -2.0, 2.9])
+        exact = se2_exp(pose, np.stack([s, 0 * s, kappa * s], -1), 1.0)
+        arc = _arc(pose, kappa, s)
+        np.testing.assert_allclose(arc[:, :2], exact[:, :2], atol=1e-12)
+        np.testing.assert_allclose(wrap_angle(arc[:, 2] - exact[:, 2]), 0.0, atol=1e-12)
     grid = OccupancyGrid.from_array(np.zeros((50, 50), bool), 0.1)
     footprint = Footprint.rectangle(1.0, 0.5, 0.2)
     exits, expanded = escape(grid, footprint, 1.0, [2.0, 2.0, 0.0], [4.0, 4.0, 0.0],

@@ -16,7 +16,7 @@ the other end, plus a tenth of the arc still to turn to its heading, plus 0.01 m
 It stops at the first pose from which a move runs a whole probe length (the footprint's
 length) without contact: the car is out, and the lattice takes over from there
 (:meth:`~wheelbase.planning.HybridAStar.plan`). The 1.10 slot takes 44 moves out, about
-3,500 expansions and 2.4 s in Python; the escape runs only where the lattice failed.
+3,500 expansions and 1.3 s in Python; the escape runs only where the lattice failed.
 
 Every move is certified collision-free along its whole length, not only at samples: the
 clearance c of the footprint at a pose bounds how far it may still drive, since no footprint
@@ -37,7 +37,6 @@ import numpy as np
 
 from wheelbase._validate import as_float_array, integer, nonnegative, positive
 from wheelbase.errors import ConfigError
-from wheelbase.geometry import se2_exp, transform_points
 from wheelbase.limits import MAX_PRIMITIVE_SAMPLES
 from wheelbase.planning.footprint import Footprint
 from wheelbase.planning.occupancy import OccupancyGrid
@@ -63,8 +62,19 @@ _PREFIX = 16
 
 
 def _arc(pose: np.ndarray, kappa: float, s: np.ndarray) -> np.ndarray:
-    """Poses after signed distances ``s`` [m] along curvature ``kappa`` (dθ per signed metre)."""
-    return se2_exp(pose, np.stack([s, np.zeros_like(s), kappa * s], -1), 1.0)
+    """Poses after signed distances ``s`` [m] along curvature ``kappa`` (dθ per signed metre):
+    :func:`~wheelbase.geometry.se2_exp` for one pose and one curvature, without its checks and
+    broadcasting (this runs some 30,000 times per escape)."""
+    x, y, th = pose
+    out = np.empty((s.size, 3))
+    out[:, 2] = th + kappa * s
+    if kappa == 0.0:
+        out[:, 0] = x + s * math.cos(th)
+        out[:, 1] = y + s * math.sin(th)
+    else:
+        out[:, 0] = x + (np.sin(out[:, 2]) - math.sin(th)) / kappa
+        out[:, 1] = y - (np.cos(out[:, 2]) - math.cos(th)) / kappa
+    return out
 
 
 def escape(
@@ -140,7 +150,14 @@ def escape(
     corners = footprint.polygon
 
     def clearance(poses: np.ndarray) -> np.ndarray:
-        points = transform_points(poses, corners)  # (N, corners, 2)
+        cos, sin = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        points = np.stack(  # the footprint's corners in the world, (N, corners, 2)
+            [
+                poses[:, :1] + cos * corners[:, 0] - sin * corners[:, 1],
+                poses[:, 1:2] + sin * corners[:, 0] + cos * corners[:, 1],
+            ],
+            -1,
+        )
         edge = np.minimum(
             np.minimum(points[..., 0] - x0, x1 - points[..., 0]),
             np.minimum(points[..., 1] - y0, y1 - points[..., 1]),
