@@ -12,7 +12,7 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   ``moves_to_contact``, near obstacles a primitive that collides is kept up to its last free
   sample (the short back-and-forth moves of tight parking: a 1.15-car-length parallel slot
   takes 13), and where the lattice still fails, the tight end is left by moves to contact on
-  continuous poses (:mod:`~wheelbase.planning.escape`: a 1.10 slot, 44 moves);
+  continuous poses (:mod:`~wheelbase.planning.escape`: a 1.10 slot, 43 moves);
 * cost: distance × ``non_straight_penalty`` on arcs × ``reverse_penalty`` in reverse, plus
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
@@ -200,7 +200,7 @@ class HybridAStar:
         moves shorter than a primitive. Every cut move is collision-checked like any motion.
         Where the lattice still fails (for a car that may reverse), the plan leaves the
         tight end by moves to contact searched on continuous poses
-        (:func:`~wheelbase.planning.escape.escape`: a slot 1.10 car lengths long, 44 moves)
+        (:func:`~wheelbase.planning.escape.escape`: a slot 1.10 car lengths long, 43 moves)
         and the lattice goes on from outside.
 
     Notes
