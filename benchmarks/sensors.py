@@ -178,17 +178,16 @@ def global_localization(quick: bool) -> dict:
 
 def kidnapped(amcl, lidar, seeds: int, kidnapped_run, anywhere: bool = False) -> dict:
     """Seconds to recover (0.2 m for good) after a kidnapping, over ``seeds`` routes: carried
-    to (15, 14, π) (the function's default), or ``anywhere``: to a random pose at least 0.6 m
-    from the walls (drawn from seed 1000 + the route's seed)."""
+    to (15, 14, π) (the function's default), or ``anywhere``: to a random pose more than 0.6 m
+    from the walls (:func:`wheelbase.localization.clear_pose`, seed 1000 + the route's)."""
+    from wheelbase.localization import clear_pose
+
     start = time.perf_counter()
     seconds, poses = [], []
     for seed in range(seeds):
         options = {}
         if anywhere:
-            rng = np.random.default_rng(1000 + seed)
-            pose = amcl.random_poses(1, rng)[0]
-            while amcl.grid.clearance(pose[None, :2])[0] <= 0.6:
-                pose = amcl.random_poses(1, rng)[0]
+            pose = clear_pose(amcl.grid, 1000 + seed)
             options["teleport"] = pose
             poses.append([round(float(v), 2) for v in pose])
         run = kidnapped_run(amcl, lidar, seed, **options)[1]

@@ -13,6 +13,7 @@ from wheelbase.localization.motion import OdometryMotion, VelocityMotion, arc_mo
 from wheelbase.localization.particles import Cluster, kld_particles, low_variance_resample
 from wheelbase.localization.trials import (
     AMCLRun,
+    clear_pose,
     kidnapped_run,
     noisy_odometry,
     run_amcl,
@@ -36,6 +37,7 @@ __all__ = [
     "VelocityMotion",
     "arc_move",
     "chi2_gate",
+    "clear_pose",
     "kidnapped_run",
     "kld_particles",
     "low_variance_resample",

@@ -24,7 +24,7 @@ from wheelbase.localization.amcl import AMCL, AMCLState
 from wheelbase.planning import OccupancyGrid
 from wheelbase.sensors import Lidar
 
-__all__ = ["AMCLRun", "kidnapped_run", "noisy_odometry", "run_amcl", "wander"]
+__all__ = ["AMCLRun", "clear_pose", "kidnapped_run", "noisy_odometry", "run_amcl", "wander"]
 
 
 def wander(
@@ -63,12 +63,7 @@ def wander(
     """
     rng = as_rng(rng)
     distance = positive("distance", distance, "m")
-    if start is None:
-        cells = np.argwhere(grid.distance_field > 0.6)
-        pose = np.array([*grid.cell_to_world(cells[rng.integers(len(cells))]), 0.0])
-        pose[2] = rng.uniform(-math.pi, math.pi)
-    else:
-        pose = np.array(start, dtype=np.float64)
+    pose = clear_pose(grid, rng) if start is None else np.array(start, dtype=np.float64)
     probe = Lidar(beams=9, fov=math.radians(60.0), max_range=3.0)
     poses = [pose.copy()]
     travelled, turn = 0.0, 0.0
@@ -84,6 +79,31 @@ def wander(
             travelled += step
         poses.append(pose.copy())
     return np.array(poses)
+
+
+def clear_pose(
+    grid: OccupancyGrid, rng: np.random.Generator | int | None = None, clearance: float = 0.6
+) -> np.ndarray:
+    """A random pose, any heading, on a cell more than ``clearance`` [m] from obstacles.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map.
+    rng : numpy.random.Generator, int or None
+        Source of randomness.
+    clearance : float
+        Least distance [m] from the cell to an obstacle (the distance field's).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+    """
+    rng = as_rng(rng)
+    cells = np.argwhere(grid.distance_field > clearance)
+    pose = np.array([*grid.cell_to_world(cells[rng.integers(len(cells))]), 0.0])
+    pose[2] = rng.uniform(-math.pi, math.pi)
+    return pose
 
 
 def noisy_odometry(
