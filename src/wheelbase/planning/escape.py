@@ -60,9 +60,9 @@ for a longer search. Into the 1.10 slot: 46 moves, 15.3 m in all, 1.1 s without 
 m, 1.4 s with 0.1; 41, 14.2 m, 2.0 s with 0.2. (With a whole car length as the probe and no
 heading term the car turned past perpendicular before it left: 50 moves, 27 m.)"""
 _MIN_MOVE = 1e-3
+"""Moves shorter than this [m] are not taken (they gain nothing)."""
 _PREFIX = 16
 """Samples of a move checked before the rest (most moves end within them)."""
-"""Moves shorter than this [m] are not taken (they gain nothing)."""
 
 
 def _arc(pose: np.ndarray, kappa: float, s: np.ndarray) -> np.ndarray:
@@ -155,7 +155,9 @@ def escape(
 
     def clearance(poses: np.ndarray) -> np.ndarray:
         cos, sin = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-        points = np.stack(  # the footprint's corners in the world, (N, corners, 2)
+        # the footprint's corners in the world, (N, corners, 2): transform_points without its
+        # checks and broadcasting, as _arc
+        points = np.stack(
             [
                 poses[:, :1] + cos * corners[:, 0] - sin * corners[:, 1],
                 poses[:, 1:2] + sin * corners[:, 0] + cos * corners[:, 1],
@@ -205,11 +207,11 @@ def escape(
                     return found, expanded
                 break
             end = _arc(pose, kappa, np.array([d * length]))[0]
-            nodes.append((end, index, depth + 1, d, kappa, length))
             k = key(end)
             if k in seen:
                 continue
             seen.add(k)
+            nodes.append((end, index, depth + 1, d, kappa, length))
             score = (
                 math.hypot(*(end[:2] - goal_xy))
                 + _MOVE_COST * (depth + 1)
