@@ -215,7 +215,9 @@ def test_per_robot_goals_and_metrics():
 
 
 def test_statuses_table_is_shared():
-    assert STATUSES == ("running", "arrived", "missed_goal", "collision", "timeout", "diverged")
+    assert STATUSES == (
+        "running", "arrived", "missed_goal", "collision", "timeout", "diverged", "blocked", "stuck"
+    )  # fmt: skip
 
 
 def test_bad_input_is_a_clear_error():

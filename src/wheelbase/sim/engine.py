@@ -51,7 +51,7 @@ from wheelbase.sim.sensing import EncoderReadings, PerfectState
 
 __all__ = ["Arrival", "Engine", "EngineState", "closed_loop"]
 
-RUNNING, ARRIVED, MISSED_GOAL, COLLISION, TIMEOUT, DIVERGED = range(len(STATUSES))
+RUNNING, ARRIVED, MISSED_GOAL, COLLISION, TIMEOUT, DIVERGED, BLOCKED, STUCK = range(len(STATUSES))
 
 
 @dataclass(frozen=True)

@@ -28,12 +28,16 @@ STATUSES: tuple[str, ...] = (
     "collision",
     "timeout",
     "diverged",
+    "blocked",
+    "stuck",
 )
 """Status names by code. ``running`` only appears while the engine steps; a finished run ends
 ``arrived`` (the estimate says the goal is reached, the robot is at rest, and the true pose is
 within tolerance too), ``missed_goal`` (the estimate says so but the true pose is off: drift),
-``collision`` (the footprint touched an obstacle), ``timeout`` (time limit) or ``diverged`` (a
-non-finite command or state)."""
+``collision`` (the footprint touched an obstacle), ``timeout`` (time limit), ``diverged`` (a
+non-finite command or state), ``blocked`` (no plan to the goal exists on what the robot sees,
+after its recoveries: it stopped) or ``stuck`` (commanded to move, the robot did not move for a
+stated time: dug into soft soil, spinning on ice). Codes are stable: new names are appended."""
 
 
 def status_code(name: str) -> int:
