@@ -90,12 +90,14 @@ __all__ = [
     "INSCRIBED",
     "LETHAL",
     "MAX_INFLATED",
+    "MAX_PATH_OCCUPANCY",
     "UNKNOWN",
     "PerceptionArrays",
     "PerceptionInputs",
     "costmap_check",
     "costmap_cost_at",
     "costmap_costs",
+    "path_blocked",
     "predict_tracks",
     "read_costmap",
     "read_tracks",
@@ -466,6 +468,42 @@ class PerceptionInputs:
         distance = _track_distances(here, now, self.disks)[0, 0]  # (J,)
         relief = np.where(distance <= 0.0, distance - CONTACT_RELIEF, 0.0)
         return np.ascontiguousarray(table), relief
+
+
+MAX_PATH_OCCUPANCY = 0.07
+"""Share of the path window's poses that may collide before the path critics are switched off
+for a call (Nav2 MPPI's ``max_path_occupancy_ratio``)."""
+
+
+def path_blocked(
+    window: np.ndarray, field: Any, geometry: np.ndarray, seen: PerceptionArrays
+) -> bool:
+    """Whether more than :data:`MAX_PATH_OCCUPANCY` of the path window's poses put the footprint
+    in collision with the static map or the costmap: a path that cuts through obstacles must
+    not pull the robot onto them (the controllers then switch their path critics off).
+
+    Parameters
+    ----------
+    window : numpy.ndarray, shape (M, 4)
+        The path window (x, y, heading, arc), relative to the robot.
+    field : FootprintField
+        The static map and footprint disks.
+    geometry : numpy.ndarray, shape (4,)
+        The map's geometry, origin relative to the robot.
+    seen : PerceptionArrays
+        The costmap.
+
+    Returns
+    -------
+    bool
+    """
+    collided = np.zeros(window.shape[0], bool)
+    if field.enabled:
+        collided |= field.clearance(window[:, :3], geometry=geometry)[1]
+    if seen.has_costmap:
+        collided |= costmap_check(window[:, :3], seen.cost, seen.near, seen.geometry,
+                                  seen.polygon)[1]  # fmt: skip
+    return bool(np.mean(collided) > MAX_PATH_OCCUPANCY)
 
 
 # --------------------------------------------------------------------------- Numba twins
