@@ -276,7 +276,7 @@ def test_a_track_touching_the_robot_lets_it_back_away():
          "position must be finite"),
         (SimpleNamespace(costmap=None, tracks=SimpleNamespace(
             position=np.zeros((1, 2)), velocity=np.zeros((1, 2)), radius=[0.1]), time="now"),
-         "perception.time must be a time"),
+         "perception.time must be a finite time"),
     ],
 )  # fmt: skip
 def test_bad_views_name_what_is_wrong(view, match):
