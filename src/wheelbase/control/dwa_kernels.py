@@ -22,9 +22,11 @@ import numba
 import numpy as np
 
 from wheelbase.control.obstacle_critics import (
+    HOLD_STEP,
     PerceptionArrays,
     costmap_cost_at,
     costmap_costs,
+    disk_reach,
     track_cost_at,
     track_costs,
 )
@@ -167,6 +169,8 @@ def dwa_kernel(
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
+    reach = disk_reach(disks)
+    hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(samples.shape[0]):
         v, w = samples[i, 0], samples[i, 1]
         x, y, th = 0.0, 0.0, theta
@@ -204,16 +208,16 @@ def dwa_kernel(
                 hit = hit or bad
             if has_tracks:
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
                 soft_dyn += soft
                 hit = hit or bad
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
-                soft_dyn += soft
+                soft_dyn += hold_weight * soft
                 hit = hit or bad
         # the forward point, never past the section's end (it would pull the end short of it)
         ahead = min(forward, math.hypot(x - end[0], y - end[1]))
@@ -340,7 +344,8 @@ def dwa_scores_numpy(
         scores[:, 4] = np.mean(soft, axis=1)
         collided |= hit.any(axis=1)
     if seen.has_tracks:
-        soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation)
+        soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation,
+                                HOLD_STEP / dt)  # fmt: skip
         scores[:, 6] = np.sum(soft, axis=1) / steps  # the held checks added, as the kernel
         collided |= hit.any(axis=1)
     end = poses[:, -1]

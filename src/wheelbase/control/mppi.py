@@ -86,7 +86,7 @@ from wheelbase.control.mppi_bounds import (
 )
 from wheelbase.control.mppi_critics import MPPICritics
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
-from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel
+from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
 from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
@@ -581,7 +581,8 @@ class MPPI:
         costs = np.empty(self.samples)
         controls = np.empty((self.samples, self.horizon_steps, self.nu))
         local, mean, lo, hi, scale, window, info, last, weights = args
-        mppi_kernel(
+        run_kernel(
+            mppi_kernel, self.samples * self.horizon_steps,
             local, mean, lo, hi, scale, window, info, last, buffer, has_noise, held_from,
             self.noise_std,
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,

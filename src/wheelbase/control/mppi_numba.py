@@ -13,9 +13,45 @@ import numba
 import numpy as np
 from scipy.special import ndtri
 
-from wheelbase.control.obstacle_critics import costmap_cost_at, track_cost_at
+from wheelbase.control.obstacle_critics import (
+    HOLD_STEP,
+    costmap_cost_at,
+    disk_reach,
+    track_cost_at,
+)
 
-__all__ = ["NORMAL_TABLE", "mppi_kernel"]
+__all__ = ["NORMAL_TABLE", "SERIAL_SAMPLE_STEPS", "mppi_kernel", "run_kernel"]
+
+SERIAL_SAMPLE_STEPS = 65536
+"""Below this many samples × steps a parallel kernel runs on the calling thread: waking Numba's
+thread pool costs about 15 ms on a busy machine (as for the lidar's rays,
+:mod:`wheelbase.sensors.raycast`; measured here at a load of 10 on 2 cores: DWA's 400 × 34
+scored at 31 calls/s on two threads, 402 on one)."""
+
+
+def run_kernel(kernel, work: int, *args) -> None:
+    """Call a parallel kernel, on the calling thread alone when ``work`` (samples × steps) is
+    below :data:`SERIAL_SAMPLE_STEPS`.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        The kernel.
+    work : int
+        Samples × steps of this call.
+    *args
+        The kernel's arguments.
+    """
+    threads = numba.get_num_threads()
+    serial = work < SERIAL_SAMPLE_STEPS and threads > 1
+    if serial:
+        numba.set_num_threads(1)
+    try:
+        kernel(*args)
+    finally:
+        if serial:
+            numba.set_num_threads(threads)
+
 
 # Inverse normal CDF at the midpoints of 2,048 equal-probability bins: the numba backend draws
 # a normal as Φ⁻¹(u), linearly interpolated in this table (tails truncated at ±3.5σ, where the
@@ -110,6 +146,8 @@ def mppi_kernel(
     n_circles = circles.shape[0]
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
     w_costmap, w_dynamic, dynamic_inflation = w[12] / steps, w[13] / steps, w[14]
+    reach = disk_reach(disks)
+    hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
         c, s = math.cos(th), math.sin(th)
@@ -197,7 +235,7 @@ def mppi_kernel(
                 collided = collided or hit
             if has_tracks:
                 soft, hit = track_cost_at(
-                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
                 cost += w_dynamic * soft
                 collided = collided or hit
@@ -214,9 +252,9 @@ def mppi_kernel(
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for t in range(steps, tracks.shape[0]):
                 soft, hit = track_cost_at(
-                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
-                cost += w_dynamic * soft
+                cost += w_dynamic * hold_weight * soft
                 collided = collided or hit
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[3]))
