@@ -559,6 +559,9 @@ def test_benchmark_quick_prints_the_promised_json():
         assert key in report
     assert report["gpu"].startswith("none") == (report["gpu_hz_2000x56"] is None)
     assert report["parking"]["seeds"] == 0  # the 4.5 m car runs only in the full benchmark
+    assert report["default_backend"] == "numba"
+    assert rates["numba_with_view"] > 0 and rates["numpy_with_view"] > 0
+    assert report["crowd"]["head_on"]["collisions"] == 0
 
 
 def test_closed_path_is_driven_round_before_arriving():
