@@ -304,9 +304,10 @@ def test_numba_kernel_has_no_infinity_sentinels():
     import inspect
     import re
 
-    from wheelbase.control import mppi_numba
+    from wheelbase.control import dwa_kernels, footprint_field, mppi_numba, obstacle_critics
 
-    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest):
+    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest, footprint_field.clearance_at,
+                   obstacle_critics.track_cost_at, dwa_kernels.dwa_kernel):  # fmt: skip
         source = inspect.getsource(kernel.py_func)
         assert not re.search(r"\b(np|math|numpy)\.inf\b|float\(.-?inf", source)
 

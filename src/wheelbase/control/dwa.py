@@ -91,6 +91,7 @@ from wheelbase.control.dwa_kernels import (
 from wheelbase.control.footprint_field import FootprintField, footprint_disks
 from wheelbase.control.local_path import PathWindow
 from wheelbase.control.mppi_bounds import KIND_VELOCITY, model_kind
+from wheelbase.control.mppi_critics import critics_from_mapping, split_critic_gains
 from wheelbase.control.mppi_numba import run_kernel
 from wheelbase.control.obstacle_critics import (
     ACCELERATION_NOISE,
@@ -184,19 +185,7 @@ class DWACritics:
         -------
         DWACritics
         """
-        if values is None:
-            return cls()
-        if isinstance(values, cls):
-            return values
-        if not isinstance(values, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ConfigError(
-                f"unknown DWA critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}"
-            )
-        return cls(**values)
+        return critics_from_mapping(cls, values, "DWA critic")
 
     def vector(self) -> np.ndarray:
         """The weights of :data:`~wheelbase.control.dwa_kernels.SCORES`, in that order."""
@@ -416,15 +405,8 @@ class DWA:
         >>> DWA.from_gains(Unicycle(), sim_time=2.0, costmap=90.0).critics.costmap
         90.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, DWACritics)
         critic_names = {f.name for f in fields(DWACritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         allowed = set(inspect.signature(cls).parameters) - {"model", "critics", "grid",
                                                              "footprint"}  # fmt: skip
         unknown = sorted(set(options) - allowed)

@@ -21,6 +21,7 @@ import math
 import numba
 import numpy as np
 
+from wheelbase.control.footprint_field import clearance_at
 from wheelbase.control.obstacle_critics import (
     HOLD_STEP,
     PerceptionArrays,
@@ -165,9 +166,9 @@ def dwa_kernel(
     the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
     ``disks`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
     Writes ``scores`` (S, 8) and ``collided`` (S,)."""
-    rows, cols = df.shape[0], df.shape[1]
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
+    inv_res = 1.0 / res
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
     reach = disk_reach(disks)
     hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
@@ -185,20 +186,8 @@ def dwa_kernel(
             th = theta + w * tau
             c, s = math.cos(th), math.sin(th)
             if has_map:
-                clearance = 1.0e300
-                for k in range(circles.shape[0]):
-                    px = x + c * circles[k, 0] - s * circles[k, 1]
-                    py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) / res)
-                    row = math.floor((py - y0) / res)
-                    if row < 0 or row >= rows or col < 0 or col >= cols:
-                        hit = True
-                        clearance = 0.0
-                        continue
-                    clear = df[row, col] - circles[k, 2] - margin
-                    if clear <= 0.0:
-                        hit = True
-                    clearance = min(clearance, clear)
+                clearance, bad = clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin)
+                hit = hit or bad
                 if 0.0 < clearance < inflation:
                     gap = inflation - clearance
                     soft_map += gap * gap

@@ -84,7 +84,7 @@ from wheelbase.control.mppi_bounds import (
     command_bounds,
     model_kind,
 )
-from wheelbase.control.mppi_critics import MPPICritics
+from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
 from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
@@ -373,15 +373,8 @@ class MPPI:
         >>> MPPI.from_gains(Unicycle(), samples=100, obstacle=30.0).critics.obstacle
         30.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, MPPICritics)
         critic_names = {f.name for f in dataclass_fields(MPPICritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = model_kind(model)

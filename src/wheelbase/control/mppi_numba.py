@@ -13,6 +13,7 @@ import numba
 import numpy as np
 from scipy.special import ndtri
 
+from wheelbase.control.footprint_field import clearance_at
 from wheelbase.control.obstacle_critics import (
     HOLD_STEP,
     costmap_cost_at,
@@ -94,11 +95,6 @@ def _wrap_scalar(a):
     return math.pi if w <= -math.pi else w
 
 
-FAR = 1.0e300
-"""A finite 'nothing yet' for the kernel's running minima: with ``fastmath`` the compiler may
-assume no value is ever inf, so a comparison with an inf sentinel would be undefined."""
-
-
 @numba.njit(cache=True, inline="always", fastmath=True)
 def _nearest(x, y, window):
     """Squared distance [m²] from (x, y) to the nearest window point and its index."""
@@ -129,7 +125,6 @@ def mppi_kernel(
     n, steps = controls.shape[0], controls.shape[1]
     m = window.shape[0]
     goal_mode = info[0] > 0.5
-    rows, cols = df.shape[0], df.shape[1]
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     inv_res = 1.0 / res
     n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
@@ -143,7 +138,6 @@ def mppi_kernel(
     w_effort, w_rate = w[7] / steps, w[8] / steps
     w_twirl = w[9] / steps * (a2 if holonomic else a1)
     inflation, direction = w[10], info[4]
-    n_circles = circles.shape[0]
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
     w_costmap, w_dynamic, dynamic_inflation = w[12] / steps, w[13] / steps, w[14]
     reach = disk_reach(disks)
@@ -211,21 +205,9 @@ def mppi_kernel(
                 cost += w_path * math.sqrt(best) + w_align * err * err
             if goal_mode:
                 cost += w_goal * math.hypot(x - info[1], y - info[2])
-            if has_map:
-                clearance = FAR  # the footprint's: the least over its disks
-                for k in range(n_circles):
-                    px = x + c * circles[k, 0] - s * circles[k, 1]
-                    py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) * inv_res)
-                    row = math.floor((py - y0) * inv_res)
-                    if row < 0 or row >= rows or col < 0 or col >= cols:
-                        collided = True
-                        clearance = 0.0
-                        continue
-                    clear = df[row, col] - circles[k, 2] - margin
-                    if clear <= 0.0:
-                        collided = True
-                    clearance = min(clearance, clear)
+            if has_map:  # the footprint's clearance: the least over its disks
+                clearance, hit = clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin)
+                collided = collided or hit
                 if 0.0 < clearance < inflation:
                     gap = inflation - clearance
                     cost += w_obstacle * gap * gap
