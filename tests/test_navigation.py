@@ -95,7 +95,7 @@ def test_a_box_on_the_path_is_planned_around_and_the_old_plan_kept_until_then():
 
 
 def test_a_closed_corridor_tries_every_recovery_then_ends_blocked():
-    nav, local, first = navigator(rate_hz=0.0, max_retries=3, wait_time=0.5)
+    nav, _, first = navigator(rate_hz=0.0, max_retries=3, wait_time=0.5)
     wall = View(Costmap(box(room(), 4.0, 4.6, 0.0, 4.0)))  # the room cut in two
     t, pose, modes = 0.0, START.copy(), []
     for _ in range(400):
@@ -128,7 +128,7 @@ def test_a_walker_crossing_the_path_does_not_block_the_route():
 
 
 def test_periodic_replans_are_skipped_while_nothing_changes():
-    nav, local, first = navigator(rate_hz=2.0)
+    nav, _, first = navigator(rate_hz=2.0)
     free = View(Costmap(room()))
     for k in range(20):
         nav(0.1 * k, START, first, perception=free)
