@@ -13,6 +13,7 @@ LAYERS = (
     {"models", "planning"},
     {"integrate", "integrate_numba", "integrate_jax", "dynamics", "trajectory", "timing", "motor"},
     {"sensors", "odometry"},
+    {"perception", "world"},
     {"control", "localization"},
     {"sim", "navigation"},
     {
@@ -21,6 +22,7 @@ LAYERS = (
         "scenario",
         "scenario_sensors",
         "scenario_world",
+        "scenario_navigation",
         "report",
         "dynamics_plot",
         "mcap_export",

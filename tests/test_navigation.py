@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from wheelbase.errors import ConfigError
-from wheelbase.navigation import Navigator, NavigatorOptions, believed_grid
+from wheelbase.navigation import Navigator, NavigatorOptions, Route, believed_grid
 from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid
 
 RES = 0.1
@@ -75,20 +75,20 @@ GOAL = np.array([9.0, 2.0, 0.0])
 def navigator(**options):
     first = planner(OccupancyGrid(room() >= 254, RES), START, [GOAL])
     local = Straight()
-    nav = Navigator(local, planner, [GOAL], FOOTPRINT, NavigatorOptions(**options))
-    return nav, local, first
+    nav = Navigator(local, planner, FOOTPRINT, NavigatorOptions(**options))
+    return nav, local, Route(first, (GOAL,))
 
 
 def test_a_box_on_the_path_is_planned_around_and_the_old_plan_kept_until_then():
     nav, local, first = navigator(rate_hz=0.0)
     free = View(Costmap(room()))
     nav(0.0, START, first, perception=free)
-    assert local.paths[-1] is first and nav.replans == 0
+    assert local.paths[-1] is first.plan and nav.replans == 0
     blocked = View(Costmap(box(room(), 4.0, 4.6, 1.0, 2.6)))  # across the straight line
     nav(0.1, START, first, perception=blocked)
     assert nav.replans == 1
     new = local.paths[-1]
-    assert new is not first
+    assert new is not first.plan
     grid = believed_grid(blocked, 0.2)
     assert not grid.in_collision(FOOTPRINT, new.poses).any()
     assert np.max(new.poses[:, 1]) > 2.6  # goes round the box above it
@@ -121,7 +121,7 @@ def test_a_walker_crossing_the_path_does_not_block_the_route():
     walker = box(room(), 2.7, 3.3, 1.7, 2.3)  # the walker's cells are marked lethal
     tracks = Tracks(np.array([[3.0, 2.0]]), np.array([[0.0, 0.5]]), np.array([0.3]))
     nav(0.0, START, first, perception=View(Costmap(walker), tracks))
-    assert nav.replans == 0 and local.paths[-1] is first
+    assert nav.replans == 0 and local.paths[-1] is first.plan
     standing = Tracks(np.array([[3.0, 2.0]]), np.array([[0.0, 0.05]]), np.array([0.3]))
     nav(0.1, START, first, perception=View(Costmap(walker), standing))
     assert nav.replans == 1  # a person standing still is planned around
@@ -139,7 +139,7 @@ def test_without_perception_the_navigator_follows_blindly():
     nav, local, first = navigator()
     nav(0.0, START, first)
     nav(0.5, START, first)
-    assert nav.replans == 0 and local.paths == [first, first]
+    assert nav.replans == 0 and local.paths == [first.plan, first.plan]
 
 
 def test_bad_options_name_the_key():

@@ -41,7 +41,7 @@ from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError
 from wheelbase.geometry import wrap_angle
 
-__all__ = ["NAVIGATOR_STATUSES", "Navigator", "NavigatorOptions", "believed_grid"]
+__all__ = ["NAVIGATOR_STATUSES", "Navigator", "NavigatorOptions", "Route", "believed_grid"]
 
 NAVIGATOR_STATUSES: tuple[str, ...] = ("recovering", "blocked")
 """The navigator's own statuses, beside the local controller's (``ok``, ``all_collide``, …)."""
@@ -146,6 +146,27 @@ def believed_grid(view: Any, moving_speed: float) -> Any:
     return OccupancyGrid(lethal, costmap.resolution, costmap.origin)
 
 
+@dataclass(frozen=True)
+class Route:
+    """Where one robot goes: its first plan and the goals the plan visits.
+
+    Attributes
+    ----------
+    plan : PlannedPath
+        The plan made on the map before the run (its legs end at the goals).
+    goals : tuple of numpy.ndarray
+        The goals (x [m], y [m], θ [rad]) in order.
+    """
+
+    plan: Any
+    goals: tuple
+
+    @property
+    def poses(self) -> np.ndarray:
+        """The first plan's poses (what a law that follows the route blindly follows)."""
+        return self.plan.poses
+
+
 @dataclass
 class _Recovery:
     """The recovery running now: which, since when, from where."""
@@ -165,8 +186,6 @@ class Navigator:
     plan_route : callable
         ``plan_route(grid, start (3,), goals list of (3,)) -> PlannedPath or None``: the global
         planner on a believed grid (the scenario's Hybrid A* through every remaining goal).
-    goals : sequence of array_like
-        The goals [m, m, rad] this robot visits in order (the plan's legs end there).
     footprint : Footprint
         The robot's outline (blocked-path checks).
     options : NavigatorOptions
@@ -184,7 +203,6 @@ class Navigator:
         self,
         local: Any,
         plan_route: Callable[..., Any],
-        goals: Any,
         footprint: Any,
         options: NavigatorOptions | None = None,
         *,
@@ -195,9 +213,6 @@ class Navigator:
             raise ConfigError(f"local must be a control law (got {type(local).__name__})")
         self.local = local
         self.plan_route = plan_route
-        self.goals = [np.asarray(goal, dtype=np.float64).reshape(3) for goal in goals]
-        if not self.goals:
-            raise ConfigError("a navigator needs at least one goal")
         self.footprint = footprint
         self.options = NavigatorOptions() if options is None else options
         self.kind = kind
@@ -211,7 +226,8 @@ class Navigator:
         reset = getattr(self.local, "reset", None)
         if reset is not None:
             reset()
-        self.plan: Any = None  # None: the reference the engine passes
+        self.plan: Any = None  # None: the route's first plan, at the first call
+        self.goals: list[np.ndarray] = []
         self.next_goal = 0
         self.last_replan = -math.inf
         self.last_belief: bytes | None = None
@@ -228,6 +244,16 @@ class Navigator:
         if self._mode != "following":
             return self._mode
         return getattr(self.local, "status", None)
+
+    def summary(self) -> dict:
+        """The run's account: ``replans``, ``recoveries``, ``blocked`` and every new plan
+        ``plans`` = [(time [s], poses (M, 3))]."""
+        return {
+            "replans": self.replans,
+            "recoveries": self.recoveries,
+            "blocked": self._mode == "blocked",
+            "plans": list(self.plans),
+        }
 
     @property
     def last_plan(self) -> Any:
@@ -247,15 +273,17 @@ class Navigator:
             Time [s].
         measured : array_like, shape (3,) or (6,)
             The estimate (x, y, θ[, u, v, r]).
-        reference : PlannedPath
-            The first plan (used until the navigator makes its own).
+        reference : Route
+            The robot's route: its first plan (used until the navigator makes its own) and
+            its goals.
         perception : LocalView or None
             What the robot perceives; None: follow the plan blindly.
         """
         measured = np.asarray(measured, dtype=np.float64)
         pose = measured[:3]
         if self.plan is None:
-            self.plan = reference
+            self.plan = reference.plan
+            self.goals = [np.asarray(goal, dtype=np.float64).reshape(3) for goal in reference.goals]
         if self._mode == "blocked":
             return np.zeros(len(self.command_names))
         self._pass_goals(pose)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -214,6 +214,7 @@ class _Row:
     signals: dict[str, np.ndarray]
     scan: np.ndarray | None = None  # read after the step, at the next row's true poses
     scan_index: np.ndarray | None = None
+    agents: np.ndarray | None = None  # (B, A, 4) every world's agents at the row
 
 
 @dataclass(frozen=True)
@@ -372,12 +373,13 @@ class Engine:
         start[:, 2] = wrap_angle(start[:, 2])
         goal = None
         if self.arrival is not None:
-            goal = self.arrival.goal
-            if goal.ndim == 2 and goal.shape[0] not in (1, n):
+            goal = self.arrival.goal.reshape(-1, 3)
+            if n % goal.shape[0]:
                 raise InputError(
-                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,) or ({n}, 3)"
+                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,), ({n}, 3) "
+                    "or one row per robot of a world whose robots make up the batch"
                 )
-            goal = np.broadcast_to(goal.reshape(-1, 3), (n, 3)).copy()
+            goal = np.tile(goal, (n // goal.shape[0], 1))  # a fleet's goals in every world
         reset = getattr(self.controller, "reset", None)
         if reset is not None:
             reset()
@@ -492,6 +494,11 @@ class Engine:
         estimator_signals = getattr(self.estimator, "signals", None)
         if estimator_signals is not None and state.estimator is not None:
             signals = {**signals, **estimator_signals(state.estimator)}
+        agents = None
+        if self.surroundings is not None:
+            signals = {**signals, **self.surroundings.signals(state.world, state.pose, state.twist)}
+            if self.record_sensors:
+                agents = self.surroundings.agents(state.world)
         scan = scan_index = None
 
         active = status == RUNNING
@@ -582,7 +589,7 @@ class Engine:
             if self.surroundings is not None:  # the world goes on around robots that stopped
                 world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
         row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
-                   state.ticks, controller_status, signals, scan, scan_index)  # fmt: skip
+                   state.ticks, controller_status, signals, scan, scan_index, agents)  # fmt: skip
         new_state = EngineState(
             step=state.step + 1,
             pose=pose,
@@ -657,13 +664,19 @@ class Engine:
                 break
         if self.progress is not None:
             self.progress(rows[-1].t)
-        return self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        log = self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        summaries = [getattr(law, "summary", None) for law in state.controllers]
+        if len(state.controllers) == n and any(callable(s) for s in summaries):
+            log = replace(log, summaries=tuple(s() if callable(s) else {} for s in summaries))
+        return log
 
     # ------------------------------------------------------------------ helpers
     def _reference_pose(self, t: float, n: int, goal: np.ndarray | None) -> np.ndarray:
         if self.reference_pose is not None:
-            value = np.asarray(self.reference_pose(t), dtype=np.float64)
-            return np.broadcast_to(value.reshape(-1, 3), (n, 3))
+            value = np.asarray(self.reference_pose(t), dtype=np.float64).reshape(-1, 3)
+            if len(value) > 1 and n % len(value) == 0:  # one per robot of each world
+                return np.tile(value, (n // len(value), 1))
+            return np.broadcast_to(value, (n, 3))
         if goal is not None:
             return goal
         return np.full((n, 3), np.nan)
@@ -731,6 +744,7 @@ class Engine:
             rollout_fans=fans,
             scans=scans,
             particles=particles,
+            agents=None if rows[0].agents is None else np.stack([r.agents for r in rows], axis=1),
         )
 
 
