@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 
 import wheelbase
 from wheelbase import BodyTwist, ConfigError, DiffDrive, Unicycle, simulate
-from wheelbase.cli import DEMO_FILES, app, parse_angle
+from wheelbase.cli import DEMO_FILES, app
+from wheelbase.commands.options import parse_angle
 from wheelbase.models import Ackermann, Bicycle, RearWheelBicycle
 
 RUNNER = CliRunner()
@@ -78,7 +79,7 @@ def test_simulate_document_000_case_1_writes_the_files(tmp_path):
     assert str(out) in result.stdout
 
 
-@pytest.mark.parametrize("heading", ["90deg", "90°", "1.5707963267948966", "1.5707963267948966rad"])
+@pytest.mark.parametrize("heading", ["90deg", "90°", "90", "1.5707963267948966rad"])
 def test_pose0_heading_units(tmp_path, heading):
     result = run(
         "simulate", "--left", "1", "--right", "0.5", "--t-end", "1", "--pose0", "1", "-2",
@@ -94,7 +95,7 @@ def test_parse_angle():
     assert parse_angle("180deg") == pytest.approx(math.pi)
     assert parse_angle("-45 deg") == pytest.approx(-math.pi / 4)
     assert parse_angle("0.5rad") == 0.5
-    assert parse_angle(" -1.25 ") == -1.25
+    assert parse_angle(" -45 ") == pytest.approx(-math.pi / 4)  # a bare angle is in degrees
     for bad in ("abc", "deg", "nan", "infdeg", ""):
         with pytest.raises(ConfigError, match="angle"):
             parse_angle(bad, "angle")
@@ -225,7 +226,7 @@ def test_version_and_help():
     top = run("--help")
     assert top.exit_code == 0 and "simulate" in top.stdout and "demo" in top.stdout
     help_text = run("simulate", "--help").stdout
-    for unit in ("[m]", "[rad/s]", "[m/s]", "[s]", "90deg"):
+    for unit in ("[m]", "[rad/s]", "[m/s]", "[s]", "[deg", "X,Y,HEADING"):
         assert unit in help_text
     assert run("kinematics-demo", "--help").exit_code == 0
     bare = run()

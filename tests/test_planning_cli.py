@@ -9,10 +9,11 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
+from wheelbase.commands.options import PoseGroup
 from wheelbase.commands.plan import register
 from wheelbase.errors import ConfigError, PlanningError
 
-app = typer.Typer()
+app = typer.Typer(cls=PoseGroup)
 
 
 @app.callback()
@@ -88,7 +89,7 @@ def test_plan_no_reverse_and_errors(tmp_path):
             str(tmp_path / "y"),
         ],
     )
-    assert isinstance(heading.exception, ConfigError) and "heading" in str(heading.exception)
+    assert heading.exit_code == 2 and "start heading must be an angle" in heading.output
     unknown = runner.invoke(
         app,
         [
