@@ -2,6 +2,7 @@
 
 import csv
 import math
+import os
 import shutil
 import subprocess
 import sys
@@ -256,3 +257,16 @@ def test_console_script_runs(tmp_path):
     assert bad.returncode == 2
     assert bad.stderr.strip() == "error: wheel_radius must be > 0 m (got -1)"
     assert "Traceback" not in bad.stdout + bad.stderr
+
+
+def test_python_m_wheelbase_is_the_command_line(tmp_path):
+    # benchmarks/closed_loop.py falls back to it where the console script is not on PATH
+    environment = {**os.environ, "PYTHONPATH": str(Path(wheelbase.__file__).parents[1])}
+    ok = subprocess.run([sys.executable, "-m", "wheelbase", "--version"], capture_output=True,
+                        text=True, timeout=120, env=environment)  # fmt: skip
+    assert ok.returncode == 0, ok.stderr
+    assert ok.stdout.strip() == f"wheelbase {wheelbase.__version__}"
+    bad = subprocess.run([sys.executable, "-m", "wheelbase", "simulate", "--left", "x"],
+                         capture_output=True, text=True, timeout=120, env=environment)  # fmt: skip
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "(see 'wheelbase simulate --help')" in bad.stderr
