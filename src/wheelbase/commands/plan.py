@@ -7,8 +7,9 @@ along the path, start/goal arrows) and ``metrics.json`` (``success``, ``length_m
 ``planning_time_s``, ``expanded_nodes``, ``min_clearance_m``), and prints the metrics. MAP is a
 ROS ``map_server`` YAML, a Moving AI ``.map`` (1 m cells), a polygon world (YAML or GeoJSON, see
 :mod:`wheelbase.planning.world_io`: collision and ``min_clearance_m`` exact on the polygons, the
-figure draws them) or a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
-``warehouse``, ``parallel_120``, ``perpendicular_bay``, …). Headings are in degrees unless
+figure draws them), a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
+``warehouse``, ``parallel_120``, ``perpendicular_bay``, …) or ``empty`` (open ground around
+the start and goal, as in scenarios). Headings are in degrees unless
 written with ``rad`` (``1.57rad``), as everywhere on the command line
 (:mod:`wheelbase.commands.options`).
 
@@ -95,7 +96,8 @@ def plan_to_files(
     Parameters
     ----------
     map_name : str
-        Map file or bundled map name.
+        Map file, bundled map name, or ``"empty"`` (open ground 3 m around the start and goal,
+        as a scenario's ``map: empty``).
     start : numpy.ndarray
         Start pose ``(x, y, θ)`` [m, m, rad].
     goal : numpy.ndarray
@@ -135,7 +137,12 @@ def plan_to_files(
     existing = [str(p) for p in paths.values() if p.exists()]
     if existing and not force:
         raise FileExistsError(f"{', '.join(existing)} exists; pass --force to overwrite")
-    grid = load_map(map_name)
+    if map_name == "empty":  # as in scenarios and `wheelbase control --map empty`
+        from wheelbase.scenario import empty_map
+
+        grid = empty_map([start, goal])
+    else:
+        grid = load_map(map_name)
     planner = HybridAStar(
         grid,
         footprint,
@@ -193,9 +200,9 @@ def register(app: typer.Typer) -> None:
             str | None,
             typer.Argument(
                 metavar="MAP",
-                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), or "
-                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ... "
-                "(optional with --case).",
+                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), "
+                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ..., "
+                "or 'empty' (open ground around the start and goal; optional with --case).",
             ),
         ] = None,
         start: Annotated[np.ndarray | None, pose_option("--start", "Start pose")] = None,
