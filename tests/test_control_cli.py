@@ -8,6 +8,7 @@ from typer.testing import CliRunner
 
 from wheelbase.commands.control import register
 from wheelbase.commands.options import PoseGroup, parse_angle
+from wheelbase.control.pose import POSE_LAWS
 from wheelbase.errors import ConfigError, InputError
 
 app = typer.Typer(cls=PoseGroup)
@@ -71,7 +72,8 @@ def test_bad_cli_input(tmp_path):
     result = runner.invoke(app, ["control", "--law", "magic", "--start", "1", "1", "0",
                                  "--out", str(tmp_path)])  # fmt: skip
     assert isinstance(result.exception, ConfigError)
-    assert "unknown law" in str(result.exception)
+    assert "unknown law 'magic'" in str(result.exception)
+    assert str(result.exception).endswith(", ".join(map(repr, (*POSE_LAWS, "mppi"))))
     result = runner.invoke(app, ["control", "--out", str(tmp_path)])
     assert isinstance(result.exception, ConfigError)
     assert "--start" in str(result.exception)
@@ -91,3 +93,10 @@ def test_goal_beyond_1e10_m_is_refused(tmp_path):
                                  "0", "--out", str(tmp_path / "o")])  # fmt: skip
     assert result.exit_code == 2  # a flag's error: usage error naming --goal
     assert "'--goal': goal x and y must be within ±1e+10 m" in result.output
+
+
+def test_help_lists_every_law():
+    from wheelbase.cli import app as wheelbase
+
+    text = " ".join(runner.invoke(wheelbase, ["control", "--help"]).stdout.split())
+    assert f"Control law: {', '.join((*POSE_LAWS, 'mppi'))}" in text

@@ -25,19 +25,21 @@ import numpy as np
 import typer
 from rich.console import Console
 
-from wheelbase._validate import positive
+from wheelbase._validate import check_choice, positive
 from wheelbase.commands.options import pose_option, rate_option
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.pose import POSE_LAWS, make_pose_law
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.sim import Log
 
-__all__ = ["control_run_to_files", "plot_run", "register"]
+__all__ = ["LAWS", "control_run_to_files", "plot_run", "register"]
 
 ARRIVAL_TOLERANCE = (0.01, math.radians(1.0))
 """Position [m] and heading [rad] tolerance of a pose-law run."""
 
 RUN_FILES: tuple[str, ...] = ("run.csv", "run.png", "metrics.json")
+LAWS: tuple[str, ...] = (*POSE_LAWS, "mppi")
+"""Every ``--law``: the pose laws of document 002, and MPPI (on ``--map``)."""
 
 
 # --------------------------------------------------------------------------- files
@@ -172,7 +174,11 @@ def register(app: typer.Typer) -> None:
     def control(
         out: Annotated[Path, typer.Option("--out", help="Output directory.")],
         law: Annotated[
-            str, typer.Option(help=f"Pose law: {', '.join(POSE_LAWS)}; or mppi (with --map).")
+            str,
+            typer.Option(
+                help=f"Control law: {', '.join(LAWS)} (the pose laws of document 002; mppi "
+                "follows a Hybrid A* path on --map)."
+            ),
         ] = "polar",
         map_name: Annotated[
             str,
@@ -196,12 +202,11 @@ def register(app: typer.Typer) -> None:
         console = Console()
         if start is None:
             raise ConfigError("--start X,Y,HEADING is required")
+        check_choice("law", law, LAWS)
         if law == "mppi":
             _mppi_run(map_name, start, goal, out, force=force,
                       max_speed=max_speed, max_yaw_rate=max_yaw_rate, t_end=t_end)  # fmt: skip
             return
-        if law not in POSE_LAWS:
-            raise ConfigError(f"unknown law {law!r}; allowed: {', '.join(POSE_LAWS)}")
         metrics = control_run_to_files(
             law,
             start,
