@@ -46,6 +46,16 @@ def test_goto_writes_files_and_metrics(tmp_path):
     assert json.loads((out / "metrics.json").read_text())["goals"][0]["goal"] == [0.5, 0.0]
 
 
+def test_goto_no_gif_writes_the_rest(tmp_path):
+    # goto always wrote route.gif; the other commands that animate take --gif/--no-gif
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["goto", "--goal", "0.5,0.5", "--no-gif", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert not (out / "route.gif").exists()
+    assert {p.name for p in out.iterdir()} == set(GOTO_FILES) - {"route.gif"}
+    assert "route.gif" not in result.output
+
+
 @pytest.mark.parametrize(
     ("argv", "match"),
     [

@@ -3,9 +3,9 @@
 ``wheelbase goto --goal 1,1 [--goal -1,1 ...] --out DIR`` drives the simulated robot of
 :class:`~wheelbase.control.goal.DriveTrain` to each goal through the full loop (set-points in
 RPM → PI speed loop → PWM → motor → encoder ticks → odometry) and writes ``routes.png``,
-``log.csv``, ``route.gif`` and ``metrics.json``. Goals are in metres like every length on the
-command line, or written with their unit (document 003 Fig. 8's ``--goal 100cm,100cm``;
-:mod:`wheelbase.commands.options`); everything written is in metres.
+``log.csv``, ``route.gif`` (unless ``--no-gif``) and ``metrics.json``. Goals are in metres
+like every length on the command line, or written with their unit (document 003 Fig. 8's
+``--goal 100cm,100cm``; :mod:`wheelbase.commands.options`); everything written is in metres.
 
 ``wheelbase calibrate --ed 1.005 --eb 1.02 --out DIR`` runs UMBmark on a robot with those errors
 and writes ``before_after.png`` and ``metrics.json`` (E_max,syst before/after and the
@@ -150,6 +150,7 @@ def register(app: typer.Typer) -> None:
             "exact", "--method", help="Odometry update: euler (doc 003), midpoint or exact."
         ),
         seed: int = typer.Option(0, "--seed", help="Seed of the random encoder errors."),
+        gif: bool = typer.Option(True, "--gif/--no-gif", help="Write route.gif."),
         force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
     ) -> None:
         """Drive to goals with document 003's go-to-goal loop; write routes, log, GIF, metrics."""
@@ -160,11 +161,13 @@ def register(app: typer.Typer) -> None:
         goals = [tuple(g) for g in goal] if goal else list(FIGURE8_GOALS)
         seed = integer("seed", seed, minimum=0, maximum=2**63 - 1)  # the engine's int64 seeds
         drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
-        paths = _prepare(out, GOTO_FILES, force)
+        names = GOTO_FILES if gif else tuple(n for n in GOTO_FILES if n != "route.gif")
+        paths = _prepare(out, names, force)
         log = run_go_to_goal(goals, drive=drive, seed=seed)  # every goal, one robot each
         _plot_routes(log, paths["routes.png"])
         log.to_csv(paths["log.csv"], overwrite=True)
-        _animate(log, paths["route.gif"], overwrite=True)
+        if gif:
+            _animate(log, paths["route.gif"], overwrite=True)
         metrics = {
             "goals": [
                 {
