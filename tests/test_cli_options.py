@@ -5,6 +5,7 @@ flag takes ``X,Y,HEADING`` or ``X Y HEADING`` with negative numbers, never the n
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -180,3 +181,34 @@ def test_a_pose_short_of_values_names_its_flag_and_keeps_the_next_flag(
 def test_the_rule_is_in_the_help():
     top = RUNNER.invoke(app, ["--help"]).stdout
     assert "Angles in degrees unless written 1.57rad" in " ".join(top.split())
+
+
+# --------------------------------------------------------------------------- --out
+def test_out_is_optional_everywhere_with_one_default():
+    # --out was required by seven commands and defaulted elsewhere ("out", "wheelbase-batch")
+    from wheelbase.commands.options import default_out
+
+    for name, command in GROUP.commands.items():
+        outs = [param for param in command.params if "--out" in param.opts]
+        if name in ("schema", "scenarios"):
+            assert not outs  # they print, they write no file
+            continue
+        assert len(outs) == 1, name
+        assert not outs[0].required, f"wheelbase {name} --out is required"
+        if name == "run":  # a report is named after its scenario
+            assert outs[0].default is None
+        else:
+            assert Path(outs[0].default) == default_out(name), name
+
+
+def test_commands_write_to_their_default_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = RUNNER.invoke(app, ["simulate", "--left", "1", "--right", "1", "--t-end", "1",
+                                 "--no-gif"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "wheelbase-simulate" / "trajectory.csv").is_file()
+    result = RUNNER.invoke(app, ["control", "--start", "1,0,0", "--t-end", "2", "--dt", "0.05"])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "wheelbase-control" / "metrics.json").is_file()
+    again = RUNNER.invoke(app, ["control", "--start", "1,0,0", "--t-end", "2", "--dt", "0.05"])
+    assert again.exit_code == 2 and "--force" in again.stderr  # kept unless --force

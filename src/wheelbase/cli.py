@@ -38,8 +38,10 @@ from rich.text import Text
 from wheelbase._validate import check_choice, finite, positive
 from wheelbase.commands.options import (
     ANGLE_RULE,
+    OUT_RULE,
     PoseGroup,
     angle_option,
+    out_option,
     pose_option,
     rate_option,
 )
@@ -109,7 +111,7 @@ class _OneLineErrors(PoseGroup):
 app = typer.Typer(
     cls=_OneLineErrors,
     name="wheelbase",
-    help=f"Model, simulate, plan for and control wheeled mobile robots. {ANGLE_RULE}",
+    help=f"Model, simulate, plan for and control wheeled mobile robots. {ANGLE_RULE} {OUT_RULE}",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_show_locals=False,
@@ -398,7 +400,9 @@ def simulate_command(
     dt: float = typer.Option(0.1, help="Time step [s], 0 < dt <= t-end."),
     method: str = typer.Option("rk4", help=f"Integrator: {', '.join(METHODS)}."),
     pose0: Annotated[np.ndarray, pose_option("--pose0", "Initial pose (default 0,0,0):")] = "0,0,0",
-    out: str = typer.Option("out", help="Output folder (created if missing)."),
+    out: Annotated[
+        Path, out_option("simulate", "trajectory.csv, states.png, path.png, animation.gif")
+    ] = "wheelbase-simulate",
     force: bool = typer.Option(False, "--force", help="Replace existing output files."),
     gif: bool = typer.Option(True, "--gif/--no-gif", help="Write animation.gif."),
     length: float | None = typer.Option(

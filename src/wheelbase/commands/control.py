@@ -26,7 +26,7 @@ import typer
 from rich.console import Console
 
 from wheelbase._validate import check_choice, positive
-from wheelbase.commands.options import pose_option, rate_option
+from wheelbase.commands.options import out_option, pose_option, rate_option
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.pose import POSE_LAWS, make_pose_law
 from wheelbase.errors import ConfigError, InputError
@@ -172,7 +172,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("control")
     def control(
-        out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+        out: Annotated[Path, out_option("control", "run.csv, run.png, metrics.json")] = (
+            "wheelbase-control"
+        ),
         law: Annotated[
             str,
             typer.Option(

@@ -28,7 +28,7 @@ import typer
 
 from wheelbase._io import write_csv
 from wheelbase._validate import check_choice, finite, nonnegative, positive
-from wheelbase.commands.options import rate_option
+from wheelbase.commands.options import out_option, rate_option
 from wheelbase.errors import ConfigError
 
 __all__ = ["DYNAMICS_FILES", "PRESETS", "TRACK_FILES", "parse_waypoints", "register"]
@@ -122,7 +122,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("dynamics")
     def dynamics_command(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("dynamics", ", ".join(DYNAMICS_FILES))
+        ] = "wheelbase-dynamics",
         preset: str = typer.Option("rm100", "--preset", help="Robot preset: rm100."),
         torques: tuple[float, float] = typer.Option(
             (0.01, 0.01), "--torques", help="Wheel torques LEFT RIGHT [N·m] (held constant)."
@@ -168,7 +170,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("track-waypoints")
     def track_command(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[Path, out_option("track-waypoints", ", ".join(TRACK_FILES))] = (
+            "wheelbase-track-waypoints"
+        ),
         preset: str = typer.Option("rm100", "--preset", help="Robot preset: rm100."),
         waypoints: str = typer.Option(
             "0,0 10,10 20,0 30,0", "--waypoints", help="Waypoints 'x,y x,y ...' [m]."

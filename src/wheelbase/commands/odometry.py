@@ -24,7 +24,7 @@ import numpy as np
 import typer
 
 from wheelbase._validate import integer
-from wheelbase.commands.options import point_option
+from wheelbase.commands.options import out_option, point_option
 from wheelbase.errors import ConfigError
 
 __all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
@@ -135,7 +135,7 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def goto(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[Path, out_option("goto", ", ".join(GOTO_FILES))] = "wheelbase-goto",
         goal: Annotated[
             list[np.ndarray] | None,
             point_option(
@@ -200,7 +200,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def calibrate(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("calibrate", ", ".join(CALIBRATE_FILES))
+        ] = "wheelbase-calibrate",
         ed: float = typer.Option(1.005, "--ed", help="Injected wheel-diameter ratio E_d [-]."),
         eb: float = typer.Option(1.02, "--eb", help="Injected track ratio E_b [-]."),
         side: float = typer.Option(4.0, "--side", help="Side of the square [m]."),

@@ -10,6 +10,9 @@ The rule (every flag of every command, and every wheelbase file)
   ``30deg/s``).
 - **Lengths** are **metres** unless written with a unit (``1.5``, ``1.5m``, ``150cm``,
   ``1500mm``).
+- **Output**: ``--out DIR`` is optional on every command that writes files; its default is
+  ``./wheelbase-COMMAND/`` (``wheelbase run``: ``./SCENARIO-NAME/``), created if missing. Files
+  already there are kept unless ``--force`` (the two demos replace only their own files).
 - A **pose** is ``X,Y,HEADING`` (``--start 1,4,90``); ``--start 1 4 90`` is the same. The values
   after a pose flag are gathered up to the next token that is not a number, so negative numbers
   (``--goal 13.6 9 -90``) are values and the next flag (``--out DIR``) is never swallowed. A
@@ -41,6 +44,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -55,11 +59,14 @@ from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
     "ANGLE_RULE",
+    "OUT_RULE",
     "POSE_HELP",
     "PoseGroup",
     "VectorParser",
     "angle_option",
+    "default_out",
     "gather_vector_values",
+    "out_option",
     "parse_angle",
     "parse_length",
     "parse_point",
@@ -75,6 +82,9 @@ ANGLE_RULE = (
     "in m unless written 150cm; poses X,Y,HEADING (or X Y HEADING)."
 )
 """The rule in one line, for ``wheelbase --help``."""
+
+OUT_RULE = "Files go to --out DIR (default ./wheelbase-COMMAND/; kept unless --force)."
+"""The ``--out`` rule in one line, for ``wheelbase --help``."""
 
 POSE_HELP = "x, y [m], heading [deg, or e.g. 1.57rad]"
 """What a pose flag takes, for its help text."""
@@ -434,6 +444,44 @@ def rate_option(flag: str, help: str) -> Any:
         parser=_ScalarParser(flag, parse_rate, "rate"),
         metavar="RATE",
         help=f"{help.rstrip('.')} [rad/s, or e.g. 30deg/s].",
+    )
+
+
+def default_out(command: str) -> Path:
+    """The default ``--out`` of ``wheelbase COMMAND``: ``./wheelbase-COMMAND/``.
+
+    Parameters
+    ----------
+    command : str
+        The sub-command's name.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    return Path(f"wheelbase-{command}")
+
+
+def out_option(command: str, files: str = "") -> Any:
+    """The ``--out`` option of a command that writes files (the rule: optional, default
+    :func:`default_out`; give ``= default_out(COMMAND)`` in the signature).
+
+    Parameters
+    ----------
+    command : str
+        The sub-command's name (named in the help's default).
+    files : str
+        What it writes there, for the help (e.g. ``"path.csv, path.png, metrics.json"``).
+
+    Returns
+    -------
+    typer.models.OptionInfo
+    """
+    what = f" for {files}" if files else ""
+    return typer.Option(
+        "--out",
+        help=f"Output folder{what} (created if missing) [default: ./{default_out(command)}/].",
+        show_default=False,
     )
 
 

@@ -30,7 +30,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from wheelbase.commands.options import pose_option
+from wheelbase.commands.options import out_option, pose_option
 from wheelbase.errors import ConfigError
 
 __all__ = ["PLAN_FILES", "plan_to_files", "register"]
@@ -193,9 +193,7 @@ def register(app: typer.Typer) -> None:
 
     @app.command("plan")
     def plan(
-        out: Annotated[
-            Path, typer.Option(help="Output folder for path.csv, path.png, metrics.json.")
-        ],
+        out: Annotated[Path, out_option("plan", ", ".join(PLAN_FILES))] = "wheelbase-plan",
         map_name: Annotated[
             str | None,
             typer.Argument(
