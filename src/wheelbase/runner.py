@@ -475,7 +475,12 @@ def prepare(
     start = _pose(scenario.start)
     goals = [_pose(goal) for goal in scenario.goals]
     grid = _field(
-        "map", lambda: _load_map(scenario.map, [start, *goals], scenario.resources.max_map_cells)
+        "map",
+        lambda: _load_map(
+            scenario.map,
+            [_pose(p) for p in scenario.robot_poses()],
+            scenario.resources.max_map_cells,
+        ),
     )
     _check_free(grid, robot, start, "start")
     for index, goal in enumerate(goals):

@@ -162,6 +162,14 @@ class EngineState:
         ``estimator.start``.
     sensors : SensorStreams or None
         The per-robot random streams of the sensors.
+    held : numpy.ndarray, shape (N, k), or None
+        The last controller commands, held between controller calls (``control_every``).
+    held_status : list or None
+        The controllers' statuses of that call.
+    world : object or None
+        The world's evolving truth (agents), from ``surroundings.start``.
+    perception : object or None
+        What each robot has made of its sensors (costmap, tracks), from ``perception.start``.
     """
 
     step: int
@@ -179,6 +187,10 @@ class EngineState:
     plant: Any = None
     estimator: Any = None
     sensors: Any = None
+    held: np.ndarray | None = None
+    held_status: list | None = None
+    world: Any = None
+    perception: Any = None
 
     @property
     def running(self) -> np.ndarray:
@@ -248,6 +260,20 @@ class Engine:
     record_sensors : bool
         Keep the lidar scans and, every ``fan_every`` steps, the particles of a particle
         filter in the log (for drawing); off for batches that only want metrics.
+    control_every : int
+        The controller is called every this many steps (its rate 1 / (control_every·dt));
+        the command is held in between.
+    surroundings : Surroundings, optional
+        The world beyond the map (:class:`~wheelbase.sim.Surroundings`: obstacles, agents, the
+        other robots of a fleet): it steps with the plant, the lidar sees it and touching it is
+        a collision. Nothing that decides (controller, estimator) reads it.
+    perception : PerceptionSuite, optional
+        Turns each robot's scans into a costmap and tracks
+        (:class:`~wheelbase.sim.PerceptionSuite`); a controller with ``uses_perception`` is
+        called with ``perception=`` its robot's view.
+    references : tuple, optional
+        One reference per robot of a world (a fleet's plans): robot i follows
+        ``references[i % len(references)]`` (per-robot controllers only).
     """
 
     plant: Any
@@ -265,6 +291,10 @@ class Engine:
     max_steps: int = MAX_STEPS
     sensors: Any = None
     record_sensors: bool = True
+    control_every: int = 1
+    surroundings: Any = None
+    perception: Any = None
+    references: tuple | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -278,6 +308,9 @@ class Engine:
             )
         if not callable(self.controller):
             raise ConfigError(f"controller must be callable (got {type(self.controller).__name__})")
+        integer("control_every", self.control_every, minimum=1)
+        if self.references is not None and not getattr(self.controller, "per_robot", False):
+            raise ConfigError("references (one per robot) need a per-robot controller")
         names = tuple(getattr(self.controller, "command_names", ("v", "omega")))
         object.__setattr__(self, "_names", self.plant.command_names(names))
         if self.estimator.encoder is not None and getattr(self.plant, "axle", None) is None:
@@ -370,6 +403,8 @@ class Engine:
             plant=self.plant.start(n, seeds),
             estimator=self.estimator.start(start, seeds),
             sensors=None if self.sensors is None else self.sensors.start(seeds),
+            world=None if self.surroundings is None else self.surroundings.start(seeds, start),
+            perception=None if self.perception is None else self.perception.start(start),
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -394,9 +429,14 @@ class Engine:
             return command, [reported if isinstance(reported, str) else None] * n
         command = np.zeros((n, width))
         statuses: list[str | None] = [None] * n
+        references = self.references
         for i in np.flatnonzero(state.running):
             law = controllers[i]
-            raw = np.asarray(law(t, measured[i].copy(), self.reference), dtype=np.float64)
+            reference = self.reference if references is None else references[i % len(references)]
+            extra = {}
+            if self.perception is not None and getattr(law, "uses_perception", False):
+                extra["perception"] = self.perception.view(state.perception, int(i), t)
+            raw = np.asarray(law(t, measured[i].copy(), reference, **extra), dtype=np.float64)
             command[i] = _shaped(raw, 1, width, self.command_names)[0]
             reported = getattr(law, "status", None)
             statuses[i] = reported if isinstance(reported, str) else None
@@ -424,8 +464,12 @@ class Engine:
         t = state.step * self.dt
         running = state.running
         n = running.size
-        if command is None:
+        held = state.held_status
+        if command is None and state.held is not None and state.step % self.control_every:
+            command, controller_status = state.held, held
+        elif command is None:
             command, controller_status = self.command(state)
+            held = controller_status
         else:
             command = _shaped(
                 np.asarray(command, dtype=np.float64), n, len(self.command_names),
@@ -437,6 +481,11 @@ class Engine:
         status[running & ~finite] = DIVERGED
         command = np.where(finite[:, None], command, 0.0)
         command[~running] = 0.0
+        held_command = command
+        gave_up = np.array([name == "blocked" for name in controller_status], dtype=bool)
+        if gave_up.any():  # the controller found no way on and stopped the robot
+            status[running & finite & gave_up] = BLOCKED
+            command = np.where(gave_up[:, None], 0.0, command)
         moved, rates = self.plant.motion(state.twist, command, self.command_names, state.plant)
         reference = self._reference_pose(t, n, state.goal)
         signals = self.plant.signals(state.plant) if state.plant is not None else {}
@@ -449,6 +498,12 @@ class Engine:
         if self.collides is not None and active.any():
             hit = np.zeros(n, dtype=bool)
             hit[active] = np.asarray(self.collides(state.pose[active]), dtype=bool)
+            status[hit] = COLLISION
+            active &= ~hit
+        if self.surroundings is not None and active.any():
+            hit = np.zeros(n, dtype=bool)
+            index = np.flatnonzero(active)
+            hit[index] = self.surroundings.collides(state.world, state.pose, index)
             status[hit] = COLLISION
             active &= ~hit
         limit = self.duration
@@ -473,6 +528,8 @@ class Engine:
         wheel_angle, ticks = state.wheel_angle.copy(), state.ticks.copy()
         estimate, estimated_twist = state.estimate.copy(), state.estimated_twist.copy()
         plant_state = state.plant
+        world_state = state.world
+        perception_state = state.perception
         if active.any():
             index = np.flatnonzero(active)
             new_pose, new_twist, turned, plant_state = self.plant.step(
@@ -493,8 +550,14 @@ class Engine:
                 delta = None
             pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
             extra = {}
+            cast = None
+            if self.surroundings is not None:  # the agents move with the robots, from time t
+                world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
+                cast = self.surroundings.caster(world_state, pose)
             if self.sensors is not None:
-                readings = self.sensors.read(state.step, self.dt, new_pose, state.sensors, moving)
+                readings = self.sensors.read(
+                    state.step, self.dt, new_pose, state.sensors, moving, cast=cast
+                )
                 extra["readings"] = readings
                 if readings.scan is not None and self.record_sensors:
                     scan, scan_index = readings.scan, moving
@@ -510,8 +573,14 @@ class Engine:
                 est[lost] = state.estimate[moving[lost]]
                 est_twist[lost] = state.estimated_twist[moving[lost]]
             estimate[moving], estimated_twist[moving] = est, est_twist
+            if self.perception is not None and extra and extra["readings"].scan is not None:
+                perception_state = self.perception.update(
+                    state.perception, t + self.dt, extra["readings"], estimate[moving], moving
+                )
         else:
             estimator_state = state.estimator
+            if self.surroundings is not None:  # the world goes on around robots that stopped
+                world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
         row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
                    state.ticks, controller_status, signals, scan, scan_index)  # fmt: skip
         new_state = EngineState(
@@ -530,6 +599,10 @@ class Engine:
             plant=plant_state,
             estimator=estimator_state,
             sensors=state.sensors,
+            held=held_command,
+            held_status=held,
+            world=world_state,
+            perception=perception_state,
         )
         return new_state, row
 
