@@ -941,19 +941,12 @@ def _pose(values) -> np.ndarray:
 def _load_map(name: str, points: list[np.ndarray], max_cells: int):
     """A bundled map or a map file; ``empty`` is an obstacle-free field around the points,
     walled by the map edge (sized as the scenario's validation sized it)."""
-    from wheelbase.planning import OccupancyGrid
     from wheelbase.planning.maps import load_map
-    from wheelbase.scenario import EMPTY_MAP_MARGIN, EMPTY_MAP_RESOLUTION
+    from wheelbase.scenario import empty_map
 
     if name != "empty":
         return load_map(name, max_cells=max_cells)
-    xy = np.array([point[:2] for point in points])
-    low = np.floor(xy.min(0) - EMPTY_MAP_MARGIN)
-    high = np.ceil(xy.max(0) + EMPTY_MAP_MARGIN)
-    cols, rows = np.ceil((high - low) / EMPTY_MAP_RESOLUTION).astype(int)
-    return OccupancyGrid.from_array(
-        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=tuple(low)
-    )
+    return empty_map(points, max_cells)
 
 
 def _footprint(robot: Robot):

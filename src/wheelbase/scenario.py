@@ -36,6 +36,8 @@ __all__ = [
     "Scenario",
     "SensorsSpec",
     "TrajectorySpec",
+    "empty_map",
+    "empty_map_shape",
     "format_validation_error",
     "load_scenario",
     "scenario_json_schema",
@@ -586,6 +588,47 @@ def empty_map_shape(points: list[tuple[float, ...]]) -> tuple[int, int]:
     width = math.ceil(max(xs) + EMPTY_MAP_MARGIN) - math.floor(min(xs) - EMPTY_MAP_MARGIN)
     height = math.ceil(max(ys) + EMPTY_MAP_MARGIN) - math.floor(min(ys) - EMPTY_MAP_MARGIN)
     return math.ceil(height / EMPTY_MAP_RESOLUTION), math.ceil(width / EMPTY_MAP_RESOLUTION)
+
+
+def empty_map(points: Any, max_cells: int = MAX_MAP_CELLS) -> Any:
+    """The ``map: empty`` field: an obstacle-free grid around ``points``, walled by its edge.
+
+    The one rule of ``empty`` for scenarios, ``wheelbase plan empty`` and ``wheelbase control
+    --map empty``: :data:`EMPTY_MAP_MARGIN` around the points' bounding box (rounded out to
+    whole metres) at :data:`EMPTY_MAP_RESOLUTION`.
+
+    Parameters
+    ----------
+    points : sequence of array_like
+        Poses or points (x [m], y [m], ...): the start and the goals.
+    max_cells : int
+        Most cells allowed (``resources.max_map_cells``).
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    MapError
+        If the field would hold more than ``max_cells`` cells.
+    """
+    import numpy as np
+
+    from wheelbase.errors import MapError
+    from wheelbase.planning import OccupancyGrid
+
+    rows, cols = empty_map_shape(points)
+    if rows * cols > max_cells:
+        raise MapError(
+            f"map: empty around the start and goals would be {rows} × {cols} = "
+            f"{count_text(rows * cols)} cells of {EMPTY_MAP_RESOLUTION} m: more than "
+            f"max_map_cells = {max_cells}; bring them closer or use a map file"
+        )
+    low = [math.floor(min(p[k] for p in points) - EMPTY_MAP_MARGIN) for k in (0, 1)]
+    return OccupancyGrid.from_array(
+        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=(float(low[0]), float(low[1]))
+    )
 
 
 def _numbers(value: Any) -> list[float]:
