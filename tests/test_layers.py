@@ -12,9 +12,9 @@ LAYERS = (
     {"errors", "_validate", "_io", "_lazy", "_jax", "geometry", "polyline", "limits", "plot"},
     {"models", "planning"},
     {"integrate", "integrate_numba", "integrate_jax", "dynamics", "trajectory", "timing", "motor"},
-    {"sensors", "odometry"},
+    {"sensors", "odometry", "datasets"},
     {"perception", "world"},
-    {"control", "localization"},
+    {"control", "localization", "mapping"},
     {"sim", "navigation"},
     {
         "runner",
