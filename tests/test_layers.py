@@ -13,6 +13,7 @@ LAYERS = (
     {"models", "planning"},
     {"integrate", "integrate_numba", "integrate_jax", "dynamics", "trajectory", "timing", "motor"},
     {"sensors", "odometry"},
+    {"perception", "world"},
     {"control", "localization"},
     {"sim"},
     {"runner", "batch", "scenario", "scenario_sensors", "report", "dynamics_plot", "mcap_export"},
