@@ -334,7 +334,11 @@ class Navigator:
         return bool(np.any(hit[1:]) if len(hit) > 1 else False)
 
     def _replan(self, t: float, pose: np.ndarray, grid: Any) -> bool:
-        path = self.plan_route(grid, pose, self.goals[self.next_goal :])
+        # what the lidar marked where the robot stands is the robot's own neighbourhood (an
+        # agent brushing past, a mark of noise): the plan may start there
+        path = self.plan_route(
+            _cleared(grid, pose, self.footprint), pose, self.goals[self.next_goal :]
+        )
         self.last_belief = _belief(grid)
         self.last_replan = t
         if path is None:
@@ -390,6 +394,32 @@ class Navigator:
         if self._replan(t, pose, grid) and not self._blocked(pose, grid):
             return None  # back to following; the retries count on until the goal (as Nav2)
         return self._start_recovery(t, pose, grid)
+
+
+def _cleared(grid: Any, pose: np.ndarray, footprint: Any) -> Any:
+    """The grid with the cells within the footprint's reach (+ one cell) of ``pose`` free."""
+    from wheelbase.planning import OccupancyGrid
+
+    res = grid.resolution
+    reach = footprint.max_radius + res
+    x0, y0 = grid.origin
+    rows, cols = grid.shape
+    c0, c1 = (
+        max(int((pose[0] - reach - x0) / res), 0),
+        min(int((pose[0] + reach - x0) / res) + 1, cols),
+    )
+    r0, r1 = (
+        max(int((pose[1] - reach - y0) / res), 0),
+        min(int((pose[1] + reach - y0) / res) + 1, rows),
+    )
+    if c0 >= c1 or r0 >= r1 or not grid.occupied[r0:r1, c0:c1].any():
+        return grid
+    occupied = grid.occupied.copy()
+    cx = x0 + (np.arange(c0, c1) + 0.5) * res
+    cy = y0 + (np.arange(r0, r1) + 0.5) * res
+    near = np.hypot(cx[None, :] - pose[0], cy[:, None] - pose[1]) <= reach
+    occupied[r0:r1, c0:c1] &= ~near
+    return OccupancyGrid(occupied, res, grid.origin)
 
 
 def _belief(grid: Any) -> bytes:

@@ -715,7 +715,10 @@ def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
         )
         legs, leg_start = [], start
         for goal in goals:
-            leg = planner.plan(leg_start, goal)
+            try:
+                leg = planner.plan(leg_start, goal)
+            except PlanningError:  # the start or a goal inside what the robot now sees
+                return None
             if not leg.success:
                 return None
             legs.append(leg)
