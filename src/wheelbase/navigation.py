@@ -10,7 +10,13 @@ its costmap and its tracks of moving obstacles), never the world's truth, and:
    A periodic replan is skipped when the believed obstacles are the ones of the last plan (the
    deterministic planner would give the remainder of the same plan). The old plan is kept until
    a new one is found;
-3. *recovers* when the plan is blocked and no new one exists: the recoveries (``wait``,
+3. *yields* (a robot of a fleet other than the first, whose order is its right of way) when
+   the plan is blocked and no new one exists: it drives to the nearest refuge off its plan,
+   far enough aside for a robot of its own width to pass along the plan, waits there until a
+   plan to its goal is free of obstacles and of every track *along its whole length* (the
+   robot with the right of way has gone by, not merely moved on), and goes on (at most
+   ``yield_time`` in all, then the recoveries);
+4. *recovers* when the plan is blocked and no new one exists: the recoveries (``wait``,
    ``back_up``, ``spin``) run in turn, each followed by a replan, at most ``max_retries``
    times; then the robot stops and its status is ``blocked`` (the engine ends it so).
 
@@ -43,7 +49,7 @@ from wheelbase.geometry import wrap_angle
 
 __all__ = ["NAVIGATOR_STATUSES", "Navigator", "NavigatorOptions", "Route", "believed_grid"]
 
-NAVIGATOR_STATUSES: tuple[str, ...] = ("recovering", "blocked")
+NAVIGATOR_STATUSES: tuple[str, ...] = ("yielding", "recovering", "blocked")
 """The navigator's own statuses, beside the local controller's (``ok``, ``all_collide``, …)."""
 
 LETHAL = 254
@@ -74,6 +80,8 @@ class NavigatorOptions:
         [m], [m/s]
     spin_angle, spin_rate : float
         [rad], [rad/s]
+    yield_time : float
+        Longest a lower-priority robot of a fleet waits aside [s] (0: it never yields).
     """
 
     replan: bool = True
@@ -87,6 +95,7 @@ class NavigatorOptions:
     back_up_speed: float = 0.1
     spin_angle: float = math.pi / 2
     spin_rate: float = math.radians(60.0)
+    yield_time: float = 60.0
 
     def __post_init__(self) -> None:
         nonnegative("rate_hz", self.rate_hz, "Hz")
@@ -101,6 +110,7 @@ class NavigatorOptions:
             raise ConfigError("recovery behaviours: give at least one of wait, back_up, spin")
         for name in ("wait_time", "back_up_distance", "back_up_speed", "spin_angle", "spin_rate"):
             positive(name, getattr(self, name))
+        nonnegative("yield_time", self.yield_time, "s")
 
 
 def believed_grid(view: Any, moving_speed: float) -> Any:
@@ -156,15 +166,29 @@ class Route:
         The plan made on the map before the run (its legs end at the goals).
     goals : tuple of numpy.ndarray
         The goals (x [m], y [m], θ [rad]) in order.
+    priority : int
+        The robot's rank in its fleet (0: the right of way; the others yield to it).
     """
 
     plan: Any
     goals: tuple
+    priority: int = 0
 
     @property
     def poses(self) -> np.ndarray:
         """The first plan's poses (what a law that follows the route blindly follows)."""
         return self.plan.poses
+
+
+@dataclass
+class _Yield:
+    """Waiting aside: since when, where, and the way there."""
+
+    started: float
+    refuge: np.ndarray
+    path: Any
+    last_try: float
+    reached: bool = False
 
 
 @dataclass
@@ -228,10 +252,14 @@ class Navigator:
             reset()
         self.plan: Any = None  # None: the route's first plan, at the first call
         self.goals: list[np.ndarray] = []
+        self.route = np.zeros((0, 2))
         self.next_goal = 0
         self.last_replan = -math.inf
         self.last_belief: bytes | None = None
         self.recovery: _Recovery | None = None
+        self.yielding: _Yield | None = None
+        self.priority = 0
+        self.yields = 0
         self.retries = 0
         self.replans = 0
         self.recoveries = 0
@@ -251,6 +279,7 @@ class Navigator:
         return {
             "replans": self.replans,
             "recoveries": self.recoveries,
+            "yields": self.yields,
             "blocked": self._mode == "blocked",
             "plans": list(self.plans),
         }
@@ -284,6 +313,8 @@ class Navigator:
         if self.plan is None:
             self.plan = reference.plan
             self.goals = [np.asarray(goal, dtype=np.float64).reshape(3) for goal in reference.goals]
+            self.priority = int(getattr(reference, "priority", 0))
+            self.route = np.asarray(reference.plan.poses)[:, :2]
         if self._mode == "blocked":
             return np.zeros(len(self.command_names))
         self._pass_goals(pose)
@@ -293,12 +324,18 @@ class Navigator:
                 command = self._recover(t, pose, grid)
                 if command is not None:
                     return command
+            if self.yielding is not None:
+                command = self._yield(t, measured, pose, grid, perception)
+                if command is not None:
+                    return command
             blocked = self._blocked(pose, grid)
             due = self.options.rate_hz > 0 and t - self.last_replan >= 1.0 / self.options.rate_hz
             if blocked or due:
                 if blocked or _belief(grid) != self.last_belief:
                     self._replan(t, pose, grid)
                     if blocked and self._blocked(pose, grid):
+                        if self._start_yield(t, pose, grid):
+                            return self._yield(t, measured, pose, grid, perception)
                         return self._start_recovery(t, pose, grid)
                 self.last_replan = t
         self._mode = "following"
@@ -314,16 +351,16 @@ class Navigator:
                 break
             self.next_goal += 1
 
-    def _ahead(self, pose: np.ndarray) -> np.ndarray:
+    def _ahead(self, pose: np.ndarray, plan: Any = None) -> np.ndarray:
         """The plan's poses from the nearest one to ``lookahead`` metres further."""
-        poses = np.asarray(self.plan.poses)
+        poses = np.asarray((self.plan if plan is None else plan).poses)
         nearest = int(np.argmin(np.hypot(poses[:, 0] - pose[0], poses[:, 1] - pose[1])))
         steps = np.hypot(*np.diff(poses[nearest:, :2], axis=0).T)
         arc = np.concatenate([[0.0], np.cumsum(steps)])
         return poses[nearest : nearest + int(np.searchsorted(arc, self.options.lookahead)) + 1]
 
-    def _blocked(self, pose: np.ndarray, grid: Any) -> bool:
-        ahead = self._ahead(pose)
+    def _blocked(self, pose: np.ndarray, grid: Any, plan: Any = None) -> bool:
+        ahead = self._ahead(pose, plan)
         if len(ahead) == 0:
             return False
         inside = grid.contains(ahead[:, :2])
@@ -347,6 +384,106 @@ class Navigator:
         self.replans += 1
         self.plans.append((t, np.asarray(path.poses)))
         return True
+
+    # ------------------------------------------------------------------ yielding
+    def _start_yield(self, t: float, pose: np.ndarray, grid: Any) -> bool:
+        """Go aside for a robot of higher priority: True when a refuge and a way there exist."""
+        if self.priority <= 0 or self.options.yield_time <= 0:
+            return False
+        refuge = self._refuge(pose, grid)
+        if refuge is None:
+            return False
+        path = self.plan_route(_cleared(grid, pose, self.footprint), pose, [refuge])
+        if path is None:
+            return False
+        self.yields += 1
+        self.yielding = _Yield(t, refuge, path, t)
+        self.plans.append((t, np.asarray(path.poses)))
+        return True
+
+    def _yield(
+        self, t: float, measured: np.ndarray, pose: np.ndarray, grid: Any, perception: Any
+    ) -> np.ndarray | None:
+        """The yielding command, or None once the way to the goal is free (follow it)."""
+        waiting = self.yielding
+        self._mode = "yielding"
+        if t - waiting.started > self.options.yield_time:
+            self.yielding = None
+            return self._start_recovery(t, pose, grid)
+        # there, or anywhere far enough aside: stop and let the others by
+        near = math.hypot(*(pose[:2] - waiting.refuge[:2])) <= 0.1
+        waiting.reached = waiting.reached or near or bool(self._aside(pose[None, :2], 0.05)[0])
+        if waiting.reached and t - waiting.last_try >= 1.0:
+            waiting.last_try = t
+            goals = self.goals[self.next_goal :]
+            path = self.plan_route(_cleared(grid, pose, self.footprint), pose, goals)
+            if path is not None and self._way_clear(pose, grid, path, perception):
+                self.yielding = None
+                self.plan = path
+                self.replans += 1
+                self.plans.append((t, np.asarray(path.poses)))
+                self.last_replan = t
+                self.last_belief = _belief(grid)
+                return None
+        if waiting.reached:
+            return np.zeros(len(self.command_names))
+        if getattr(self.local, "uses_perception", False):
+            return self.local(t, measured, waiting.path, perception=perception)
+        return self.local(t, measured, waiting.path)
+
+    def _way_clear(self, pose: np.ndarray, grid: Any, path: Any, perception: Any) -> bool:
+        """No obstacle cell under the footprint along the whole path (but where the robot
+        stands) and no track, moving or not, near it."""
+        from wheelbase.polyline import distance_to_polyline
+
+        poses = np.asarray(path.poses)
+        away = np.hypot(poses[:, 0] - pose[0], poses[:, 1] - pose[1]) > self.footprint.max_radius
+        inside = grid.contains(poses[:, :2]) & away
+        if inside.any() and grid.in_collision(self.footprint, poses[inside]).any():
+            return False
+        tracks = getattr(perception, "tracks", None)
+        if tracks is None or len(tracks.position) == 0 or len(poses) < 2:
+            return True
+        reach = np.asarray(tracks.radius) + self.footprint.max_radius + 0.2
+        return bool(np.all(distance_to_polyline(tracks.position, poses[:, :2]) > reach))
+
+    def _aside(self, points: np.ndarray, margin: float) -> np.ndarray:
+        """Which points are far enough from the way others take (the whole route, behind the
+        robot too, and the plan now) for a robot as wide as this one to pass, ``margin`` [m]
+        apart (a refuge is chosen 0.15 m aside; a robot 0.05 m aside has arrived there)."""
+        from wheelbase.polyline import distance_to_polyline
+
+        width = float(np.ptp(self.footprint.polygon[:, 1]))
+        away = np.minimum(
+            distance_to_polyline(points, self.route),
+            distance_to_polyline(points, np.asarray(self.plan.poses)[:, :2]),
+        )
+        return away >= self.footprint.max_radius + 0.5 * width + margin
+
+    def _refuge(self, pose: np.ndarray, grid: Any) -> np.ndarray | None:
+        """The nearest pose reachable from ``pose`` whose footprint stands aside of the plan by
+        at least a robot's width (module docstring), or None."""
+        from wheelbase.planning.astar import dijkstra
+
+        footprint = self.footprint
+        free = _cleared(grid, pose, footprint).inflate(
+            max(footprint.max_radius - grid.resolution, 0)
+        )
+        cell = free.world_to_cell(pose[:2]).astype(int)
+        occupied = free.occupied.copy()
+        occupied[cell[0], cell[1]] = False
+        from wheelbase.planning import OccupancyGrid
+
+        reach = dijkstra(OccupancyGrid(occupied, grid.resolution, grid.origin), cell)
+        rows, cols = np.nonzero(np.isfinite(reach))
+        if not len(rows):
+            return None
+        centres = grid.cell_to_world(np.column_stack([rows, cols]))
+        ok = self._aside(centres, 0.15)
+        if not ok.any():
+            return None
+        best = int(np.argmin(np.where(ok, reach[rows, cols], np.inf)))
+        return np.array([*centres[best], pose[2]])
 
     def _start_recovery(self, t: float, pose: np.ndarray, grid: Any) -> np.ndarray:
         if self.retries >= self.options.max_retries:

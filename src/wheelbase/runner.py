@@ -598,7 +598,8 @@ def prepare(
         from wheelbase.navigation import Route
 
         routes = tuple(
-            Route(leg, tuple(leg_goals)) for leg, (_, leg_goals) in zip(plans, robots, strict=True)
+            Route(leg, tuple(leg_goals), priority)
+            for priority, (leg, (_, leg_goals)) in enumerate(zip(plans, robots, strict=True))
         )
         engine_reference = routes[0]
         fleet_references = routes if len(routes) > 1 else None

@@ -186,4 +186,5 @@ def navigator_options(scenario: Scenario) -> Any:
         back_up_speed=recovery.back_up_speed,
         spin_angle=math.radians(recovery.spin_angle_deg),
         spin_rate=math.radians(recovery.spin_rate_deg),
+        yield_time=recovery.yield_time,
     )
