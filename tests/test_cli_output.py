@@ -1,5 +1,6 @@
 """What the commands print (``wheelbase.commands.output``): piped output keeps names and paths
-whole, nothing precedes an error line, counts agree with their nouns."""
+whole, nothing precedes an error line, counts agree with their nouns, and an OS error is one
+line too."""
 
 from __future__ import annotations
 
@@ -63,6 +64,17 @@ def test_one_run_is_one_run(tmp_path):
     assert result.exit_code == 0, result.output
     assert result.stdout.lstrip().startswith("1 run in ")
     assert "1 runs" not in result.stdout
+
+
+@pytest.mark.parametrize("command", [["simulate", "--left", "1", "--right", "1", "--no-gif"],
+                                     ["calibrate", "--runs", "1"]])  # fmt: skip
+def test_an_os_error_is_one_line(tmp_path, command):
+    # --out under a file: NotADirectoryError was a traceback
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    result = RUNNER.invoke(app, [*command, "--out", str(blocker / "sub")])
+    assert result.exit_code == 2, result.output
+    assert result.stderr == f"error: Not a directory: {blocker / 'sub'}\n"
 
 
 @pytest.mark.parametrize(

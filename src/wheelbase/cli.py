@@ -13,7 +13,7 @@ Commands
 Angles, rates, lengths and poses follow one rule, parsed by :mod:`wheelbase.commands.options`
 (angles in degrees unless written ``1.57rad``, rates in rad/s, lengths in metres, poses
 ``X,Y,HEADING``), converted to SI on entry. Every :class:`~wheelbase.errors.WheelbaseError`,
-``FileExistsError`` and usage error ends the program with one
+``FileExistsError``, ``OSError`` of a file or folder and usage error ends the program with one
 red line ``error: ...`` on stderr and exit code 2; no traceback. What commands print goes
 through :mod:`wheelbase.commands.output`. Sub-commands of other areas live in
 :mod:`wheelbase.commands` (each module there has ``register(app)``) and are added here.
@@ -90,6 +90,10 @@ class _OneLineErrors(PoseGroup):
             code = super().main(*args, standalone_mode=False, **kwargs)
         except (WheelbaseError, FileExistsError) as error:
             _error_line(str(error))
+            sys.exit(2)
+        except OSError as error:  # a folder that cannot be made or a file that cannot be written
+            where = f": {error.filename}" if error.filename else ""
+            _error_line(f"{error.strerror or error}{where}")
             sys.exit(2)
         except typer.Abort:
             _error_line("aborted")
