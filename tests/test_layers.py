@@ -11,7 +11,17 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "wheelbase"
 LAYERS = (
     {"errors", "_validate", "_io", "_lazy", "_jax", "geometry", "polyline", "limits", "plot"},
     {"models", "planning"},
-    {"integrate", "integrate_numba", "integrate_jax", "dynamics", "trajectory", "timing", "motor"},
+    {
+        "integrate",
+        "integrate_numba",
+        "integrate_jax",
+        "dynamics",
+        "trajectory",
+        "timing",
+        "motor",
+        "inertial",
+        "terrain",
+    },
     {"sensors", "odometry"},
     {"control", "localization"},
     {"sim"},

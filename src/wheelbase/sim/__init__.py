@@ -18,7 +18,13 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
     from wheelbase.sim.localizers import KalmanLocalizer, ParticleLocalizer
     from wheelbase.sim.log import STATUSES, Log, status_code
-    from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
+    from wheelbase.sim.plants import (
+        DynamicPlant,
+        KinematicPlant,
+        TerrainPlant,
+        TerrainState,
+        WheelAxle,
+    )
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
     from wheelbase.sim.sensors import Readings, SensorSuite
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
@@ -37,6 +43,8 @@ _EXPORTS = {
     "status_code": "wheelbase.sim.log",
     "DynamicPlant": "wheelbase.sim.plants",
     "KinematicPlant": "wheelbase.sim.plants",
+    "TerrainPlant": "wheelbase.sim.plants",
+    "TerrainState": "wheelbase.sim.plants",
     "WheelAxle": "wheelbase.sim.plants",
     "EncoderOdometry": "wheelbase.sim.sensing",
     "PerfectState": "wheelbase.sim.sensing",
@@ -62,6 +70,8 @@ __all__ = [
     "PerfectState",
     "Readings",
     "SensorSuite",
+    "TerrainPlant",
+    "TerrainState",
     "WheelAxle",
     "closed_loop",
     "run_go_to_goal",
