@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from wheelbase._validate import count_text, read_text
 from wheelbase.errors import ScenarioError
 from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
+from wheelbase.scenario_world import FleetRobotSpec, RecoverySpec, ReplanningSpec, WorldSpec
 
 __all__ = [
     "EMPTY_MAP_MARGIN",
@@ -35,6 +36,8 @@ __all__ = [
     "Scenario",
     "SensorsSpec",
     "TrajectorySpec",
+    "empty_map",
+    "empty_map_shape",
     "format_validation_error",
     "load_scenario",
     "scenario_json_schema",
@@ -431,6 +434,39 @@ class Scenario(_Strict):
     resources: ResourceSpec = Field(
         default_factory=ResourceSpec, description="Resource limits (raise them on purpose)."
     )
+    world: WorldSpec | None = Field(
+        None,
+        description="The truth beyond map (obstacles, moving agents), seen only by the sensors.",
+    )
+    fleet: tuple[FleetRobotSpec, ...] | None = Field(
+        None,
+        min_length=1,
+        description="Several robots (each its start and goals) in one world, each seeing the "
+        "others; start and goal then come from the fleet's first robot.",
+    )
+    costmap: dict[str, float | int | bool] | None = Field(
+        None,
+        description="Layered costmap options (wheelbase.perception.CostmapSpec: "
+        "inflation_radius [m], cost_scaling_factor [1/m], obstacle_max_range [m], "
+        "raytrace_max_range [m], window [m], ...); default Nav2's.",
+    )
+    tracker: dict[str, float | int | bool] | None = Field(
+        None,
+        description="Tracker of moving obstacles (wheelbase.perception.TrackerSpec options).",
+    )
+    replanning: ReplanningSpec = Field(
+        default_factory=ReplanningSpec,
+        description="Replanning on the costmap (with a lidar and a path-following law).",
+    )
+    recovery: RecoverySpec = Field(
+        default_factory=RecoverySpec, description="Recoveries when no plan exists."
+    )
+    control_rate_hz: float | None = Field(
+        None,
+        gt=0,
+        description="Controller calls per second (default: every step dt); the command is "
+        "held between calls.",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -440,6 +476,17 @@ class Scenario(_Strict):
                 raise ValueError("give either goal or goals, not both")
             data = dict(data)
             data["goals"] = [data.pop("goal")]
+        if isinstance(data, dict) and data.get("fleet"):
+            fleet = data["fleet"]
+            if "start" in data or "goals" in data:
+                raise ValueError(
+                    "with fleet, give each robot's start and goal in the fleet, not start/goal"
+                )
+            first = fleet[0] if isinstance(fleet, (list, tuple)) else None
+            if isinstance(first, dict):
+                data = dict(data)
+                data["start"] = first.get("start")
+                data["goals"] = first.get("goals", [first["goal"]] if "goal" in first else None)
         return data
 
     @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
@@ -503,7 +550,7 @@ class Scenario(_Strict):
                 "use a larger dt or a shorter duration, or raise resources.max_steps"
             )
         if self.map == "empty":
-            rows, cols = empty_map_shape([self.start, *self.goals])
+            rows, cols = empty_map_shape(self.robot_poses())
             limit = self.resources.max_map_cells
             if rows * cols > limit:
                 raise ValueError(
@@ -513,6 +560,12 @@ class Scenario(_Strict):
                     "raise resources.max_map_cells"
                 )
         return self
+
+    def robot_poses(self) -> list[tuple[float, float, float]]:
+        """Every start and goal of every robot (the fleet's, or the one robot's) [m, m, deg]."""
+        if self.fleet is None:
+            return [self.start, *self.goals]
+        return [pose for robot in self.fleet for pose in (robot.start, *robot.goals)]
 
     def to_yaml(self) -> str:
         """The resolved scenario (all defaults filled) as YAML, loadable again."""
@@ -535,6 +588,47 @@ def empty_map_shape(points: list[tuple[float, ...]]) -> tuple[int, int]:
     width = math.ceil(max(xs) + EMPTY_MAP_MARGIN) - math.floor(min(xs) - EMPTY_MAP_MARGIN)
     height = math.ceil(max(ys) + EMPTY_MAP_MARGIN) - math.floor(min(ys) - EMPTY_MAP_MARGIN)
     return math.ceil(height / EMPTY_MAP_RESOLUTION), math.ceil(width / EMPTY_MAP_RESOLUTION)
+
+
+def empty_map(points: Any, max_cells: int = MAX_MAP_CELLS) -> Any:
+    """The ``map: empty`` field: an obstacle-free grid around ``points``, walled by its edge.
+
+    The one rule of ``empty`` for scenarios, ``wheelbase plan empty`` and ``wheelbase control
+    --map empty``: :data:`EMPTY_MAP_MARGIN` around the points' bounding box (rounded out to
+    whole metres) at :data:`EMPTY_MAP_RESOLUTION`.
+
+    Parameters
+    ----------
+    points : sequence of array_like
+        Poses or points (x [m], y [m], ...): the start and the goals.
+    max_cells : int
+        Most cells allowed (``resources.max_map_cells``).
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    MapError
+        If the field would hold more than ``max_cells`` cells.
+    """
+    import numpy as np
+
+    from wheelbase.errors import MapError
+    from wheelbase.planning import OccupancyGrid
+
+    rows, cols = empty_map_shape(points)
+    if rows * cols > max_cells:
+        raise MapError(
+            f"map: empty around the start and goals would be {rows} × {cols} = "
+            f"{count_text(rows * cols)} cells of {EMPTY_MAP_RESOLUTION} m: more than "
+            f"max_map_cells = {max_cells}; bring them closer or use a map file"
+        )
+    low = [math.floor(min(p[k] for p in points) - EMPTY_MAP_MARGIN) for k in (0, 1)]
+    return OccupancyGrid.from_array(
+        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=(float(low[0]), float(low[1]))
+    )
 
 
 def _numbers(value: Any) -> list[float]:
