@@ -33,6 +33,8 @@ LAYERS = (
         "scenario_sensors",
         "scenario_world",
         "scenario_navigation",
+        "scenario_terrain",
+        "scenario_ground",
         "report",
         "dynamics_plot",
         "mcap_export",

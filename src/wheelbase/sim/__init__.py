@@ -31,6 +31,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     )
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
     from wheelbase.sim.sensors import Readings, SensorSuite
+    from wheelbase.sim.stuck import Stuck
     from wheelbase.sim.surroundings import Surroundings
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
 
@@ -57,6 +58,7 @@ _EXPORTS = {
     "PerfectState": "wheelbase.sim.sensing",
     "Readings": "wheelbase.sim.sensors",
     "SensorSuite": "wheelbase.sim.sensors",
+    "Stuck": "wheelbase.sim.stuck",
     "Surroundings": "wheelbase.sim.surroundings",
     "track_trajectory": "wheelbase.sim.tracking",
     "tune_computed_torque": "wheelbase.sim.tracking",
@@ -80,6 +82,7 @@ __all__ = [
     "PerfectState",
     "Readings",
     "SensorSuite",
+    "Stuck",
     "Surroundings",
     "TerrainPlant",
     "TerrainState",
