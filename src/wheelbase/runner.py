@@ -236,6 +236,9 @@ class TorqueTracking:
         path has curvature jumps (line to arc), so the time-parametrised ω steps and its
         derivative is an impulse the wheels cannot deliver; feeding it forward would only
         saturate the torques. The PID corrects the remaining error.
+    law : callable, optional
+        Builds the torque law from (model, gains, max_torque=, derivative_filter=) (default
+        :class:`~wheelbase.control.ComputedTorquePID`; the adaptive law learns its model).
     """
 
     command_names = ("tau_left", "tau_right")
@@ -250,6 +253,7 @@ class TorqueTracking:
         model_error: float = 0.0,
         max_acceleration: float = math.inf,
         max_yaw_acceleration: float = math.inf,
+        law: Callable[..., Any] | None = None,
     ) -> None:
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
 
@@ -258,7 +262,7 @@ class TorqueTracking:
         if model_error:
             factor = 1.0 + model_error
             model = model.with_body(model.body.scaled(factor, factor))
-        self._pid = ComputedTorquePID(
+        self._pid = (law or ComputedTorquePID)(
             model,
             TorqueGains.pole_placement(bandwidth, speed=speed),
             max_torque=max_torque,
@@ -270,6 +274,20 @@ class TorqueTracking:
     def reset(self) -> None:
         """Forget the integrals of the PID."""
         self._pid.reset()
+
+    @property
+    def law(self) -> Any:
+        """The torque law it runs (its estimates, for the adaptive one)."""
+        return self._pid
+
+    @property
+    def model(self) -> Any:
+        """The law's model of the robot (settable: a payload it knows it picked up)."""
+        return self._pid.model
+
+    @model.setter
+    def model(self, model: Any) -> None:
+        self._pid.model = model
 
     def __call__(self, t: float, state: np.ndarray, reference: PoseTrajectory) -> np.ndarray:
         """Wheel torques (left, right) [N·m] for the estimated state (6,) at time ``t`` [s].
@@ -305,6 +323,23 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread")
+"""Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
+
+
+def _adaptive_computed_torque(
+    robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None
+):
+    """Computed torque on a model whose mass, inertia and CG moment are learnt online."""
+    import functools
+
+    from wheelbase.control.adaptive import AdaptiveComputedTorque
+
+    options = {key: gains.pop(key) for key in ADAPTIVE_GAINS if key in gains}
+    law = functools.partial(AdaptiveComputedTorque, **options)
+    return _computed_torque(robot, {**gains, "law": law}, limits, grid)
+
+
 def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
     """MPPI (Williams et al.) on the map's distance field, following the planned path."""
     from wheelbase.control.mppi import MPPI
@@ -320,6 +355,7 @@ def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = 
 LAWS: dict[str, Callable[..., Any]] = {
     "mppi": _mppi,
     "computed_torque": _computed_torque,
+    "adaptive_computed_torque": _adaptive_computed_torque,
     "kanayama": _tracker("Kanayama"),
     "linear": _tracker("LinearTracker"),
     "pure_pursuit": _follower("PurePursuit"),
@@ -328,6 +364,8 @@ LAWS: dict[str, Callable[..., Any]] = {
     "segment": _follower("SegmentFollower"),
 }
 """Control laws a scenario can name (``controller.law``) and how each is built."""
+TORQUE_LAWS = ("computed_torque", "adaptive_computed_torque")
+"""The laws that give wheel torques themselves (a dynamic plant; the others are wrapped)."""
 
 
 def _build_controller(
@@ -372,6 +410,8 @@ class RunResult:
         Planning and tracking figures (see ``metrics.json`` in the README).
     sensors : SensorSuite or None
         The sensors the robot read (a lidar, landmarks), for drawing.
+    terrain : TerrainMap or None
+        The ground it drove on (a scenario with terrain or a payload), for drawing.
     """
 
     scenario: Scenario
@@ -382,6 +422,7 @@ class RunResult:
     log: Log | None
     metrics: dict[str, Any]
     sensors: Any = None
+    terrain: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -510,28 +551,35 @@ def prepare(
         # true pose, off by the odometry drift, still lands inside it.
         position, heading_deg = scenario.goal_tolerance
         gains.setdefault("goal_tolerance", (0.5 * position, 0.5 * math.radians(heading_deg)))
+    dynamic = scenario.plant == "dynamic"
+    believed = robot  # the controller's model: the robot with the payload it believes in
+    if dynamic and robot.dynamics is not None:
+        from wheelbase.scenario_ground import controller_model
+
+        believed = replace(robot, dynamics=controller_model(scenario, robot))
     controller, reference_kind = _field(
         "controller.gains",
-        lambda: _build_controller(scenario.controller.law, robot, gains, limits, grid),
+        lambda: _build_controller(scenario.controller.law, believed, gains, limits, grid),
     )
 
-    dynamic = scenario.plant == "dynamic"
-    if not dynamic and scenario.controller.law == "computed_torque":
+    if not dynamic and scenario.controller.law in TORQUE_LAWS:
         raise ScenarioError(
-            "controller.law: computed_torque gives wheel torques: use it with plant: dynamic"
+            f"controller.law: {scenario.controller.law} gives wheel torques: use it with "
+            "plant: dynamic"
         )
     if dynamic and robot.dynamics is None:
         raise ScenarioError("plant: dynamic needs a robot with a dynamics preset (rm100)")
-    if dynamic and scenario.controller.law != "computed_torque":
+    if dynamic and scenario.controller.law not in TORQUE_LAWS:
         from wheelbase.control.torque import TwistTorqueLoop
 
         loop = scenario.controller.torque_loop
         controller = _field(
             "controller.torque_loop",
             lambda: TwistTorqueLoop(
-                controller, robot.dynamics, bandwidth=loop.bandwidth, max_torque=loop.max_torque
+                controller, believed.dynamics, bandwidth=loop.bandwidth,
+                max_torque=loop.max_torque,
             ),
-        )
+        )  # fmt: skip
     if (
         not dynamic
         and robot.kind == "diff"
@@ -582,6 +630,13 @@ def prepare(
         track_scale=scenario.odometry.track_scale,
     )
     plant = DynamicPlant(robot.dynamics, axle) if dynamic else KinematicPlant(robot.model, axle)
+    if dynamic:  # the ground, the payloads and what the controller knows of them
+        from wheelbase import scenario_ground as ground
+
+        timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        if ground.ground_active(scenario):
+            terrain = ground.build_terrain(scenario, grid)
+            plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
 
@@ -608,6 +663,8 @@ def prepare(
             timed if reference_kind == "trajectory" else leg
             for timed, leg in zip(references, plans, strict=True)
         )
+    if dynamic:  # the payload changes the controller knows of, traction control
+        controller = ground.wrap_controller(scenario, controller, robot, timeline)
     control_every = 1
     if scenario.control_rate_hz is not None:
         control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))
@@ -634,11 +691,18 @@ def prepare(
         surroundings=surroundings,
         perception=perception,
         references=fleet_references,
+        stuck=_stuck(scenario),
     )
     return Prepared(
         scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,
         np.array([robot_start for robot_start, _ in robots]), tuple(plans), tuple(references),
     )  # fmt: skip
+
+
+def _stuck(scenario: Scenario) -> Any:
+    from wheelbase.scenario_ground import build_stuck
+
+    return build_stuck(scenario)
 
 
 def _fleet(scenario: Scenario, start: np.ndarray, goals: list[np.ndarray]) -> list:
@@ -796,6 +860,7 @@ def run(
         log,
         metrics,
         prepared.engine.sensors,
+        getattr(getattr(prepared.engine.plant, "model", None), "terrain", None),
     )
 
 

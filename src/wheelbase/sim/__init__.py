@@ -22,9 +22,16 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.sim.localizers import KalmanLocalizer, ParticleLocalizer
     from wheelbase.sim.log import STATUSES, Log, status_code
     from wheelbase.sim.perceiving import PerceptionState, PerceptionSuite
-    from wheelbase.sim.plants import DynamicPlant, KinematicPlant, WheelAxle
+    from wheelbase.sim.plants import (
+        DynamicPlant,
+        KinematicPlant,
+        TerrainPlant,
+        TerrainState,
+        WheelAxle,
+    )
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
     from wheelbase.sim.sensors import Readings, SensorSuite
+    from wheelbase.sim.stuck import Stuck
     from wheelbase.sim.surroundings import Surroundings
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
 
@@ -44,11 +51,14 @@ _EXPORTS = {
     "PerceptionSuite": "wheelbase.sim.perceiving",
     "DynamicPlant": "wheelbase.sim.plants",
     "KinematicPlant": "wheelbase.sim.plants",
+    "TerrainPlant": "wheelbase.sim.plants",
+    "TerrainState": "wheelbase.sim.plants",
     "WheelAxle": "wheelbase.sim.plants",
     "EncoderOdometry": "wheelbase.sim.sensing",
     "PerfectState": "wheelbase.sim.sensing",
     "Readings": "wheelbase.sim.sensors",
     "SensorSuite": "wheelbase.sim.sensors",
+    "Stuck": "wheelbase.sim.stuck",
     "Surroundings": "wheelbase.sim.surroundings",
     "track_trajectory": "wheelbase.sim.tracking",
     "tune_computed_torque": "wheelbase.sim.tracking",
@@ -72,7 +82,10 @@ __all__ = [
     "PerfectState",
     "Readings",
     "SensorSuite",
+    "Stuck",
     "Surroundings",
+    "TerrainPlant",
+    "TerrainState",
     "WheelAxle",
     "closed_loop",
     "run_go_to_goal",

@@ -14,6 +14,7 @@ code. Each :meth:`Engine.step`, for every robot still running:
 4. *the rules* (on the state at time t): collision of the footprint → ``collision``; after
    the reference has ended, at rest and with the *estimate* within tolerance of the goal, the
    robot stops → ``arrived`` if the *true* pose is within tolerance too, else ``missed_goal``;
+   with a ``stuck`` rule, commanded to move and not moving for its time → ``stuck``;
    the time limit → ``timeout``;
 5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
 6. *encoders and sensors*: the wheel angles' change becomes tick differences, and the sensors
@@ -170,6 +171,8 @@ class EngineState:
         The world's evolving truth (agents), from ``surroundings.start``.
     perception : object or None
         What each robot has made of its sensors (costmap, tracks), from ``perception.start``.
+    still : numpy.ndarray, shape (N,), or None
+        Seconds each robot has stood still while commanded to move (the ``stuck`` rule).
     """
 
     step: int
@@ -191,6 +194,7 @@ class EngineState:
     held_status: list | None = None
     world: Any = None
     perception: Any = None
+    still: np.ndarray | None = None
 
     @property
     def running(self) -> np.ndarray:
@@ -275,6 +279,9 @@ class Engine:
     references : tuple, optional
         One reference per robot of a world (a fleet's plans): robot i follows
         ``references[i % len(references)]`` (per-robot controllers only).
+    stuck : Stuck, optional
+        The ``stuck`` rule (:class:`~wheelbase.sim.stuck.Stuck`): a robot commanded to move
+        that does not move for its time ends ``stuck``.
     """
 
     plant: Any
@@ -296,6 +303,7 @@ class Engine:
     surroundings: Any = None
     perception: Any = None
     references: tuple | None = None
+    stuck: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -407,6 +415,7 @@ class Engine:
             sensors=None if self.sensors is None else self.sensors.start(seeds),
             world=None if self.surroundings is None else self.surroundings.start(seeds, start),
             perception=None if self.perception is None else self.perception.start(start),
+            still=None if self.stuck is None else np.zeros(n),
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -527,6 +536,11 @@ class Engine:
                     status[stopped & truly] = ARRIVED
                     status[stopped & ~truly] = MISSED_GOAL
                     active &= ~stopped
+        still = state.still
+        if self.stuck is not None and still is not None:
+            still, stuck = self.stuck.update(still, state.pose, moved, reference, self.dt)
+            status[active & stuck] = STUCK
+            active &= ~stuck
         if state.step >= self.steps or t >= limit - 1e-12:
             status[active] = TIMEOUT
             active[:] = False
@@ -610,6 +624,7 @@ class Engine:
             held_status=held,
             world=world_state,
             perception=perception_state,
+            still=still,
         )
         return new_state, row
 
