@@ -950,7 +950,15 @@ def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, An
     if extras:
         speed = float(np.hypot(*one.twist[0, -1, :2]))
         out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed))
+    if "track_matches" in one.extras:
+        matches = float(one.extras["track_matches"][0, -1])
+        for name, key in (("position", "track_position_rmse_m"),
+                          ("velocity", "track_velocity_rmse_m_s")):  # fmt: skip
+            total = float(one.extras[f"track_{name}_sq_sum"][0, -1])
+            out[key] = math.sqrt(total / matches) if matches else None
+        out["track_matches"] = int(matches)
     out["replans"] = int(summary.get("replans", 0))
+    out["yields"] = int(summary.get("yields", 0))
     out["recoveries"] = int(summary.get("recoveries", 0))
     speed = np.hypot(one.twist[0, :-1, 0], one.twist[0, :-1, 1])
     out["time_stopped_s"] = float(np.sum(np.diff(one.t)[speed < 0.01]))

@@ -152,14 +152,14 @@ def build_perception(scenario: Scenario, grid: Any, footprint: Any, sensors: Any
     """
     if not perceives(scenario) or sensors is None or sensors.lidar is None:
         return None
-    from wheelbase.perception import CostmapSpec, LayeredCostmap, Tracker, TrackerSpec
+    from wheelbase.perception import CostmapSpec, LayeredCostmap, TrackerSpec
     from wheelbase.scenario_sensors import world_grid
     from wheelbase.sim.perceiving import PerceptionSuite
 
     spec = CostmapSpec.from_mapping(scenario.costmap)
     costmap = LayeredCostmap.from_map(spec, world_grid(grid), footprint)
-    tracker = Tracker(TrackerSpec.from_mapping(scenario.tracker), world_grid(grid))
-    return PerceptionSuite(costmap, sensors.lidar, tracker)
+    tracker = TrackerSpec.from_mapping(scenario.tracker)
+    return PerceptionSuite(costmap, sensors.lidar, tracker, world_grid(grid))
 
 
 def navigator_options(scenario: Scenario) -> Any:
