@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -82,6 +82,10 @@ class NavigatorOptions:
         [rad], [rad/s]
     yield_time : float
         Longest a lower-priority robot of a fleet waits aside [s] (0: it never yields).
+    local_window : float or None
+        Side [m] of the rolling window of the costmap the local controller sees (Nav2's local
+        costmap); None: the whole costmap. Outside the window is lethal to it, so the window
+        must reach past the controller's horizon.
     """
 
     replan: bool = True
@@ -96,6 +100,7 @@ class NavigatorOptions:
     spin_angle: float = math.pi / 2
     spin_rate: float = math.radians(60.0)
     yield_time: float = 60.0
+    local_window: float | None = None
 
     def __post_init__(self) -> None:
         nonnegative("rate_hz", self.rate_hz, "Hz")
@@ -111,6 +116,8 @@ class NavigatorOptions:
         for name in ("wait_time", "back_up_distance", "back_up_speed", "spin_angle", "spin_rate"):
             positive(name, getattr(self, name))
         nonnegative("yield_time", self.yield_time, "s")
+        if self.local_window is not None:
+            positive("local_window", self.local_window, "m")
 
 
 def believed_grid(view: Any, moving_speed: float) -> Any:
@@ -242,6 +249,7 @@ class Navigator:
         self.kind = kind
         self.goal_reach = positive("goal_reach", goal_reach, "m")
         self.command_names = tuple(getattr(local, "command_names", ("v", "omega")))
+        self._samples: dict[float, np.ndarray] = {}  # the footprint sampled, per resolution
         self.reset()
 
     # ------------------------------------------------------------------ engine protocol
@@ -339,9 +347,19 @@ class Navigator:
                         return self._start_recovery(t, pose, grid)
                 self.last_replan = t
         self._mode = "following"
-        if getattr(self.local, "uses_perception", False):
-            return self.local(t, measured, self.plan, perception=perception)
-        return self.local(t, measured, self.plan)
+        return self._follow(t, measured, pose, self.plan, perception)
+
+    def _follow(
+        self, t: float, measured: np.ndarray, pose: np.ndarray, path: Any, perception: Any
+    ) -> np.ndarray:
+        """The local controller's command along ``path``, seeing its rolling window."""
+        if not getattr(self.local, "uses_perception", False):
+            return self.local(t, measured, path)
+        if perception is not None and self.options.local_window is not None:
+            costmap = perception.costmap
+            cells = max(1, round(self.options.local_window / costmap.resolution))
+            perception = replace(perception, costmap=costmap.window(pose, cells))
+        return self.local(t, measured, path, perception=perception)
 
     # ------------------------------------------------------------------ pieces
     def _pass_goals(self, pose: np.ndarray) -> None:
@@ -366,9 +384,16 @@ class Navigator:
         inside = grid.contains(ahead[:, :2])
         if not inside.any():
             return False
-        hit = grid.in_collision(self.footprint, ahead[inside])
+        hit = self._hits(grid, ahead[inside])
         # the robot's own cell: an obstacle the robot already overlaps is not ahead of it
         return bool(np.any(hit[1:]) if len(hit) > 1 else False)
+
+    def _hits(self, grid: Any, poses: np.ndarray) -> np.ndarray:
+        """Which poses put the footprint on an obstacle cell of ``grid`` (or off it)."""
+        key = grid.resolution
+        if key not in self._samples:
+            self._samples[key] = _footprint_samples(self.footprint, key)
+        return _footprint_hits(grid, self._samples[key], poses)
 
     def _replan(self, t: float, pose: np.ndarray, grid: Any) -> bool:
         # what the lidar marked where the robot stands is the robot's own neighbourhood (an
@@ -427,9 +452,7 @@ class Navigator:
                 return None
         if waiting.reached:
             return np.zeros(len(self.command_names))
-        if getattr(self.local, "uses_perception", False):
-            return self.local(t, measured, waiting.path, perception=perception)
-        return self.local(t, measured, waiting.path)
+        return self._follow(t, measured, pose, waiting.path, perception)
 
     def _way_clear(self, pose: np.ndarray, grid: Any, path: Any, perception: Any) -> bool:
         """No obstacle cell under the footprint along the whole path (but where the robot
@@ -439,7 +462,7 @@ class Navigator:
         poses = np.asarray(path.poses)
         away = np.hypot(poses[:, 0] - pose[0], poses[:, 1] - pose[1]) > self.footprint.max_radius
         inside = grid.contains(poses[:, :2]) & away
-        if inside.any() and grid.in_collision(self.footprint, poses[inside]).any():
+        if inside.any() and self._hits(grid, poses[inside]).any():
             return False
         tracks = getattr(perception, "tracks", None)
         if tracks is None or len(tracks.position) == 0 or len(poses) < 2:
@@ -515,7 +538,7 @@ class Navigator:
             if (
                 travelled < options.back_up_distance
                 and elapsed < limit
-                and not _touches(grid, self.footprint, behind)
+                and not self._hits(grid, behind[None])[0]
             ):
                 command = stop.copy()
                 command[0] = -options.back_up_speed
@@ -564,8 +587,38 @@ def _belief(grid: Any) -> bytes:
     return np.packbits(grid.occupied).tobytes()
 
 
-def _touches(grid: Any, footprint: Any, pose: np.ndarray) -> bool:
-    """Whether the footprint at ``pose`` leaves the grid or overlaps an obstacle cell."""
-    if not grid.contains(pose[:2]):
-        return True
-    return bool(grid.in_collision(footprint, pose))
+def _footprint_hits(grid: Any, samples: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Which poses put the footprint (its ``samples`` (K, 2), body frame) on an occupied cell
+    or off the grid. A believed grid changes with every scan: a lookup per sample, not a
+    distance transform per grid."""
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    x = poses[:, :1] + c * samples[:, 0] - s * samples[:, 1]
+    y = poses[:, 1:2] + s * samples[:, 0] + c * samples[:, 1]
+    col = np.floor((x - grid.origin[0]) / grid.resolution).astype(np.int64)
+    row = np.floor((y - grid.origin[1]) / grid.resolution).astype(np.int64)
+    rows, cols = grid.shape
+    outside = (row < 0) | (row >= rows) | (col < 0) | (col >= cols)
+    hit = grid.occupied[np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)]
+    return np.any(hit | outside, axis=1)
+
+
+def _footprint_samples(footprint: Any, resolution: float) -> np.ndarray:
+    """Body-frame points (K, 2) [m] covering a convex footprint at half-cell spacing."""
+    poly = np.asarray(footprint.polygon, dtype=np.float64)
+    step = 0.5 * resolution
+    lo, hi = poly.min(0), poly.max(0)
+    gx = np.arange(lo[0], hi[0] + step, step)
+    gy = np.arange(lo[1], hi[1] + step, step)
+    grid = np.stack(np.meshgrid(np.minimum(gx, hi[0]), np.minimum(gy, hi[1])), -1).reshape(-1, 2)
+    edges = np.roll(poly, -1, axis=0) - poly
+    cross = edges[None, :, 0] * (grid[:, None, 1] - poly[None, :, 1]) - edges[None, :, 1] * (
+        grid[:, None, 0] - poly[None, :, 0]
+    )
+    inside = np.all(cross >= -1e-12, axis=1) | np.all(cross <= 1e-12, axis=1)
+    outline = [
+        poly[k]
+        + np.linspace(0, 1, max(2, int(np.ceil(np.hypot(*edges[k]) / step)) + 1))[:, None]
+        * edges[k]
+        for k in range(len(poly))
+    ]
+    return np.concatenate([grid[inside], *outline])

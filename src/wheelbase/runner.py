@@ -753,6 +753,16 @@ def _surroundings(scenario, grid, robot: Robot, footprint, robots, plans, seed):
     return Surroundings(world, footprint, len(robots), np.array(keep), tuple(labels))
 
 
+def _reach(law) -> float:
+    """How far ahead a local controller looks [m]: MPPI's horizon, DWA's simulated time, at
+    full speed (0 for a law without a horizon)."""
+    limits = getattr(law, "limits", None)
+    speed = float(getattr(limits, "max_speed", 0.0) or getattr(law, "max_speed", 0.0) or 0.0)
+    if hasattr(law, "horizon_steps"):
+        return law.horizon_steps * law.dt * speed
+    return float(getattr(law, "sim_time", 0.0)) * speed
+
+
 def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
     """The path law wrapped in a :class:`~wheelbase.navigation.Navigator` (replanning and
     recovery on the robot's costmap); on a dynamic plant inside the torque loop."""
@@ -793,7 +803,7 @@ def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
         return legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
 
     navigator = Navigator(
-        inner, plan_route, footprint, navigator_options(scenario), kind=robot.kind
+        inner, plan_route, footprint, navigator_options(scenario, _reach(inner)), kind=robot.kind
     )
     if isinstance(law, TwistTorqueLoop):
         return TwistTorqueLoop(

@@ -162,7 +162,7 @@ def build_perception(scenario: Scenario, grid: Any, footprint: Any, sensors: Any
     return PerceptionSuite(costmap, sensors.lidar, tracker, world_grid(grid))
 
 
-def navigator_options(scenario: Scenario) -> Any:
+def navigator_options(scenario: Scenario, reach: float = 0.0) -> Any:
     """The ``replanning`` and ``recovery`` sections as navigator options
     (:class:`~wheelbase.navigation.NavigatorOptions`).
 
@@ -170,10 +170,15 @@ def navigator_options(scenario: Scenario) -> Any:
     ----------
     scenario : Scenario
         The validated scenario.
+    reach : float
+        How far ahead the local controller looks [m] (its horizon at full speed): its rolling
+        window is at least 1 m wider than twice that, whatever ``costmap.window`` says.
     """
     from wheelbase.navigation import NavigatorOptions
+    from wheelbase.perception import CostmapSpec
 
     replanning, recovery = scenario.replanning, scenario.recovery
+    window = max(CostmapSpec.from_mapping(scenario.costmap).window, 2.0 * reach + 1.0)
     return NavigatorOptions(
         replan=replanning.enabled,
         rate_hz=replanning.rate_hz,
@@ -187,4 +192,5 @@ def navigator_options(scenario: Scenario) -> Any:
         spin_angle=math.radians(recovery.spin_angle_deg),
         spin_rate=math.radians(recovery.spin_rate_deg),
         yield_time=recovery.yield_time,
+        local_window=window,
     )
