@@ -352,8 +352,27 @@ def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = 
     ), "path"
 
 
+def _dwa(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
+    """The dynamic window approach (Fox, Burgard and Thrun; Nav2's DWB critics) along the
+    planned path, for (v, ω) robots."""
+    from wheelbase.control.dwa import DWA
+
+    if robot.kind != "diff":
+        raise ConfigError("dwa drives (v, omega) robots: use mppi for a car-like robot")
+    defaults: dict[str, Any] = {
+        "max_speed": limits.max_speed,
+        "max_yaw_rate": limits.max_yaw_rate,
+        "max_acceleration": limits.max_acceleration,
+        "max_yaw_acceleration": limits.max_yaw_acceleration,
+    }
+    return DWA.from_gains(
+        robot.model, grid=grid, footprint=_footprint(robot), **{**defaults, **gains}
+    ), "path"
+
+
 LAWS: dict[str, Callable[..., Any]] = {
     "mppi": _mppi,
+    "dwa": _dwa,
     "computed_torque": _computed_torque,
     "adaptive_computed_torque": _adaptive_computed_torque,
     "kanayama": _tracker("Kanayama"),
@@ -546,7 +565,7 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
-    if scenario.controller.law == "mppi":
+    if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
         position, heading_deg = scenario.goal_tolerance
