@@ -610,6 +610,8 @@ def prepare(
     ):
         raise ScenarioError("controller: a steering law cannot drive a differential drive")
     robots = _fleet(scenario, start, goals)
+    if len(robots) > 1:
+        _check_fleet_apart(robots, _footprint(robot))
     plans, planning = [], {}
     for index, (robot_start, robot_goals) in enumerate(robots):
         if index:
@@ -729,6 +731,29 @@ def _fleet(scenario: Scenario, start: np.ndarray, goals: list[np.ndarray]) -> li
     if scenario.fleet is None:
         return [(start, goals)]
     return [(_pose(robot.start), [_pose(goal) for goal in robot.goals]) for robot in scenario.fleet]
+
+
+def _check_fleet_apart(robots: list, footprint) -> None:
+    """Two robots of a fleet may not start (or end) where their footprints overlap."""
+    import shapely
+
+    def outline(pose):
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        body = footprint.polygon
+        return shapely.Polygon(
+            np.column_stack([pose[0] + c * body[:, 0] - s * body[:, 1],
+                             pose[1] + s * body[:, 0] + c * body[:, 1]])
+        )  # fmt: skip
+
+    for what, pick in (("start", lambda r: r[0]), ("goal", lambda r: r[1][-1])):
+        shapes = [outline(pick(r)) for r in robots]
+        for i in range(len(shapes)):
+            for j in range(i):
+                if shapes[i].intersects(shapes[j]):
+                    raise ScenarioError(
+                        f"fleet[{i}].{what} overlaps fleet[{j}].{what}: the robots' footprints "
+                        "touch there; place them apart"
+                    )
 
 
 def _sum_planning(total: dict[str, Any], stats: dict[str, Any]) -> dict[str, Any]:

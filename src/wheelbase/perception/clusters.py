@@ -129,6 +129,11 @@ def detect(
     inside = (cells[:, 0] >= 0) & (cells[:, 0] < rows) & (cells[:, 1] >= 0) & (cells[:, 1] < cols)
     clearance = np.zeros(points.shape[0])
     clearance[inside] = grid.distance_field[cells[inside, 0], cells[inside, 1]]
+    # the map's edge is a wall to the lidar (its rays stop there): returns on it are explained
+    x0, x1, y0, y1 = grid.extent
+    edge = np.minimum.reduce([points[:, 0] - x0, x1 - points[:, 0], points[:, 1] - y0,
+                              y1 - points[:, 1]])  # fmt: skip
+    clearance = np.minimum(clearance, np.maximum(edge, 0.0))
     unexplained = inside & (clearance > spec.map_tolerance)
     spacing = _beam_spacing(angles)
     seam = (

@@ -430,7 +430,7 @@ class Engine:
             self.surroundings is not None
             and self.perception is not None
             and getattr(self.perception, "tracker", None) is not None
-            and self.surroundings.world.agent_count > 0
+            and getattr(self.surroundings, "has_agents", False)
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:

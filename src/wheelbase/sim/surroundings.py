@@ -63,6 +63,11 @@ class Surroundings:
             keep = np.asarray(self.keep_clear, dtype=np.float64).reshape(-1, 3)
             object.__setattr__(self, "keep_clear", keep)
 
+    @property
+    def has_agents(self) -> bool:
+        """Whether the world has moving agents (whose tracking the log scores)."""
+        return self.world.agent_count > 0
+
     # ------------------------------------------------------------------ batch layout
     def _worlds(self, n: int) -> int:
         if n % self.robots_per_world:
