@@ -900,11 +900,7 @@ def run(
         )
     starts = prepared.starts if prepared.starts is not None else prepared.start[None]
     log = prepared.engine.run(starts, seeds=np.full(len(starts), prepared.scenario.seed))
-    metrics = run_metrics(prepared, log, 0)
-    if len(starts) > 1:  # a fleet: every robot's figures, and the fleet's status
-        robots = [run_metrics(prepared, log, i) for i in range(len(starts))]
-        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
-        metrics = {**metrics, "status": worst, "robots": robots}
+    metrics = _world_metrics(prepared, log, 0)
     return RunResult(
         prepared.scenario,
         prepared.robot,
@@ -936,14 +932,36 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
-    prepared = prepare(scenario)
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
+    if scenario.world is not None and scenario.world.path_boxes is not None:
+        # each seed drops its own boxes: its own world, run alone
+        return [row for seed in seeds for row in _run_batch(prepare(scenario, seed=seed), [seed])]
+    return _run_batch(prepare(scenario), seeds)
+
+
+def _run_batch(prepared: Prepared, seeds: list[int]) -> list[dict[str, Any]]:
+    """One engine run of a prepared scenario for ``seeds``: a world of R robots per seed."""
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
-    starts = np.tile(prepared.start, (len(seeds), 1))
+    fleet = len(prepared.starts)
+    starts = np.tile(prepared.starts, (len(seeds), 1))
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    log = engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
-    return [run_metrics(prepared, log, i) for i in range(len(seeds))]
+    log = engine.run(starts, seeds=np.repeat(np.array(seeds, dtype=np.int64), fleet))
+    return [_world_metrics(prepared, log, k) for k in range(len(seeds))]
+
+
+def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
+    """The metrics of world ``world`` of a run: its robot's, or a fleet's first robot's with
+    ``robots`` (each robot's) and the fleet's status (the first that is not ``arrived``)."""
+    fleet = len(prepared.starts) if prepared.starts is not None else 1
+    metrics = run_metrics(prepared, log, world * fleet)
+    if fleet > 1:
+        robots = [run_metrics(prepared, log, world * fleet + i) for i in range(fleet)]
+        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
+        metrics = {**metrics, "status": worst, "robots": robots}
+    return metrics
 
 
 def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
@@ -1003,7 +1021,8 @@ def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, An
     extras = {key: value[0] for key, value in one.extras.items() if key.startswith("world_")}
     if extras:
         speed = float(np.hypot(*one.twist[0, -1, :2]))
-        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed))
+        dt = np.append(np.diff(one.t), 0.0)
+        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed, dt))
     if "track_matches" in one.extras:
         matches = float(one.extras["track_matches"][0, -1])
         for name, key in (("position", "track_position_rmse_m"),
