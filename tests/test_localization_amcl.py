@@ -5,18 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from wheelbase.errors import ConfigError, InputError, MapError
+from amcl_trials import kidnapped_run, noisy_odometry, run_amcl, wander
+from wheelbase.errors import ConfigError, InputError, MapError, PlanningError
 from wheelbase.localization import (
     AMCL,
     GLOBAL_LOCALIZATION,
     OdometryMotion,
-    kidnapped_run,
     kld_particles,
     low_variance_resample,
-    noisy_odometry,
     odometry_delta,
-    run_amcl,
-    wander,
 )
 from wheelbase.localization.likelihood import likelihood_field, scan_log_likelihood
 from wheelbase.localization.particles import _bin_keys, _kld_bound, clusters
@@ -272,3 +269,33 @@ def test_update_rules_and_bad_input():
         force=True,
     )
     assert info.landmarks_used == 1 and info.landmarks_skipped == 2
+
+
+def test_wander_stops_with_an_error_where_every_heading_is_blocked():
+    import signal
+
+    def too_long(signum, frame):
+        raise TimeoutError("wander still turning after 20 s: it loops forever")
+
+    room = np.ones((19, 19), dtype=bool)
+    room[2:-2, 2:-2] = False  # a 1.5 m walled room of 0.1 m cells
+    grid = OccupancyGrid.from_array(room, 0.1)
+    previous = signal.signal(signal.SIGALRM, too_long)
+    signal.alarm(20)
+    try:
+        with pytest.raises(PlanningError, match=r"every heading .* blocked within clearance"):
+            wander(grid, 5.0, 0, start=np.array([0.95, 0.95, 0.0]))
+        with pytest.raises(PlanningError, match=r"every heading .* blocked within clearance"):
+            wander(grid, 5.0, 0)  # a start drawn in the middle, 0.75 m from the walls
+        closet = OccupancyGrid.from_array(np.pad(np.zeros((10, 10), bool), 2, constant_values=True),
+                                          0.1)  # fmt: skip
+        with pytest.raises(MapError, match=r"more than clearance = 0\.6 m"):
+            wander(closet, 5.0, 0)  # 1 m wide: no cell 0.6 m from the walls to start from
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    # where there is room, it wanders the distance asked for
+    free = np.zeros((60, 60), dtype=bool)
+    free[[0, -1], :] = free[:, [0, -1]] = True
+    truth = wander(OccupancyGrid.from_array(free, 0.1), 3.0, 1, start=np.array([3.0, 3.0, 0.0]))
+    assert np.sum(np.hypot(*np.diff(truth[:, :2], axis=0).T)) >= 3.0 - 1e-9

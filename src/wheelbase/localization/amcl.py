@@ -117,7 +117,7 @@ GLOBAL_LOCALIZATION: dict[str, object] = {
 docstring): ``AMCL(grid=..., lidar=..., **GLOBAL_LOCALIZATION)``. On the maze with a 30 m,
 360-beam lidar, 20 of 20 wandering robots were within 0.2 m for good within 10 m of travel
 (``benchmarks/sensors.py``), and 80 of 80 on other seeds (100–139, 200–239); kidnapped robots
-(:func:`~wheelbase.localization.kidnapped_run`) recovered within 30 s in 10 of 10 runs
+(``kidnapped_run`` of ``benchmarks/amcl_trials.py``) recovered within 30 s in 10 of 10 runs
 (2.8–11.1 s), and 20 of 20 on seeds 10–29.
 
 What makes the maze hard are its near twins: a corridor 8 m away that differs by 0.3 m of
