@@ -238,3 +238,26 @@ def test_bad_sensor_and_filter_settings_are_clear_errors():
     full = OccupancyGrid.from_array(np.ones((10, 10), bool), 0.1)
     with pytest.raises(MapError, match="no free cell"):
         ParticleLocalizer(AMCL(grid=full, lidar=LIDAR), odometry(), global_start=True)
+
+
+def test_the_particle_filter_gets_the_time_its_per_second_motion_noise_needs():
+    # A robot at rest: the particles spread only by the motion model's per-second heading
+    # noise, over the whole time since the start (11 steps of 0.1 s), as σ² = q·t.
+    q = 0.01  # rad²/s
+    amcl = AMCL(
+        landmarks=LANDMARKS, motion=VelocityMotion(0.0, 0.0, 0.0, 0.0, 0.0, q),
+        min_particles=4000, max_particles=4000, update_min_d=0.0, update_min_a=0.0,
+    )  # fmt: skip
+    localizer = ParticleLocalizer(amcl, odometry(), initial_std=(0.0, 0.0, 0.0))
+    pose = np.array([[2.0, 2.0, 0.0]])
+    state = localizer.start(pose, np.array([0]))
+    index, still = np.array([0]), np.zeros((1, 2), dtype=np.int64)
+    nothing = Readings(landmark_ids=np.zeros((1, 0), np.int64), landmark_z=np.zeros((1, 0, 2)))
+    for k in range(11):
+        readings = nothing if k == 10 else None  # the filter runs once, at t = 1.1 s
+        _, _, state = localizer.update(
+            pose, still, 0.1, pose, np.zeros((1, 3)), state=state, index=index, readings=readings
+        )
+    heading = state.filters[0].particles[:, 2]
+    assert state.counts[0, 0] == 1 and state.filters[0].time == pytest.approx(1.1)
+    assert np.std(heading) == pytest.approx(math.sqrt(q * 1.1), rel=0.05)

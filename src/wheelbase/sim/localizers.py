@@ -17,6 +17,9 @@ Both follow the estimator protocol of :mod:`wheelbase.sim.sensing` (``encoder``,
     mean of the heaviest cluster) fixes the correction map ← odom. Between updates the
     estimate is that correction composed with the odometry pose, so the controller sees a
     smooth pose that jumps only by the corrections.
+    Each update is given the robot's time (its steps × dt), so that a
+    :class:`~wheelbase.localization.VelocityMotion`'s per-second noise grows over the time
+    between updates.
 
 Random numbers: robot i's particle filter draws from ``default_rng([seed_i, 3])``, so robot i
 of a batch equals the single run with seed i.
@@ -32,7 +35,7 @@ signals of the log (``loc_*`` columns) and the run's metrics.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -273,6 +276,10 @@ class ParticleState:
         Particles each filter holds.
     counts : numpy.ndarray of int64, shape (N, len(COUNTS))
         Cumulative counts (:data:`COUNTS`).
+    steps : numpy.ndarray of int64, shape (N,)
+        Steps of odometry each robot has taken: its time is ``steps·dt``, handed to
+        :meth:`~wheelbase.localization.AMCL.update` (a :class:`VelocityMotion`'s per-second
+        noise grows with the time between updates).
     """
 
     filters: list
@@ -282,6 +289,7 @@ class ParticleState:
     cov: np.ndarray
     particles: np.ndarray
     counts: np.ndarray
+    steps: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -335,9 +343,10 @@ class ParticleLocalizer(_FusesOdometry):
         filters = []
         for i in range(n):
             if self.global_start:
-                filters.append(self.amcl.global_state(poses[i], generators[i]))
+                belief = self.amcl.global_state(poses[i], generators[i])
             else:
-                filters.append(self.amcl.initial_state(poses[i], cov[0], poses[i], generators[i]))
+                belief = self.amcl.initial_state(poses[i], cov[0], poses[i], generators[i])
+            filters.append(replace(belief, time=0.0))  # stamped: the first update's time counts
         return ParticleState(
             filters=filters,
             generators=generators,
@@ -346,6 +355,7 @@ class ParticleLocalizer(_FusesOdometry):
             cov=np.broadcast_to(cov, (n, 3, 3)).copy(),
             particles=np.array([f.particles.shape[0] for f in filters], dtype=np.int64),
             counts=np.zeros((n, len(COUNTS)), dtype=np.int64),
+            steps=np.zeros(n, dtype=np.int64),
         )
 
     def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
@@ -383,6 +393,8 @@ class ParticleLocalizer(_FusesOdometry):
         filters = list(state.filters)
         correction, cov = state.correction.copy(), state.cov.copy()
         particles, counts = state.particles.copy(), state.counts.copy()
+        steps = state.steps.copy()
+        steps[index] += 1
         failed = np.zeros(index.size, dtype=bool)
         if readings is not None and not readings.empty:
             amcl = self.amcl
@@ -397,6 +409,7 @@ class ParticleLocalizer(_FusesOdometry):
                         scan=readings.scan[row] if use_scan else None,
                         landmark_ids=readings.landmark_ids[row] if use_marks else None,
                         landmark_z=readings.landmark_z[row] if use_marks else None,
+                        time=float(steps[i]) * dt,
                     )  # fmt: skip
                     found = amcl.estimate(new)
                 except (EstimationError, InputError):
@@ -414,7 +427,9 @@ class ParticleLocalizer(_FusesOdometry):
         return (
             new_estimate,
             odo_twist,
-            ParticleState(filters, state.generators, odom, correction, cov, particles, counts),
+            ParticleState(
+                filters, state.generators, odom, correction, cov, particles, counts, steps
+            ),
         )
 
     def particles_of(self, state: ParticleState, robot: int) -> np.ndarray:
