@@ -68,7 +68,8 @@ COUNTS: tuple[str, ...] = (
 )
 """Cumulative counts per robot in the estimators' signals: filter corrections, landmark
 measurements applied, rejected by the χ² gate, skipped (NaN or negative range, NaN bearing,
-unknown identity), lidar beams used and skipped (NaN or negative readings)."""
+unknown identity), lidar beams used and skipped (of the beams the filter chose, those not
+used: NaN or negative readings, and max-range ones under the likelihood field)."""
 
 _COV_NAMES = (("xx", 0, 0), ("xy", 0, 1), ("xtheta", 0, 2), ("yy", 1, 1), ("ytheta", 1, 2),
               ("thetatheta", 2, 2))  # fmt: skip
