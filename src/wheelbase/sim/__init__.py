@@ -4,6 +4,8 @@
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
+- :mod:`wheelbase.sim.streams`: counter-based random streams (a step is a function of its
+  state);
 - :mod:`wheelbase.sim.engine`: the step (estimator → controller → limits → rules → plant →
   encoders) and the run;
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.

@@ -153,7 +153,7 @@ class EngineState:
     controllers : list
         One controller copy per robot for a ``per_robot`` controller, else one shared.
     encoders : EncoderReadings or None
-        The per-robot random streams of the encoders.
+        The encoders and their robots' seeds (counter-based random errors).
     plant : object or None
         What a plant keeps between steps besides pose and twist (a drive train's motor
         currents and speed-loop integrals), from ``plant.start``.
@@ -161,7 +161,7 @@ class EngineState:
         What an estimator keeps besides the estimate (a covariance, particles), from
         ``estimator.start``.
     sensors : SensorStreams or None
-        The per-robot random streams of the sensors.
+        The robots' seeds of the sensors' counter-based random streams.
     """
 
     step: int
@@ -410,7 +410,12 @@ class Engine:
         Parameters
         ----------
         state : EngineState
-            The state at time ``state.step·dt``; it is not changed.
+            The state at time ``state.step·dt``; it is not changed, and the result is a
+            function of it: the random streams are counter-based
+            (:mod:`wheelbase.sim.streams`), so stepping one state twice gives equal states.
+            (A controller that keeps memory between calls, such as a path follower's progress
+            or MPPI's warm start, is an object in ``state.controllers`` that the call
+            advances: :func:`copy.deepcopy` the state to branch with one.)
         command : array_like, shape (N, k), optional
             Commands to apply instead of asking the controller (a learning agent's action).
 
@@ -487,7 +492,7 @@ class Engine:
                 before = state.wheel_angle.copy()
                 after = before.copy()
                 after[moving] = new_angle
-                delta = state.encoders.tick_deltas(before, after)[moving]
+                delta = state.encoders.tick_deltas(before, after, state.step)[moving]
                 ticks[moving] = state.ticks[moving] + delta
             else:
                 delta = None

@@ -21,8 +21,10 @@ Both follow the estimator protocol of :mod:`wheelbase.sim.sensing` (``encoder``,
     :class:`~wheelbase.localization.VelocityMotion`'s per-second noise grows over the time
     between updates.
 
-Random numbers: robot i's particle filter draws from ``default_rng([seed_i, 3])``, so robot i
-of a batch equals the single run with seed i.
+Random numbers are counter-based (:mod:`wheelbase.sim.streams`): robot i's particle filter
+draws its start from (seed_i, :data:`PARTICLE_STREAM`, 0) and its update after step k from
+(seed_i, :data:`PARTICLE_STREAM`, k), so robot i of a batch equals the single run with seed i
+and updating one state twice gives the same belief.
 
 Failures: nothing a robot does raises. A filter that fails for a robot (an
 :class:`~wheelbase.errors.EstimationError`: a covariance that stops being positive definite,
@@ -44,6 +46,7 @@ from wheelbase._validate import as_float_array, nonnegative
 from wheelbase.errors import ConfigError, EstimationError, InputError
 from wheelbase.geometry import compose, inverse_pose, wrap_angle
 from wheelbase.sim.sensing import EncoderOdometry
+from wheelbase.sim.streams import counter_stream
 
 __all__ = [
     "COUNTS",
@@ -56,7 +59,7 @@ __all__ = [
 ]
 
 PARTICLE_STREAM = 3
-"""Second word of the seed of a robot's particle filter: ``default_rng([seed, 3])``."""
+"""Stream of a robot's particle filter (:func:`~wheelbase.sim.streams.counter_stream`)."""
 
 COUNTS: tuple[str, ...] = (
     "loc_updates",
@@ -265,8 +268,8 @@ class ParticleState:
     ----------
     filters : list of AMCLState
         Each robot's particles.
-    generators : list of numpy.random.Generator
-        Each robot's random stream.
+    seeds : numpy.ndarray of int64, shape (N,)
+        Each robot's seed (of its filter's random stream).
     odom : numpy.ndarray, shape (N, 3)
         Dead-reckoned poses in the odometry frame (which starts at the start pose).
     correction : numpy.ndarray, shape (N, 3)
@@ -284,7 +287,7 @@ class ParticleState:
     """
 
     filters: list
-    generators: list
+    seeds: np.ndarray
     odom: np.ndarray
     correction: np.ndarray
     cov: np.ndarray
@@ -339,7 +342,7 @@ class ParticleLocalizer(_FusesOdometry):
             The robots' seeds (their particle filters' random streams).
         """
         n = poses.shape[0]
-        generators = [np.random.default_rng([int(s), PARTICLE_STREAM]) for s in seeds]
+        generators = [counter_stream(s, PARTICLE_STREAM, 0) for s in seeds]
         _, cov = _initial_cov(self.initial_std, 1)
         filters = []
         for i in range(n):
@@ -350,7 +353,7 @@ class ParticleLocalizer(_FusesOdometry):
             filters.append(replace(belief, time=0.0))  # stamped: the first update's time counts
         return ParticleState(
             filters=filters,
-            generators=generators,
+            seeds=np.array(seeds, dtype=np.int64),
             odom=poses.copy(),
             correction=np.zeros((n, 3)),
             cov=np.broadcast_to(cov, (n, 3, 3)).copy(),
@@ -406,7 +409,8 @@ class ParticleLocalizer(_FusesOdometry):
                     continue
                 try:
                     new, info = amcl.update(
-                        filters[i], odom_now[row], state.generators[i], force=True,
+                        filters[i], odom_now[row],
+                        counter_stream(state.seeds[i], PARTICLE_STREAM, steps[i]), force=True,
                         scan=readings.scan[row] if use_scan else None,
                         landmark_ids=readings.landmark_ids[row] if use_marks else None,
                         landmark_z=readings.landmark_z[row] if use_marks else None,
@@ -428,9 +432,7 @@ class ParticleLocalizer(_FusesOdometry):
         return (
             new_estimate,
             odo_twist,
-            ParticleState(
-                filters, state.generators, odom, correction, cov, particles, counts, steps
-            ),
+            ParticleState(filters, state.seeds, odom, correction, cov, particles, counts, steps),
         )
 
     def particles_of(self, state: ParticleState, robot: int) -> np.ndarray:
