@@ -312,3 +312,36 @@ def test_stepping_one_state_twice_gives_the_same_state(make):
         second, _ = eng.step(second)
     _same(first, second)
     assert not np.array_equal(first.pose, saved.pose)
+
+
+class _Blind:
+    """An estimator that hands the one it wraps NaN for the true start poses."""
+
+    def __init__(self, inner):
+        self.inner = inner
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+    def start(self, poses, seeds):
+        return self.inner.start(np.full_like(poses, np.nan), seeds)
+
+
+def test_global_localisation_never_starts_from_the_truth():
+    def make():
+        filter_ = amcl(min_particles=500, max_particles=3000, update_min_d=0.1).amcl
+        return ParticleLocalizer(filter_, odometry(0.3), global_start=True)
+
+    starts = [[1.0, 2.0, 0.0], [1.0, 2.05, 0.0]]
+    seen = engine(make(), SUITE).run(starts, seeds=[5, 6])
+    hidden = engine(_Blind(make()), SUITE).run(starts, seeds=[5, 6])
+    # the truth of the start plays no part: a run that hides it is the same run
+    np.testing.assert_array_equal(seen.estimated_pose, hidden.estimated_pose)
+    np.testing.assert_array_equal(seen.true_pose, hidden.true_pose)
+    np.testing.assert_array_equal(seen.status, hidden.status)
+    # the first estimate is the filter's heaviest cluster of a spread over the room, flagged
+    # not converged; it converges once the lidar has told where the robot is
+    first_error = np.hypot(*(seen.estimated_pose[:, 0, :2] - np.array(starts)[:, :2]).T)
+    assert np.all(first_error > 0.05)
+    converged = seen.extras["loc_converged"]
+    assert np.all(converged[:, 0] == 0) and np.all(converged[:, -1] == 1)

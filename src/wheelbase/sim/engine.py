@@ -310,7 +310,9 @@ class Engine:
         seeds: ArrayLike | int | None = None,
         twists: ArrayLike | None = None,
     ) -> EngineState:
-        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact.
+        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact
+        (or, for an estimator with ``first_estimate(state)``, such as a global localisation,
+        what it estimates without the start).
 
         Parameters
         ----------
@@ -354,11 +356,14 @@ class Engine:
         else:
             controllers = [self.controller]
         encoder = self.estimator.encoder
+        estimator_state = self.estimator.start(start, seeds)
+        first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
+        estimate = start.copy() if first is None else np.array(first(estimator_state), float)
         return EngineState(
             step=0,
             pose=start,
             twist=twist,
-            estimate=start.copy(),
+            estimate=estimate,
             estimated_twist=twist.copy(),
             wheel_angle=np.zeros((n, 2)),
             ticks=np.zeros((n, 2), dtype=np.int64),
@@ -368,7 +373,7 @@ class Engine:
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
-            estimator=self.estimator.start(start, seeds),
+            estimator=estimator_state,
             sensors=None if self.sensors is None else self.sensors.start(seeds),
         )
 

@@ -10,9 +10,10 @@ dt, pose, twist, state=..., index=...)`` returning the new estimate ``(M, 3)``, 
 twist ``(M, 3)`` and its new state, for the robots ``index`` still running. When the engine has
 sensors it also passes ``readings=`` (:class:`~wheelbase.sim.sensors.Readings`, rows as
 ``index``); the filters that use them are in :mod:`wheelbase.sim.localizers`. An estimator may
-also have ``signals(state)`` (named per-robot arrays for the log, e.g. a covariance) and
-``particles_of(state, robot)`` (particles for drawing). A non-finite estimate for a robot ends
-that robot ``diverged``.
+also have ``first_estimate(state)`` (the estimate at t = 0 when it does not start from the
+true start pose: a global localisation), ``signals(state)`` (named per-robot arrays for the
+log, e.g. a covariance) and ``particles_of(state, robot)`` (particles for drawing). A
+non-finite estimate for a robot ends that robot ``diverged``.
 
 Random encoder errors are counter-based (:mod:`wheelbase.sim.streams`): the errors of robot
 ``i`` at step k come from its seed, :data:`ENCODER_STREAM` and k, so a robot's run does not
