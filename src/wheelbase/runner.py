@@ -1005,7 +1005,9 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end
-        if key.startswith("loc_") and key != "loc_particles":
+        if key == "loc_converged":  # a global localisation's belief is one cluster at the end
+            metrics["localization_converged"] = bool(value[0, -1])
+        elif key.startswith("loc_") and key != "loc_particles":
             metrics[f"localization_{key[4:]}"] = int(value[0, -1])
     summary = log.summaries[index] if log.summaries else {}
     if summary or (prepared.engine is not None and prepared.engine.surroundings is not None):

@@ -4,6 +4,8 @@
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
+- :mod:`wheelbase.sim.streams`: counter-based random streams (a step is a function of its
+  state);
 - :mod:`wheelbase.sim.surroundings`: the world beyond the map (obstacles, agents, a fleet's
   other robots) that steps with the robots and that only the sensors see;
 - :mod:`wheelbase.sim.perceiving`: each robot's costmap and tracks from its lidar;

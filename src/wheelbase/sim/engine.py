@@ -154,7 +154,7 @@ class EngineState:
     controllers : list
         One controller copy per robot for a ``per_robot`` controller, else one shared.
     encoders : EncoderReadings or None
-        The per-robot random streams of the encoders.
+        The encoders and their robots' seeds (counter-based random errors).
     plant : object or None
         What a plant keeps between steps besides pose and twist (a drive train's motor
         currents and speed-loop integrals), from ``plant.start``.
@@ -162,7 +162,7 @@ class EngineState:
         What an estimator keeps besides the estimate (a covariance, particles), from
         ``estimator.start``.
     sensors : SensorStreams or None
-        The per-robot random streams of the sensors.
+        The robots' seeds of the sensors' counter-based random streams.
     held : numpy.ndarray, shape (N, k), or None
         The last controller commands, held between controller calls (``control_every``).
     held_status : list or None
@@ -356,7 +356,9 @@ class Engine:
         seeds: ArrayLike | int | None = None,
         twists: ArrayLike | None = None,
     ) -> EngineState:
-        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact.
+        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact
+        (or, for an estimator with ``first_estimate(state)``, such as a global localisation,
+        what it estimates without the start).
 
         Parameters
         ----------
@@ -401,11 +403,14 @@ class Engine:
         else:
             controllers = [self.controller]
         encoder = self.estimator.encoder
+        estimator_state = self.estimator.start(start, seeds)
+        first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
+        estimate = start.copy() if first is None else np.array(first(estimator_state), float)
         return EngineState(
             step=0,
             pose=start,
             twist=twist,
-            estimate=start.copy(),
+            estimate=estimate,
             estimated_twist=twist.copy(),
             wheel_angle=np.zeros((n, 2)),
             ticks=np.zeros((n, 2), dtype=np.int64),
@@ -415,7 +420,7 @@ class Engine:
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
-            estimator=self.estimator.start(start, seeds),
+            estimator=estimator_state,
             sensors=None if self.sensors is None else self.sensors.start(seeds),
             world=None if self.surroundings is None else self.surroundings.start(seeds, start),
             perception=None if self.perception is None else self.perception.start(start),
@@ -476,7 +481,12 @@ class Engine:
         Parameters
         ----------
         state : EngineState
-            The state at time ``state.step·dt``; it is not changed.
+            The state at time ``state.step·dt``; it is not changed, and the result is a
+            function of it: the random streams are counter-based
+            (:mod:`wheelbase.sim.streams`), so stepping one state twice gives equal states.
+            (A controller that keeps memory between calls, such as a path follower's progress
+            or MPPI's warm start, is an object in ``state.controllers`` that the call
+            advances: :func:`copy.deepcopy` the state to branch with one.)
         command : array_like, shape (N, k), optional
             Commands to apply instead of asking the controller (a learning agent's action).
 
@@ -585,7 +595,7 @@ class Engine:
                 before = state.wheel_angle.copy()
                 after = before.copy()
                 after[moving] = new_angle
-                delta = state.encoders.tick_deltas(before, after)[moving]
+                delta = state.encoders.tick_deltas(before, after, state.step)[moving]
                 ticks[moving] = state.ticks[moving] + delta
             else:
                 delta = None
