@@ -288,6 +288,15 @@ class ORCA:
         Most neighbours considered (the nearest).
     max_speed_factor : float
         Largest speed / preferred speed.
+    perturbation : float
+        Largest random change [m/s] of the preferred velocity each step (counter-based), which
+        breaks the deadlocks of perfectly symmetric crowds (RVO2's examples perturb by 1e-4);
+        0 for none.
+    margin : float
+        Distance [m] added to both radii in the agents' half-planes. When the program is
+        infeasible (section V-C) the least-penetration velocity lets the planned discs overlap
+        by millimetres (measured: up to 1.2 cm among 30 agents wandering in a 16 m square);
+        the margin keeps that overlap outside the bodies.
     """
 
     time_horizon: float = 5.0
@@ -295,8 +304,15 @@ class ORCA:
     neighbour_distance: float = 10.0
     max_neighbours: int = 10
     max_speed_factor: float = 1.0
+    perturbation: float = 0.01
+    margin: float = 0.02
 
     def __post_init__(self) -> None:
+        from wheelbase._validate import nonnegative
+
+        object.__setattr__(self, "perturbation",
+                           nonnegative("perturbation", self.perturbation, "m/s"))  # fmt: skip
+        object.__setattr__(self, "margin", nonnegative("margin", self.margin, "m"))
         for name in ("time_horizon", "obstacle_time_horizon", "neighbour_distance"):
             unit = "m" if name == "neighbour_distance" else "s"
             object.__setattr__(self, name, positive(name, getattr(self, name), unit))
@@ -310,7 +326,7 @@ class ORCA:
 
     def packed(self) -> np.ndarray:
         """The parameters as the kernels read them: (τ, τ_obs, neighbour distance, max
-        neighbours, factor)."""
+        neighbours, factor, perturbation, margin)."""
         return np.array([self.time_horizon, self.obstacle_time_horizon,
                          self.neighbour_distance, float(self.max_neighbours),
-                         self.max_speed_factor])  # fmt: skip
+                         self.max_speed_factor, self.perturbation, self.margin])  # fmt: skip

@@ -111,7 +111,7 @@ class Obstacles:
             if len(np.unique(ring, axis=0)) < 3:
                 raise MapError(f"polygon {i} needs >= 3 distinct vertices (got {len(ring)})")
             shape = shapely.Polygon(ring)
-            if shape.area <= 1e-12:
+            if shapely.MultiPoint(ring).convex_hull.area <= 1e-12:
                 raise MapError(f"polygon {i} has no area (its vertices are collinear)")
             if not shapely.is_valid(shape):
                 raise MapError(f"polygon {i} is not simple: {shapely.is_valid_reason(shape)}")

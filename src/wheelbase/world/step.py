@@ -29,7 +29,7 @@ import math
 import numba
 import numpy as np
 
-from wheelbase.world.counter_rng import STREAM_DIRECTION, STREAM_GOAL, counter_uniform
+from wheelbase.world.counter_rng import STREAM_DIRECTION, STREAM_GOAL, STREAM_ORCA, counter_uniform
 from wheelbase.world.orca import half_plane, solve_lp
 from wheelbase.world.social_force import (
     CUTOFF,
@@ -65,7 +65,7 @@ GOAL_TIME_FACTOR = 3.0
 GOAL_TIME_SLACK = 5.0  # s
 _PUSH_EPS = 1e-9  # m beyond contact after a push-out, so the next query finds the disc clear
 # ORCA parameter indices (ORCA.packed)
-TAU, TAU_OBS, NEIGHBOUR_DIST, MAX_NEIGHBOURS, ORCA_FACTOR = range(5)
+TAU, TAU_OBS, NEIGHBOUR_DIST, MAX_NEIGHBOURS, ORCA_FACTOR, PERTURBATION, MARGIN = range(7)
 
 
 @numba.njit(cache=True)
@@ -110,7 +110,7 @@ def _resolve(st, px, py, vx, vy, r, reflect, rob_x, rob_y, rob_r, n_rob):
 
 
 @numba.njit(cache=True)
-def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st, rob_xy,
+def _orca_velocity(a, seed, step, pos, vel, goal, dt, radius, speed, code, reacts, orca, st, rob_xy,
                    rob_v, rob_r, nx, ny, c, pnx, pny, pc, nb_d, nb_i):  # fmt: skip
     """The ORCA velocity of agent ``a`` of one world (``pos``, ``vel``: that world's)."""
     px, py = pos[a, 0], pos[a, 1]
@@ -124,6 +124,12 @@ def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st,
     dist = math.hypot(ex, ey)
     scale = 0.0 if dist == 0.0 else (v0 / dist if dist > v0 * dt else 1.0 / dt)
     ox, oy = ex * scale, ey * scale
+    if orca[PERTURBATION] > 0.0:
+        # a tiny random change of the preferred velocity breaks perfectly symmetric deadlocks
+        turn = 2.0 * math.pi * counter_uniform(seed, STREAM_ORCA, step, a, 0)
+        size = orca[PERTURBATION] * counter_uniform(seed, STREAM_ORCA, step, a, 1)
+        ox += size * math.cos(turn)
+        oy += size * math.sin(turn)
     m = 0
     # walls (the feature transform's nearest point) and obstacles: hard half-planes
     reach = r + vmax * tau_obs
@@ -176,7 +182,8 @@ def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st,
             k = j - n_agents
             qx, qy, wx, wy, rb = rob_xy[k, 0], rob_xy[k, 1], rob_v[k, 0], rob_v[k, 1], rob_r
             share = 1.0
-        hx, hy, hc = half_plane(px, py, vx, vy, r, qx, qy, wx, wy, rb, orca[TAU], dt, share)
+        hx, hy, hc = half_plane(px, py, vx, vy, r + orca[MARGIN], qx, qy, wx, wy,
+                                rb + orca[MARGIN], orca[TAU], dt, share)  # fmt: skip
         nx[m] = hx
         ny[m] = hy
         c[m] = hc
@@ -310,7 +317,8 @@ def step_worlds(pos, vel, goal, waypoint, budget, seed, step, dt, radius, speed,
             for a in range(n_agents):
                 if code[a] == ORCA_CODE:
                     new_v[a, 0], new_v[a, 1] = _orca_velocity(
-                        a, p, v, g, dt, radius, speed, code, reacts, orca, st, rob_xy[b],
+                        a, seed[b], step[b], p, v, g, dt, radius, speed, code, reacts, orca, st,
+                        rob_xy[b],
                         rob_v[b], rob_r, nx, ny, c, pnx, pny, pc, nb_d, nb_i,
                     )  # fmt: skip
             for a in range(n_agents):
