@@ -133,12 +133,14 @@ IRSIM_LIDAR = """    sensors:
 def irsim_rate(walkers: int, steps: int, lidar: bool) -> float:
     """ir-sim's ``env.step()`` per second on the notes' world (never ``env.end()``: it waits
     for matplotlib)."""
+    import contextlib
     import logging
 
     import matplotlib
 
     matplotlib.use("Agg")
-    import irsim
+    with contextlib.redirect_stdout(sys.stderr):  # (it prints its backend trials on import)
+        import irsim
 
     logging.getLogger().setLevel(logging.ERROR)
     with tempfile.TemporaryDirectory() as folder:

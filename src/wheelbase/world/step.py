@@ -50,10 +50,9 @@ from wheelbase.world.statics import (
     RES,
     X0,
     Y0,
-    map_feature_point,
-    obstacle_nearest,
     push_direction,
     static_nearest,
+    wall_points,
 )
 
 __all__ = ["GOAL_TRIES", "draw_goal", "initial_motion", "step_worlds", "uniform_keys"]
@@ -130,23 +129,11 @@ def _orca_velocity(a, seed, step, pos, vel, goal, dt, radius, speed, code, react
         size = orca[PERTURBATION] * counter_uniform(seed, STREAM_ORCA, step, a, 1)
         ox += size * math.cos(turn)
         oy += size * math.sin(turn)
-    m = 0
-    # walls (the feature transform's nearest point) and obstacles: hard half-planes
-    reach = r + vmax * tau_obs
-    d, wx, wy = map_feature_point(st, px, py)
-    circle = st[CIRCLE]
-    for q in range(-1, circle.shape[0]):
-        if q >= 0:
-            if math.hypot(px - circle[q, 0], py - circle[q, 1]) - circle[q, 2] > reach:
-                continue
-            d, wx, wy = obstacle_nearest(st, q, px, py)
-        if d > reach:
-            continue
-        hx, hy = push_direction(d, wx, wy, px, py)
-        nx[m] = hx
-        ny[m] = hy
-        c[m] = (r - d) / tau_obs if d >= r else min((r - d) / dt, vmax)
-        m += 1
+    # walls and obstacles: hard half-planes, first in the program
+    m = wall_points(st, px, py, r + vmax * tau_obs, c, nx, ny)
+    for k in range(m):
+        d = c[k]
+        c[k] = (r - d) / tau_obs if d >= r else min((r - d) / dt, vmax)
     hard = m
     # the nearest neighbours: agents, then robots when the agent reacts to them
     kmax = int(orca[MAX_NEIGHBOURS])
@@ -193,7 +180,7 @@ def _orca_velocity(a, seed, step, pos, vel, goal, dt, radius, speed, code, react
 
 @numba.njit(cache=True)
 def _social_acceleration(a, pos, vel, goal, radius, speed, sf, st, rob_x, rob_y, rob_v,
-                         rob_r, n_rob):  # fmt: skip
+                         rob_r, n_rob, wall_d, wall_nx, wall_ny):  # fmt: skip
     """Force per unit mass on social-force agent ``a`` (:class:`SocialForce`)."""
     px, py = pos[a, 0], pos[a, 1]
     vx, vy = vel[a, 0], vel[a, 1]
@@ -211,18 +198,9 @@ def _social_acceleration(a, pos, vel, goal, radius, speed, sf, st, rob_x, rob_y,
         ax += fx
         ay += fy
     # walls: the map's nearest point and each static obstacle
-    reach = r + sf[CUTOFF]
-    d, wx, wy = map_feature_point(st, px, py)
-    circle = st[CIRCLE]
-    for q in range(-1, circle.shape[0]):
-        if q >= 0:
-            if math.hypot(px - circle[q, 0], py - circle[q, 1]) - circle[q, 2] > reach:
-                continue
-            d, wx, wy = obstacle_nearest(st, q, px, py)
-        if d > reach:
-            continue
-        hx, hy = push_direction(d, wx, wy, px, py)
-        fx, fy = wall_force(vx, vy, r, d, hx, hy, sf[A], sf[B], sf[K], sf[KAPPA], sf[CUTOFF])
+    for k in range(wall_points(st, px, py, r + sf[CUTOFF], wall_d, wall_nx, wall_ny)):
+        fx, fy = wall_force(vx, vy, r, wall_d[k], wall_nx[k], wall_ny[k], sf[A], sf[B], sf[K],
+                            sf[KAPPA], sf[CUTOFF])  # fmt: skip
         ax += fx
         ay += fy
     return ax, ay
@@ -336,7 +314,7 @@ def step_worlds(pos, vel, goal, waypoint, budget, seed, step, dt, radius, speed,
                         seen = n_rob if reacts[a] else 0
                         acc[a, 0], acc[a, 1] = _social_acceleration(
                             a, p, v, g, radius, speed, sf, st, rob_x, rob_y, rob_v[b],
-                            rob_r, seen,
+                            rob_r, seen, pnx, pny, pc,
                         )  # fmt: skip
                 for a in range(n_agents):
                     if code[a] == SOCIAL_FORCE:
