@@ -218,7 +218,9 @@ class SocialForce:
     v⁰_α`` (v_max = 1.3 v⁰ in Helbing and Molnár 1995, eq. 6). Integration: semi-implicit
     Euler, velocities first, in substeps of at most ``max_substep`` (the contact stiffness
     k/m = 1500 s⁻² makes steps above 2/√1500 = 0.05 s unstable; the default 0.02 s keeps a
-    factor 2.5).
+    factor 2.5). The forces are isotropic (HFV 2000): two walkers on exactly one line, head
+    on, push straight back and stop face to face; any lateral offset (5 cm suffices) lets them
+    pass.
 
     Parameters
     ----------
