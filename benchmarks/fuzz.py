@@ -37,6 +37,7 @@ TARGETS = {
     "map_array": (fuzzing.array_map_cases, fuzzing.grid_from_array, "map_file", 0.05),
     "constructor": (fuzzing.constructor_cases, fuzzing.call_constructor, "constructor", 0.25),
     "cli": (fuzzing.cli_cases, fuzzing.run_cli, "cli", 0.1),
+    "world": (fuzzing.world_cases, fuzzing.run_world, "world", 0.1),
 }  # fmt: skip
 
 

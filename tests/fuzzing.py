@@ -46,9 +46,11 @@ __all__ = [
     "run_cli",
     "run_scenario",
     "run_scenario_file",
+    "run_world",
     "scenario_cases",
     "scenario_file_cases",
     "warm_up",
+    "world_cases",
 ]
 
 BUDGET_S = {
@@ -57,6 +59,7 @@ BUDGET_S = {
     "map_file": 10.0,
     "cli": 60.0,
     "constructor": 60.0,
+    "world": 20.0,
 }
 """Seconds one case of each kind may take. Typical cases take milliseconds; the budgets cover the
 largest work the limits allow (a NumPy MPPI call at 5e6 samples × 10 steps: 19 s on 2 cores)."""
@@ -171,6 +174,7 @@ def warm_up() -> None:
     first call that compiles under a loaded machine can take longer than a case may."""
     for base in BASES:
         outcome(lambda base=base: run_scenario(base), 600.0)
+    outcome(lambda: run_world(WORLD_BASE), 600.0)
 
 
 def _where(error: BaseException) -> str:
@@ -607,6 +611,115 @@ def grid_from_array(kwargs: dict[str, Any]) -> Any:
     from wheelbase.planning import OccupancyGrid
 
     return OccupancyGrid.from_array(**kwargs)
+
+
+# =========================================================================== world section
+WORLD_BASE: dict[str, Any] = {
+    "obstacles": [{"box": [6.0, 3.0, 0.6, 0.6, 30]}, {"disc": [8.0, 7.0, 0.3]},
+                  {"polygon": [[2.0, 6.0], [3.0, 6.0], [2.5, 7.0]]}],
+    "agents": [
+        {"count": 3, "radius": 0.3, "speed": 0.5, "behaviour": "straight",
+         "region": [3, 3, 9, 9], "reacts_to_robot": False},
+        {"count": 3, "behaviour": "wander"},
+        {"count": 2, "behaviour": "waypoints", "waypoints": [[2.0, 2.0], [8.0, 2.0]]},
+        {"count": 3, "behaviour": "social_force", "reacts_to_robot": True},
+        {"count": 3, "behaviour": "orca", "reacts_to_robot": True},
+    ],
+    "social_force": {"relaxation_time": 0.5},
+    "orca": {"time_horizon": 5.0},
+}  # fmt: skip
+"""A valid ``world`` section on a 10 m room (:func:`run_world`); cases damage it."""
+
+
+def _world_paths() -> list[tuple]:
+    from dataclasses import fields
+
+    from wheelbase.world import ORCA, SocialForce
+    from wheelbase.world.spec import AGENT_KEYS, OBSTACLE_KINDS, WORLD_KEYS
+
+    paths: list[tuple] = [(key,) for key in WORLD_KEYS]
+    paths += [("obstacles", i, kind) for i in range(3) for kind in OBSTACLE_KINDS]
+    paths += [("obstacles", i) for i in range(4)]
+    paths += [("agents", i, key) for i in range(5) for key in AGENT_KEYS]
+    paths += [("agents", i) for i in range(6)]
+    paths += [("social_force", f.name) for f in fields(SocialForce)]
+    paths += [("orca", f.name) for f in fields(ORCA)]
+    return paths
+
+
+def _apply_world(data: Any, mutation: tuple) -> None:
+    path, action, value = mutation
+    node = data
+    for key in path[:-1]:
+        in_dict = isinstance(node, dict) and key in node
+        in_list = isinstance(node, list) and isinstance(key, int) and key < len(node)
+        if in_dict or in_list:
+            node = node[key]
+        else:
+            return
+    last = path[-1]
+    if isinstance(node, dict):
+        if action == "delete":
+            node.pop(last, None)
+        elif action == "unknown":
+            node[f"{last}_typo"] = copy.deepcopy(value)
+        else:
+            node[last] = copy.deepcopy(value)
+    elif isinstance(node, list) and isinstance(last, int):
+        if last < len(node):
+            if action == "delete":
+                node.pop(last)
+            else:
+                node[last] = copy.deepcopy(value)
+        elif action == "set":
+            node.append(copy.deepcopy(value))
+
+
+@st.composite
+def world_cases(draw) -> Any:
+    """The base ``world`` section with one to three entries set to hostile values (numbers,
+    lists, huge counts, other behaviours), deleted or misspelt; or a hostile section."""
+    if draw(st.integers(0, 19)) == 0:
+        return draw(st.sampled_from(HOSTILE))
+    data = copy.deepcopy(WORLD_BASE)
+    value = st.one_of(
+        _TUPLES,
+        st.sampled_from(HOSTILE),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(min_value=-(2**70), max_value=2**70),
+        st.sampled_from(["wander", "orca", "social_force", "waypoints", "dance", [[0.0, 0.0]],
+                         {"box": [5, 5, 0.5, 0.5]}, {"disc": [1.0, 1.0, 0.5]}, 10_000, 5000,
+                         [0, 0, 10, 10], [[1, 1], [1e9, 1]], 1e-9, 0.01, 9.9]),
+    )  # fmt: skip
+    for path in draw(st.lists(st.sampled_from(_world_paths()), min_size=1, max_size=3)):
+        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
+        _apply_world(data, (path, action, draw(value)))
+    return data
+
+
+def run_world(spec: Any) -> Any:
+    """Build the world of a case on a 10 m room, start two worlds clear of a robot's start
+    and goal, step them with the robot, cast a scan and measure distances."""
+    from wheelbase.planning import Footprint, OccupancyGrid
+    from wheelbase.world import RobotBodies, world_from_spec
+
+    occupied = np.zeros((100, 100), bool)
+    occupied[[0, -1], :] = occupied[:, [0, -1]] = True
+    world = world_from_spec(spec, OccupancyGrid(occupied, 0.1))
+    keep = [[1.0, 1.0, 0.4], [9.0, 9.0, 0.4]]
+    state = world.start([0, 1], keep, labels=["start", "goal"])
+    footprint = Footprint.rectangle(0.4, 0.4)
+    robots = RobotBodies(np.tile([1.0, 1.0, 0.3], (2, 1, 1)), np.tile([0.3, 0.1], (2, 1, 1)),
+                         footprint)  # fmt: skip
+    for _ in range(3):
+        state = world.step(state, 0.1, robots)
+    if not np.all(np.isfinite(state.position)) or not np.all(np.isfinite(state.velocity)):
+        raise AssertionError("non-finite agent state")  # silently wrong: a raw failure
+    poses = robots.pose.reshape(-1, 3)
+    index = np.arange(2, dtype=np.int64)
+    world.cast(poses, np.linspace(-np.pi, np.pi, 90, endpoint=False), 8.0, index, state,
+               robots, np.zeros(2, np.int64))  # fmt: skip
+    return world.distances(poses, footprint, index, state, robots, np.zeros(2, np.int64))
 
 
 # =========================================================================== constructors

@@ -113,6 +113,22 @@ def test_cli_flags(case):
     check(fuzzing.run_cli, case, "cli")
 
 
+@settings(**FAST, **_examples(40, 1500))
+@given(fuzzing.world_cases())
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2, "speed": 0}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2, "speed": 50}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 5000, "radius": 0.3}]})  # do not fit
+@example({**fuzzing.WORLD_BASE, "agents": [{"behaviour": "dance"}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"behaviour": "waypoints"}]})  # no waypoints
+@example({**fuzzing.WORLD_BASE, "obstacles": [{"box": [1.0, 1.0, 0.6, 0.6]}]})  # on the start
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 3, "radius": 1e-300}]})
+@example({**fuzzing.WORLD_BASE, "social_force": {"range": 1e-300}})
+@example({**fuzzing.WORLD_BASE, "orca": {"time_horizon": 1e-300}})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2**70}]})
+def test_world_section(case):
+    check(fuzzing.run_world, case, "world")
+
+
 def test_outcome_classifies_and_stops_a_hang():
     # The harness itself: a clean error, a raw exception, and a loop stopped at its budget.
     from wheelbase.errors import ConfigError

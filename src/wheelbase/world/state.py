@@ -147,8 +147,14 @@ class RobotBodies:
     def __post_init__(self) -> None:
         from wheelbase.planning import Footprint
 
-        pose = as_float_array("robots.pose", self.pose, 3, min_ndim=3, max_ndim=3)
-        velocity = as_float_array("robots.velocity", self.velocity, 2, min_ndim=3, max_ndim=3)
+        pose, velocity = self.pose, self.velocity
+        plain = all(isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 3
+                    for x in (pose, velocity))  # fmt: skip
+        if not (plain and pose.shape[2] == 3 and velocity.shape[2] == 2
+                and np.isfinite(pose).all() and np.isfinite(velocity).all()):  # fmt: skip
+            # (the engine passes clean arrays every step; anything else gets the full checks)
+            pose = as_float_array("robots.pose", pose, 3, min_ndim=3, max_ndim=3)
+            velocity = as_float_array("robots.velocity", velocity, 2, min_ndim=3, max_ndim=3)
         if velocity.shape[:2] != pose.shape[:2]:
             raise InputError(f"robots.velocity must have shape {(*pose.shape[:2], 2)} (got "
                              f"{velocity.shape})")  # fmt: skip
