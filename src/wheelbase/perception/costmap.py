@@ -510,14 +510,14 @@ def update_costmap(
     scans = _readings(ranges, (poses.shape[0], angles.shape[0]))
     max_range = positive("max_range", max_range, "m")
     rows = _rows(index, poses.shape[0], state.robots)
-    spec, inv = costmap.spec, 1.0 / costmap.resolution
-    cells = np.column_stack([(poses[:, 0] - costmap.origin[0]) * inv,
-                             (poses[:, 1] - costmap.origin[1]) * inv, poses[:, 2]])  # fmt: skip
-    limits = inv * np.array([max_range, spec.obstacle_min_range, spec.obstacle_max_range,
-                             spec.raytrace_min_range, spec.raytrace_max_range])  # fmt: skip
+    spec = costmap.spec
+    params = np.array([max_range, spec.obstacle_min_range, spec.obstacle_max_range,
+                       spec.raytrace_min_range, spec.raytrace_max_range, *costmap.origin,
+                       1.0 / costmap.resolution])  # fmt: skip
     obstacle, cost = state.obstacle.copy(), state.cost.copy()
-    batch_update(costmap.static, state.obstacle, obstacle, cost, rows, cells, angles,
-                 scans * inv, limits, costmap.table, costmap.reach)  # fmt: skip
+    batch_update(costmap.static, state.obstacle, obstacle, cost, rows,
+                 np.ascontiguousarray(poses), np.ascontiguousarray(angles), scans, params,
+                 costmap.table, costmap.reach)  # fmt: skip
     return CostmapState(_read_only(obstacle), _read_only(cost))
 
 

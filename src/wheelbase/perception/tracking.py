@@ -17,7 +17,8 @@ Association
     assignment inside it, and are dropped after).
 Update
     Kalman gain K = P Hᵀ S⁻¹, x̂ += K ν, P = (I − K H) P (I − K H)ᵀ + K R Kᵀ (Joseph form). The
-    radius is a running mean of the detections' radii (over the last 10 at most).
+    radius is a running mean of the radii of the detections not occluded (over the last 10 at
+    most).
 Management
     A detection no track takes starts a tentative track at z with velocity 0 and covariance
     blockdiag(R, ``initial_speed_std``² I), unless ``max_tracks`` are alive. A tentative
@@ -170,12 +171,13 @@ class TrackerState:
 
 def _motion(spec: TrackerSpec, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """F and Q of the constant-velocity model over ``dt`` (module docstring)."""
-    eye = np.eye(2)
-    f = np.block([[eye, dt * eye], [np.zeros((2, 2)), eye]])
-    q = spec.process_noise * np.block(
-        [[dt**3 / 3.0 * eye, dt**2 / 2.0 * eye], [dt**2 / 2.0 * eye, dt * eye]]
-    )
-    return f, q
+    f = np.eye(4)
+    f[0, 2] = f[1, 3] = dt
+    q = np.zeros((4, 4))
+    q[0, 0] = q[1, 1] = dt**3 / 3.0
+    q[0, 2] = q[1, 3] = q[2, 0] = q[3, 1] = dt**2 / 2.0
+    q[2, 2] = q[3, 3] = dt
+    return f, spec.process_noise * q
 
 
 def _associate(
@@ -274,15 +276,20 @@ def update_tracker(
         hits[slots] += 1
         misses[slots] = 0
         weight = 1.0 / np.minimum(hits[slots], _RADIUS_MEMORY)
+        weight[found.occluded[taken]] = 0.0  # a partly hidden cluster's radius is too small
         radius[slots] += weight * (found.radius[taken] - radius[slots])
         confirmed[slots] |= hits[slots] >= spec.hits_to_confirm
-    missed = np.setdiff1d(alive, slots)
+    matched = np.zeros(ids.shape, bool)
+    matched[slots] = True
+    missed = alive[~matched[alive]]
     misses[missed] += 1
     gone = missed[~confirmed[missed] | (misses[missed] >= spec.misses_to_delete)]
     ids[gone] = -1
     confirmed[gone] = False
 
-    new = np.setdiff1d(np.arange(len(found)), taken)
+    unclaimed = np.ones(len(found), bool)
+    unclaimed[taken] = False
+    new = np.flatnonzero(unclaimed)
     free = np.flatnonzero(ids < 0)[: new.size]
     new = new[: free.size]
     if free.size:
