@@ -144,9 +144,10 @@ def scan_update(static, obstacle_in, obstacle, cost, pose, angles, ranges, param
         r = ranges[b] * inv
         if math.isnan(r) or r >= max_range or r < mark_min or r > mark_max:
             continue
-        j = math.floor(px + (r + _NUDGE) * ux[b])
-        i = math.floor(py + (r + _NUDGE) * uy[b])
-        if 0 <= i < rows and 0 <= j < cols:
+        x = px + (r + _NUDGE) * ux[b]
+        y = py + (r + _NUDGE) * uy[b]
+        if 0.0 <= x < cols and 0.0 <= y < rows:  # checked before the cast to an integer
+            i, j = int(y), int(x)
             marks[b] = i * cols + j
             obstacle[i, j] = _PENDING
     if 0.0 <= px < cols and 0.0 <= py < rows:

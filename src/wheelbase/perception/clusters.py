@@ -37,10 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, positive
+from wheelbase._validate import as_float_array
 from wheelbase.errors import InputError, MapError
 from wheelbase.geometry import wrap_angle
-from wheelbase.perception.specs import TrackerSpec
+from wheelbase.perception.specs import TrackerSpec, check_scan_geometry
 from wheelbase.planning import OccupancyGrid
 
 __all__ = ["Detections", "detect"]
@@ -127,7 +127,7 @@ def detect(
         )
     if (readings < 0.0).any():
         raise InputError("ranges must be >= 0 m, +inf (no return) or NaN (no reading)")
-    max_range = positive("max_range", max_range, "m")
+    max_range = check_scan_geometry(pose[:2], max_range)
 
     beams = np.flatnonzero(np.isfinite(readings) & (readings < max_range))
     direction = pose[2] + angles[beams]

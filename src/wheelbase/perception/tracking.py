@@ -43,6 +43,14 @@ from wheelbase.planning import OccupancyGrid
 __all__ = ["TrackerState", "Tracks", "update_tracker"]
 
 _RADIUS_MEMORY = 10  # detections the running mean of a radius spans at most
+_MAX_TIME = 1e9  # s (31 years): beyond it Δt³ of a prediction nears the float range
+
+
+def _time(time: float) -> float:
+    time = finite("time", time, "s", InputError)
+    if abs(time) > _MAX_TIME:
+        raise InputError(f"time must be within ±{_MAX_TIME:g} s (got {time:g} s)")
+    return time
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +153,7 @@ class TrackerState:
                   np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, bool))  # fmt: skip
         for array in arrays:
             array.setflags(write=False)
-        return cls(finite("time", time, "s", InputError), *arrays, 0)
+        return cls(_time(time), *arrays, 0)
 
     def tracks(self, confirmed_only: bool = False) -> Tracks:
         """The tracks alive, sorted by id.
@@ -247,7 +255,7 @@ def update_tracker(
         raise InputError(
             f"state has {state.ids.shape[0]} track slots, spec.max_tracks = {spec.max_tracks}"
         )
-    time = finite("time", time, "s", InputError)
+    time = _time(time)
     dt = time - state.time
     if dt < 0.0:
         raise InputError(f"time must not go back: {time:g} s after {state.time:g} s")
