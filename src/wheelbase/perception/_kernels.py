@@ -36,9 +36,10 @@ def _combined(static, obstacle):
 @numba.njit(cache=True)
 def inflate_window(static, obstacle, cost, r0, r1, c0, c1, table, reach):
     """Rewrite ``cost[r0:r1, c0:c1]`` from the layers: exact squared distances to the nearest
-    lethal cell within ``reach`` cells (a column pass, then the lower envelope of parabolas of
-    Felzenszwalb and Huttenlocher, "Distance transforms of sampled functions", 2012, on each
-    row), looked up in ``table``. Lethal cells up to ``reach`` outside the window count."""
+    lethal cell within ``reach`` cells (a column pass, then on each row the lower envelope of
+    parabolas of Felzenszwalb and Huttenlocher, "Distance transforms of sampled functions",
+    2012), looked up in ``table``.
+    Lethal cells up to ``reach`` outside the window count."""
     rows, cols = static.shape
     s0 = max(0, r0 - reach)
     s1 = min(rows, r1 + reach)
@@ -48,67 +49,82 @@ def inflate_window(static, obstacle, cost, r0, r1, c0, c1, table, reach):
     w = u1 - u0
     big = reach + 1
     # vertical distance [cells] to the nearest lethal cell of the same column, capped at big
+    # (two sweeps down and up the rows, all columns at once: row-major, cache friendly)
     vertical = np.empty((h, w), np.int64)
-    for k in range(w):
-        last = -big
-        for a in range(h):
-            if _combined(static[s0 + a, u0 + k], obstacle[s0 + a, u0 + k]) == LETHAL:
-                last = a
-            vertical[a, k] = min(a - last, big)
-        last = h - 1 + big
-        for a in range(h - 1, -1, -1):
+    last = np.full(w, -big, np.int64)
+    for a in range(h):
+        for k in range(w):
+            # the combined layers are lethal where either layer is (an unknown layer value
+            # never overrides, and otherwise the larger wins)
+            if static[s0 + a, u0 + k] == LETHAL or obstacle[s0 + a, u0 + k] == LETHAL:
+                last[k] = a
+            vertical[a, k] = min(a - last[k], big)
+    last[:] = h - 1 + big
+    for a in range(h - 1, -1, -1):
+        for k in range(w):
             if vertical[a, k] == 0:
-                last = a
-            vertical[a, k] = min(vertical[a, k], last - a)
+                last[k] = a
+            vertical[a, k] = min(vertical[a, k], last[k] - a)
     sites = np.empty(w, np.int64)
     bounds = np.empty(w + 1)
+    nearest = np.empty(c1 - c0, np.int64)
     size = table.shape[0]
     for a in range(r0 - s0, r1 - s0):
-        # lower envelope of the parabolas (q − k)² + vertical[a, k]² of the columns with a
-        # lethal cell within reach
-        n = 0
-        cross = 0.0
-        for k in range(w):
-            g = vertical[a, k]
-            if g >= big:
-                continue
-            fk = g * g + k * k
-            while n > 0:
-                p = sites[n - 1]
-                gp = vertical[a, p]
-                cross = (fk - (gp * gp + p * p)) / (2.0 * (k - p))
-                if cross <= bounds[n - 1]:
-                    n -= 1
-                else:
-                    break
-            if n == 0:
-                bounds[0] = -math.inf
-            else:
-                bounds[n] = cross
-            sites[n] = k
-            n += 1
-        m = 0
+        _row_by_envelope(vertical[a], c0 - u0, c1 - u0, big, nearest, sites, bounds)
         i = s0 + a
-        for q in range(c0 - u0, c1 - u0):
-            if n == 0:
-                sq = _NO_SITE
-            else:
-                while m + 1 < n and bounds[m + 1] < q:
-                    m += 1
-                p = sites[m]
-                g = vertical[a, p]
-                sq = (q - p) * (q - p) + g * g
-            j = u0 + q
+        for q in range(c1 - c0):
+            j = c0 + q
             layer = _combined(static[i, j], obstacle[i, j])
             if layer == LETHAL:
                 cost[i, j] = LETHAL
                 continue
+            sq = nearest[q]
             inflated = table[sq] if sq < size else FREE
             if layer == UNKNOWN:
                 # Nav2 (inflate_unknown false): unknown stays unknown unless inscribed
                 cost[i, j] = inflated if inflated >= INSCRIBED else UNKNOWN
             else:
                 cost[i, j] = max(layer, inflated)
+
+
+@numba.njit(cache=True)
+def _row_by_envelope(vertical, q0, q1, big, nearest, sites, bounds):
+    """``nearest[q − q0]`` = min over columns k of (q − k)² + vertical[k]², by the lower
+    envelope of those parabolas for the columns with a lethal cell within reach (Felzenszwalb
+    and Huttenlocher): linear in the row whatever the reach (a plain scan of the columns
+    within reach was twice slower at 11 cells)."""
+    w = vertical.shape[0]
+    n = 0
+    cross = 0.0
+    for k in range(w):
+        g = vertical[k]
+        if g >= big:
+            continue
+        fk = g * g + k * k
+        while n > 0:
+            p = sites[n - 1]
+            gp = vertical[p]
+            cross = (fk - (gp * gp + p * p)) / (2.0 * (k - p))
+            if cross <= bounds[n - 1]:
+                n -= 1
+            else:
+                break
+        if n == 0:
+            bounds[0] = -math.inf
+        else:
+            bounds[n] = cross
+        sites[n] = k
+        n += 1
+    m = 0
+    for q in range(q0, q1):
+        if n == 0:
+            nearest[q - q0] = _NO_SITE
+            continue
+        while m + 1 < n and bounds[m + 1] < q:
+            m += 1
+        p = sites[m]
+        g = vertical[p]
+        nearest[q - q0] = (q - p) * (q - p) + g * g
 
 
 _TILE = 16  # cells: changes are gathered per tile, and groups of changed tiles re-inflated
