@@ -21,7 +21,8 @@ The rule, step by step:
    ``max_radius`` (or spanning half the view and more) are dropped: long unmapped walls are
    left to the costmap.
 5. The measurement covariance is the points' spread over their number plus the floor
-   ``measurement_std``²: R = C/n + σ² I, with C the points' covariance (divided by n).
+   σ² with σ = ``measurement_std``: R = C/n + σ² I, with C the points' covariance (divided
+   by n).
 6. A cluster is *occluded* when the beam just outside one of its edges returns nearer than
    that edge's return: the object may go on behind what is in front, so its span, radius and
    centre are not to be trusted: its R gains ρ² I (its centre is uncertain by about the

@@ -21,10 +21,10 @@ Update
     most).
 Management
     A detection no track takes starts a tentative track at z with velocity 0 and covariance
-    blockdiag(R, ``initial_speed_std``² I), unless ``max_tracks`` are alive. A tentative
-    track is confirmed at ``hits_to_confirm`` hits in a row since its birth and deleted at
-    its first miss; a confirmed track is deleted after ``misses_to_delete`` misses in a row
-    (it coasts on its prediction until then). Ids are never reused.
+    blockdiag(R, σ_v² I) with σ_v = ``initial_speed_std``, unless ``max_tracks`` are alive.
+    A tentative track is confirmed at ``hits_to_confirm`` hits in a row since its birth and
+    deleted at its first miss; a confirmed track is deleted after ``misses_to_delete`` misses
+    in a row (it coasts on its prediction until then). Ids are never reused.
 """
 
 from __future__ import annotations
