@@ -830,6 +830,69 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
         finite(estimate.pose, estimate.cov)
         return estimate
 
+    beams = np.linspace(-math.pi, math.pi, 24, endpoint=False)
+
+    def true_ranges(pose):
+        """The true ranges of the room."""
+        from wheelbase.sensors import scan_rays
+
+        return scan_rays(room, [pose[:2]], [pose[2]], beams, 3.0, "exact")[0]
+
+    def scan_of(pose, discs=((1.4, 1.2, 0.2),)):
+        """A lidar scan of ``room`` with discs in it (the walkers of the perception cases)."""
+        ranges = true_ranges(pose)
+        angle = pose[2] + beams
+        for cx, cy, rho in discs:
+            dx, dy = cx - pose[0], cy - pose[1]
+            b = np.cos(angle) * dx + np.sin(angle) * dy
+            disc = b * b - (dx * dx + dy * dy - rho * rho)
+            t = b - np.sqrt(np.maximum(disc, 0.0))
+            ranges = np.where((disc >= 0) & (t >= 0) & (t < ranges), t, ranges)
+        return ranges
+
+    def costmap(**keys):
+        from wheelbase.perception import CostmapSpec, LayeredCostmap, update_costmap
+
+        spec = CostmapSpec.from_mapping(keys)
+        layers = LayeredCostmap.from_map(spec, room, 0.1)
+        pose = np.array([[1.0, 1.0, 0.3]])
+        state = update_costmap(layers, layers.initial_state(1), pose, beams,
+                               scan_of(pose[0])[None], 3.0)  # fmt: skip
+        return layers.rolling_window(state, 0, pose[0]).to_occupancy_grid()
+
+    def costmap_args(sensor_poses, beam_angles, ranges, max_range, index):
+        from wheelbase.perception import CostmapSpec, LayeredCostmap, update_costmap
+
+        layers = LayeredCostmap.from_map(CostmapSpec(), room, 0.1)
+        return update_costmap(layers, layers.initial_state(2), sensor_poses, beam_angles,
+                              ranges, max_range, index)  # fmt: skip
+
+    def tracker(**keys):
+        from wheelbase.perception import TrackerSpec, TrackerState, update_tracker
+
+        spec = TrackerSpec.from_mapping(keys)
+        state = TrackerState.initial(spec)
+        for k in range(4):
+            pose = np.array([1.0, 1.0, 0.3])
+            disc = ((1.4 + 0.05 * k, 1.2, 0.2),)
+            state = update_tracker(spec, state, 0.1 * k, pose, beams, scan_of(pose, disc), 3.0,
+                                   room)  # fmt: skip
+        tracks = state.tracks()
+        finite(tracks.position, tracks.velocity, tracks.covariance)
+        return tracks
+
+    def tracker_args(time, sensor_pose, beam_angles, ranges, max_range):
+        from wheelbase.perception import TrackerSpec, TrackerState, update_tracker
+
+        spec = TrackerSpec()
+        state = update_tracker(spec, TrackerState.initial(spec), 0.0, (1.0, 1.0, 0.3), beams,
+                               scan_of((1.0, 1.0, 0.3)), 3.0, room)  # fmt: skip
+        state = update_tracker(spec, state, time, sensor_pose, beam_angles, ranges, max_range,
+                               room)  # fmt: skip
+        tracks = state.tracks()
+        finite(tracks.position, tracks.velocity, tracks.covariance)
+        return tracks
+
     return {
         "DiffDrive": (wb.DiffDrive, {"wheel_radius": 0.05, "half_track": 0.2}),
         "Bicycle": (wb.Bicycle, {"wheel_base": 0.5, "max_steering": 0.6}),
@@ -979,6 +1042,56 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
                 "recovery_alpha_fast": 0.1,
                 "update_min_d": 0.25,
                 "resample_interval": 1,
+            },
+        ),
+        "CostmapSpec.from_mapping": (
+            costmap,
+            {
+                "inflation_radius": 0.55,
+                "cost_scaling_factor": 10.0,
+                "obstacle_max_range": 2.5,
+                "obstacle_min_range": 0.0,
+                "raytrace_max_range": 3.0,
+                "raytrace_min_range": 0.0,
+                "window": 3.0,
+                "resolution": 0.1,
+                "track_unknown": False,
+            },
+        ),
+        "update_costmap": (
+            costmap_args,
+            {
+                "sensor_poses": [[1.0, 1.0, 0.3]],
+                "beam_angles": beams,
+                "ranges": np.full((1, 24), 1.5),
+                "max_range": 3.0,
+                "index": [1],
+            },
+        ),
+        "TrackerSpec.from_mapping": (
+            tracker,
+            {
+                "map_tolerance": 0.2,
+                "cluster_distance": 0.3,
+                "min_points": 2,
+                "max_radius": 1.0,
+                "measurement_std": 0.05,
+                "process_noise": 0.5,
+                "initial_speed_std": 1.0,
+                "gate_probability": 0.99,
+                "hits_to_confirm": 3,
+                "misses_to_delete": 5,
+                "max_tracks": 64,
+            },
+        ),
+        "update_tracker": (
+            tracker_args,
+            {
+                "time": 0.1,
+                "sensor_pose": (1.0, 1.0, 0.3),
+                "beam_angles": beams,
+                "ranges": np.full(24, 1.5),
+                "max_range": 3.0,
             },
         ),
         "AMCL.update": (

@@ -10,6 +10,7 @@ cases instead of stopping at the first.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 
@@ -101,6 +102,16 @@ def test_map_arrays(case):
 )  # 4e9 covering circles
 @example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
                                "xy_resolution": 1e-320}))  # fmt: skip
+@example(("update_costmap", {**fuzzing.constructors()["update_costmap"][1],
+                             "sensor_poses": [[1e300, 1.0, 0.0]]}))  # fmt: skip
+@example(("update_costmap", {**fuzzing.constructors()["update_costmap"][1], "max_range": 1e-300}))
+@example(("update_tracker", {**fuzzing.constructors()["update_tracker"][1], "time": 1e300}))
+@example(("update_tracker", {**fuzzing.constructors()["update_tracker"][1],
+                             "ranges": np.full(24, np.nan)}))  # fmt: skip
+@example(("CostmapSpec.from_mapping", {**fuzzing.constructors()["CostmapSpec.from_mapping"][1],
+                                       "resolution": 1e-9}))  # fmt: skip
+@example(("TrackerSpec.from_mapping", {**fuzzing.constructors()["TrackerSpec.from_mapping"][1],
+                                       "max_tracks": 2**70}))  # fmt: skip
 def test_constructors(case):
     check(fuzzing.call_constructor, case, "constructor")
 
