@@ -252,9 +252,11 @@ for _base in BASES:
 
 def _scenario_paths() -> list[tuple[str, ...]]:
     """Every field of the scenario schema, and the gains and planner options a file can set."""
+    from dataclasses import fields
+
     from pydantic import BaseModel
 
-    from wheelbase.control import MPPI, Kanayama, PurePursuit, Stanley
+    from wheelbase.control import DWA, MPPI, DWACritics, Kanayama, PurePursuit, Stanley
     from wheelbase.control.mppi_critics import MPPICritics
     from wheelbase.planning import HybridAStar
     from wheelbase.scenario import Scenario
@@ -270,8 +272,9 @@ def _scenario_paths() -> list[tuple[str, ...]]:
 
     walk(Scenario, ())
     paths.append(("goal",))
-    gains = set(inspect.signature(MPPI).parameters) | {f for f in MPPICritics.WEIGHTS}
-    for cls in (Kanayama, PurePursuit, Stanley):
+    gains = set(inspect.signature(MPPI).parameters) | {f.name for f in fields(MPPICritics)}
+    gains |= {f.name for f in fields(DWACritics)} - {"extra"}
+    for cls in (Kanayama, PurePursuit, Stanley, DWA):
         gains |= set(inspect.signature(cls).parameters)
     gains |= {"bandwidth", "speed", "max_torque", "model_error", "max_speed", "max_yaw_rate"}
     paths += [("controller", "gains", name) for name in sorted(gains - {"model", "limits"})]
@@ -748,6 +751,38 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
         controller = wb.MPPI(wb.Unicycle(), 10, 0.1, 32, 0.2, 0.1, None, limits)
         return controller(0.0, pose, reference)
 
+    def perceived(law, cost, resolution, origin, position, velocity, covariance, radius, time):
+        from types import SimpleNamespace
+
+        costmap = SimpleNamespace(cost=cost, resolution=resolution, origin=origin)
+        tracks = SimpleNamespace(position=position, velocity=velocity, covariance=covariance,
+                                 radius=radius)  # fmt: skip
+        view = SimpleNamespace(costmap=costmap, tracks=tracks, time=time)
+        if law == "dwa":
+            controller = wb.control.DWA(wb.Unicycle(), v_samples=5, w_samples=5,
+                                        footprint=Footprint.rectangle(0.4, 0.4))  # fmt: skip
+        else:
+            controller = wb.MPPI(wb.Unicycle(), 10, 0.1, 32, 0.2, 0.1, None, limits,
+                                 footprint=Footprint.rectangle(0.4, 0.4))  # fmt: skip
+        command = controller(0.2, (0.5, 0.5, 0.0), line, perception=view)
+        finite(command)
+        return command
+
+    view_arguments = {
+        "cost": np.zeros((20, 30), np.uint8) + np.uint8(40),
+        "resolution": 0.1,
+        "origin": (-0.5, -0.5),
+        "position": [[1.2, 0.6]],
+        "velocity": [[-0.3, 0.0]],
+        "covariance": np.eye(4)[None] * 0.01,
+        "radius": [0.3],
+        "time": 0.1,
+    }
+
+    def dwa(**kw):
+        controller = wb.control.DWA.from_gains(wb.Unicycle(), **kw)
+        return controller(0.0, (0.5, 0.5, 0.0), line)
+
     def simulate(**kw):
         return wb.simulate(wb.DiffDrive(0.05, 0.2), **kw)
 
@@ -947,6 +982,25 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
             },
         ),
         "MPPI(pose)": (mppi_pose, {"pose": (0.5, 0.5, -6.12), "reference": line}),
+        "MPPI(perception)": (perceived, {"law": "mppi", **view_arguments}),
+        "DWA(perception)": (perceived, {"law": "dwa", **view_arguments}),
+        "DWA": (
+            dwa,
+            {
+                "max_speed": 0.5,
+                "min_speed": 0.0,
+                "max_yaw_rate": 1.5,
+                "max_acceleration": 2.5,
+                "sim_time": 1.7,
+                "sim_dt": 0.1,
+                "v_samples": 5,
+                "w_samples": 5,
+                "path_dist": 640.0,
+                "dynamic_inflation": 0.5,
+                "oscillation": True,
+                "goal_tolerance": (0.05, 0.25),
+            },
+        ),
         "simulate": (
             simulate,
             {
