@@ -20,6 +20,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from wheelbase._validate import count_text, read_text
 from wheelbase.errors import ScenarioError
 from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
+from wheelbase.scenario_terrain import (
+    ContactsSpec,
+    PayloadSpec,
+    TerrainSpec,
+    TractionSpec,
+)
 from wheelbase.scenario_world import FleetRobotSpec, RecoverySpec, ReplanningSpec, WorldSpec
 
 __all__ = [
@@ -91,6 +97,12 @@ class RobotSpec(_Strict):
     )
     max_wheel_speed: float | None = Field(
         None, gt=0, description="Wheel angular speed limit of a differential drive [rad/s]."
+    )
+    payload: PayloadSpec | None = Field(
+        None, description="What the robot carries from the start (a dynamic plant)."
+    )
+    contacts: ContactsSpec | None = Field(
+        None, description="Drive wheels, casters and load sharing on terrain (default RM100's)."
     )
 
     @field_validator("footprint")
@@ -173,6 +185,14 @@ class ControllerSpec(_Strict):
         default_factory=TorqueLoopSpec,
         description="On a dynamic plant, a law other than computed_torque commands (v, ω), "
         "tracked by computed torque with these settings.",
+    )
+    model_payload: bool | PayloadSpec = Field(
+        True,
+        description="The payload of the controller's model: true, the robot's (as goals change "
+        "it); false, none; or a payload of its own (a mismatch with the truth).",
+    )
+    traction_control: TractionSpec | None = Field(
+        None, description="Limit the wheel torques by the estimated friction (a dynamic plant)."
     )
 
 
@@ -468,6 +488,15 @@ class Scenario(_Strict):
         description="Controller calls per second (default: every step dt); the command is "
         "held between calls.",
     )
+    terrain: TerrainSpec | None = Field(
+        None,
+        description="The ground: surfaces, regions with grades, wheel slip (a dynamic plant).",
+    )
+    goal_payloads: tuple[PayloadSpec | None, ...] | None = Field(
+        None,
+        description="The payload from each goal on (None: unchanged; mass 0: dropped); a goal "
+        "written {pose: [x, y, deg], payload: {...}} fills it.",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -489,6 +518,59 @@ class Scenario(_Strict):
                 data["start"] = first.get("start")
                 data["goals"] = first.get("goals", [first["goal"]] if "goal" in first else None)
         return data
+
+    @model_validator(mode="before")
+    @classmethod
+    def _goals_with_payloads(cls, data: Any) -> Any:
+        # a goal may be {pose: [x, y, deg], payload: {...} | null}: split it into the pose and
+        # goal_payloads (null drops the load: mass 0)
+        if not isinstance(data, dict):
+            return data
+        key = "goals" if "goals" in data else "goal" if "goal" in data else None
+        goals = data.get(key) if key else None
+        entries = [goals] if key == "goal" else goals
+        if not isinstance(entries, (list, tuple)) or not any(isinstance(g, dict) for g in entries):
+            return data
+        if "goal_payloads" in data:
+            raise ValueError("give payloads in the goals or in goal_payloads, not both")
+        poses, payloads = [], []
+        for index, goal in enumerate(entries):
+            if not isinstance(goal, dict):
+                poses.append(goal)
+                payloads.append(None)
+                continue
+            unknown = sorted(set(goal) - {"pose", "payload"})
+            if unknown or "pose" not in goal:
+                raise ValueError(
+                    f"goals[{index}]: a goal mapping has pose: [x, y, deg] and optionally "
+                    f"payload (got keys {sorted(goal)})"
+                )
+            poses.append(goal["pose"])
+            if "payload" in goal:
+                payloads.append(goal["payload"] if goal["payload"] is not None else {"mass": 0})
+            else:
+                payloads.append(None)
+        data = dict(data)
+        data[key] = poses[0] if key == "goal" else poses
+        data["goal_payloads"] = payloads
+        return data
+
+    @model_validator(mode="after")
+    def _terrain_needs(self):
+        dynamic = self.plant == "dynamic"
+        for name, given in (
+            ("terrain", self.terrain is not None),
+            ("robot.payload", self.robot.payload is not None),
+            ("goal_payloads", self.goal_payloads is not None),
+            ("controller.traction_control", self.controller.traction_control is not None),
+        ):
+            if given and not dynamic:
+                raise ValueError(f"{name} acts on the dynamics: set plant: dynamic")
+        if self.goal_payloads is not None and len(self.goal_payloads) != len(self.goals):
+            raise ValueError(
+                f"goal_payloads has {len(self.goal_payloads)} entries for {len(self.goals)} goals"
+            )
+        return self
 
     @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
     @classmethod

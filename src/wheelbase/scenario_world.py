@@ -21,25 +21,12 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
-    "BEHAVIOURS",
-    "MAX_AGENTS",
-    "AgentGroupSpec",
     "FleetRobotSpec",
-    "ObstacleSpec",
     "PathBoxesSpec",
     "RecoverySpec",
     "ReplanningSpec",
     "WorldSpec",
 ]
-
-BEHAVIOURS: tuple[str, ...] = ("straight", "wander", "waypoints", "social_force", "orca")
-"""How agents move (see :mod:`wheelbase.world`)."""
-
-MAX_AGENTS = 10_000
-"""Most agents of one group (a crowd of 10,000 in one world is already a stadium)."""
-
-MAX_AGENT_SPEED = 10.0
-"""Largest preferred speed of an agent [m/s] (a sprinter runs 10 m/s; faster is a typo)."""
 
 
 class _Strict(BaseModel):
@@ -50,86 +37,6 @@ def _finite(values: Any) -> bool:
     if isinstance(values, (tuple, list)):
         return all(_finite(value) for value in values)
     return math.isfinite(float(values)) and abs(float(values)) <= MAX_COORDINATE
-
-
-class ObstacleSpec(_Strict):
-    """One static obstacle that is not on the map: exactly one of ``box``, ``disc``, ``polygon``."""
-
-    box: tuple[float, float, float, float, float] | None = Field(
-        None, description="(x [m], y [m], length [m], width [m], yaw [deg]) of a rectangle."
-    )
-    disc: tuple[float, float, float] | None = Field(None, description="(x [m], y [m], radius [m]).")
-    polygon: tuple[tuple[float, float], ...] | None = Field(
-        None, min_length=3, description="Vertices [[x, y], ...] [m] of a simple polygon."
-    )
-
-    @model_validator(mode="after")
-    def _one_shape(self):
-        given = [name for name in ("box", "disc", "polygon") if getattr(self, name) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "give exactly one of box: [x, y, length, width, yaw_deg], disc: [x, y, radius] "
-                f"or polygon: [[x, y], ...] (got {', '.join(given) or 'none'})"
-            )
-        shape = getattr(self, given[0])
-        if not _finite(shape):
-            raise ValueError(f"{given[0]}: numbers must be finite (got {list(shape)})")
-        if self.box is not None and (self.box[2] <= 0 or self.box[3] <= 0):
-            raise ValueError(f"box: length and width must be > 0 m (got {list(self.box)})")
-        if self.disc is not None and self.disc[2] <= 0:
-            raise ValueError(f"disc: radius must be > 0 m (got {self.disc[2]:g})")
-        return self
-
-
-class AgentGroupSpec(_Strict):
-    """A group of moving agents (people, other robots that do not follow our plans)."""
-
-    count: int = Field(1, ge=1, le=MAX_AGENTS, description="Number of agents.")
-    radius: float = Field(0.3, gt=0, le=5.0, description="Body radius [m].")
-    speed: float = Field(
-        0.5, gt=0, le=MAX_AGENT_SPEED, description="Preferred walking speed [m/s]."
-    )
-    behaviour: Literal["straight", "wander", "waypoints", "social_force", "orca"] = Field(
-        "wander",
-        description="straight (constant velocity, reflects off walls), wander (random goals "
-        "in region), waypoints (a loop through waypoints), social_force (Helbing–Molnár), "
-        "orca (reciprocal velocity obstacles).",
-    )
-    region: tuple[float, float, float, float] | None = Field(
-        None,
-        description="(x0, y0, x1, y1) [m]: where they start and draw their goals "
-        "(default: the whole map).",
-    )
-    reacts_to_robot: bool = Field(
-        False, description="True: the robots are agents to them (they avoid them)."
-    )
-    waypoints: tuple[tuple[float, float], ...] | None = Field(
-        None, min_length=1, description="[[x, y], ...] [m] for behaviour: waypoints."
-    )
-
-    @field_validator("region")
-    @classmethod
-    def _region(cls, value):
-        if value is None:
-            return value
-        if not _finite(value):
-            raise ValueError(f"must be finite (got {list(value)})")
-        x0, y0, x1, y1 = value
-        if not (x1 > x0 and y1 > y0):
-            raise ValueError(
-                f"must be (x0, y0, x1, y1) with x1 > x0 and y1 > y0 (got {list(value)})"
-            )
-        return value
-
-    @model_validator(mode="after")
-    def _waypoints_for_waypoints(self):
-        if self.behaviour == "waypoints" and self.waypoints is None:
-            raise ValueError("behaviour: waypoints needs waypoints: [[x, y], ...]")
-        if self.behaviour != "waypoints" and self.waypoints is not None:
-            raise ValueError(f"waypoints are for behaviour: waypoints (got {self.behaviour!r})")
-        if self.waypoints is not None and not _finite(self.waypoints):
-            raise ValueError("waypoints must be finite")
-        return self
 
 
 class PathBoxesSpec(_Strict):
@@ -159,16 +66,38 @@ class PathBoxesSpec(_Strict):
 
 
 class WorldSpec(_Strict):
-    """The truth beyond ``map``, unknown to the robot, seen only through its sensors."""
+    """The truth beyond ``map``, unknown to the robot, seen only through its sensors.
 
-    obstacles: tuple[ObstacleSpec, ...] = Field(
-        (), description="Static obstacles that are not on the map."
+    The entries of ``obstacles`` and ``agents`` and the parameter sets are checked by
+    :func:`wheelbase.world.world_from_spec` when the scenario is prepared (it needs the map);
+    its errors name the key (``world.agents[0].speed: ...``).
+    """
+
+    obstacles: tuple[dict[str, Any], ...] = Field(
+        (),
+        description="Static obstacles that are not on the map, each one of {box: [x, y, "
+        "length, width, yaw_deg]}, {disc: [x, y, radius]}, {polygon: [[x, y], ...]} [m].",
     )
-    agents: tuple[AgentGroupSpec, ...] = Field((), description="Groups of moving agents.")
+    agents: tuple[dict[str, Any], ...] = Field(
+        (),
+        description="Groups of moving agents: {count, radius [m], speed [m/s], behaviour "
+        "(straight | wander | waypoints | social_force | orca), region [x0, y0, x1, y1] [m], "
+        "reacts_to_robot, waypoints [[x, y], ...]}.",
+    )
+    social_force: dict[str, Any] | None = Field(
+        None, description="Parameters of the social force model (wheelbase.world.SocialForce)."
+    )
+    orca: dict[str, Any] | None = Field(
+        None, description="Parameters of ORCA (wheelbase.world.ORCA)."
+    )
     path_boxes: PathBoxesSpec | None = Field(
         None,
         description="Boxes dropped at random on the planned path after planning (seeded).",
     )
+
+    def truth(self) -> dict[str, Any]:
+        """The section as :func:`wheelbase.world.world_from_spec` reads it."""
+        return self.model_dump(exclude={"path_boxes"}, exclude_none=True)
 
 
 class FleetRobotSpec(_Strict):
@@ -241,5 +170,12 @@ class RecoverySpec(_Strict):
     back_up_speed: float = Field(0.1, gt=0, le=5, description="Speed of back_up [m/s].")
     spin_angle_deg: float = Field(
         90.0, gt=0, le=360, description="How far spin turns on the spot [deg]."
+    )
+    yield_time: float = Field(
+        60.0,
+        ge=0,
+        le=3600,
+        description="Longest a robot of a fleet other than the first waits aside for a robot "
+        "with the right of way [s] (the fleet's order is its priority; 0: never yield).",
     )
     spin_rate_deg: float = Field(60.0, gt=0, le=3600, description="Yaw rate of spin [deg/s].")

@@ -14,6 +14,7 @@ code. Each :meth:`Engine.step`, for every robot still running:
 4. *the rules* (on the state at time t): collision of the footprint → ``collision``; after
    the reference has ended, at rest and with the *estimate* within tolerance of the goal, the
    robot stops → ``arrived`` if the *true* pose is within tolerance too, else ``missed_goal``;
+   with a ``stuck`` rule, commanded to move and not moving for its time → ``stuck``;
    the time limit → ``timeout``;
 5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
 6. *encoders and sensors*: the wheel angles' change becomes tick differences, and the sensors
@@ -36,7 +37,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -170,6 +171,11 @@ class EngineState:
         The world's evolving truth (agents), from ``surroundings.start``.
     perception : object or None
         What each robot has made of its sensors (costmap, tracks), from ``perception.start``.
+    still : numpy.ndarray, shape (N,), or None
+        Seconds each robot has stood still while commanded to move (the ``stuck`` rule).
+    track_scores : numpy.ndarray, shape (N, 3), or None
+        For the metrics only (nothing that decides reads it): each robot's running sums of
+        squared track position and velocity errors against the true agents, and of matches.
     """
 
     step: int
@@ -191,6 +197,8 @@ class EngineState:
     held_status: list | None = None
     world: Any = None
     perception: Any = None
+    still: np.ndarray | None = None
+    track_scores: np.ndarray | None = None
 
     @property
     def running(self) -> np.ndarray:
@@ -214,6 +222,7 @@ class _Row:
     signals: dict[str, np.ndarray]
     scan: np.ndarray | None = None  # read after the step, at the next row's true poses
     scan_index: np.ndarray | None = None
+    agents: np.ndarray | None = None  # (B, A, 4) every world's agents at the row
 
 
 @dataclass(frozen=True)
@@ -274,6 +283,9 @@ class Engine:
     references : tuple, optional
         One reference per robot of a world (a fleet's plans): robot i follows
         ``references[i % len(references)]`` (per-robot controllers only).
+    stuck : Stuck, optional
+        The ``stuck`` rule (:class:`~wheelbase.sim.stuck.Stuck`): a robot commanded to move
+        that does not move for its time ends ``stuck``.
     """
 
     plant: Any
@@ -295,6 +307,7 @@ class Engine:
     surroundings: Any = None
     perception: Any = None
     references: tuple | None = None
+    stuck: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -372,12 +385,13 @@ class Engine:
         start[:, 2] = wrap_angle(start[:, 2])
         goal = None
         if self.arrival is not None:
-            goal = self.arrival.goal
-            if goal.ndim == 2 and goal.shape[0] not in (1, n):
+            goal = self.arrival.goal.reshape(-1, 3)
+            if n % goal.shape[0]:
                 raise InputError(
-                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,) or ({n}, 3)"
+                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,), ({n}, 3) "
+                    "or one row per robot of a world whose robots make up the batch"
                 )
-            goal = np.broadcast_to(goal.reshape(-1, 3), (n, 3)).copy()
+            goal = np.tile(goal, (n // goal.shape[0], 1))  # a fleet's goals in every world
         reset = getattr(self.controller, "reset", None)
         if reset is not None:
             reset()
@@ -405,6 +419,18 @@ class Engine:
             sensors=None if self.sensors is None else self.sensors.start(seeds),
             world=None if self.surroundings is None else self.surroundings.start(seeds, start),
             perception=None if self.perception is None else self.perception.start(start),
+            still=None if self.stuck is None else np.zeros(n),
+            track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
+        )
+
+    @property
+    def _scores_tracks(self) -> bool:
+        """Whether the log scores the robots' tracks against the world's agents."""
+        return (
+            self.surroundings is not None
+            and self.perception is not None
+            and getattr(self.perception, "tracker", None) is not None
+            and self.surroundings.world.agent_count > 0
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -492,6 +518,15 @@ class Engine:
         estimator_signals = getattr(self.estimator, "signals", None)
         if estimator_signals is not None and state.estimator is not None:
             signals = {**signals, **estimator_signals(state.estimator)}
+        agents = None
+        if state.track_scores is not None:
+            signals = {**signals, "track_position_sq_sum": state.track_scores[:, 0],
+                       "track_velocity_sq_sum": state.track_scores[:, 1],
+                       "track_matches": state.track_scores[:, 2]}  # fmt: skip
+        if self.surroundings is not None:
+            signals = {**signals, **self.surroundings.signals(state.world, state.pose, state.twist)}
+            if self.record_sensors:
+                agents = self.surroundings.agents(state.world)
         scan = scan_index = None
 
         active = status == RUNNING
@@ -520,6 +555,11 @@ class Engine:
                     status[stopped & truly] = ARRIVED
                     status[stopped & ~truly] = MISSED_GOAL
                     active &= ~stopped
+        still = state.still
+        if self.stuck is not None and still is not None:
+            still, stuck = self.stuck.update(still, state.pose, moved, reference, self.dt)
+            status[active & stuck] = STUCK
+            active &= ~stuck
         if state.step >= self.steps or t >= limit - 1e-12:
             status[active] = TIMEOUT
             active[:] = False
@@ -530,6 +570,7 @@ class Engine:
         plant_state = state.plant
         world_state = state.world
         perception_state = state.perception
+        track_scores = state.track_scores
         if active.any():
             index = np.flatnonzero(active)
             new_pose, new_twist, turned, plant_state = self.plant.step(
@@ -577,12 +618,18 @@ class Engine:
                 perception_state = self.perception.update(
                     state.perception, t + self.dt, extra["readings"], estimate[moving], moving
                 )
+                if track_scores is not None:  # evaluation against the truth, for the log
+                    tracks = [self.perception.tracks(perception_state, int(i)) for i in moving]
+                    track_scores = track_scores.copy()
+                    track_scores[moving] += self.surroundings.track_scores(
+                        world_state, tracks, moving
+                    )
         else:
             estimator_state = state.estimator
             if self.surroundings is not None:  # the world goes on around robots that stopped
                 world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
         row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
-                   state.ticks, controller_status, signals, scan, scan_index)  # fmt: skip
+                   state.ticks, controller_status, signals, scan, scan_index, agents)  # fmt: skip
         new_state = EngineState(
             step=state.step + 1,
             pose=pose,
@@ -603,6 +650,8 @@ class Engine:
             held_status=held,
             world=world_state,
             perception=perception_state,
+            still=still,
+            track_scores=track_scores,
         )
         return new_state, row
 
@@ -657,13 +706,19 @@ class Engine:
                 break
         if self.progress is not None:
             self.progress(rows[-1].t)
-        return self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        log = self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        summaries = [getattr(law, "summary", None) for law in state.controllers]
+        if len(state.controllers) == n and any(callable(s) for s in summaries):
+            log = replace(log, summaries=tuple(s() if callable(s) else {} for s in summaries))
+        return log
 
     # ------------------------------------------------------------------ helpers
     def _reference_pose(self, t: float, n: int, goal: np.ndarray | None) -> np.ndarray:
         if self.reference_pose is not None:
-            value = np.asarray(self.reference_pose(t), dtype=np.float64)
-            return np.broadcast_to(value.reshape(-1, 3), (n, 3))
+            value = np.asarray(self.reference_pose(t), dtype=np.float64).reshape(-1, 3)
+            if len(value) > 1 and n % len(value) == 0:  # one per robot of each world
+                return np.tile(value, (n // len(value), 1))
+            return np.broadcast_to(value, (n, 3))
         if goal is not None:
             return goal
         return np.full((n, 3), np.nan)
@@ -731,6 +786,7 @@ class Engine:
             rollout_fans=fans,
             scans=scans,
             particles=particles,
+            agents=None if rows[0].agents is None else np.stack([r.agents for r in rows], axis=1),
         )
 
 
