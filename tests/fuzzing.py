@@ -587,6 +587,8 @@ def load_map_file(case: tuple[str, bytes, dict[str, bytes]]) -> Any:
             (Path(folder) / name).write_bytes(data)
         if suffix == ".scen":
             return read_movingai_scenarios(path)
+        if suffix in (".png", ".pgm", ".bmp", ".jpg"):  # a bare image needs its resolution
+            return load_map(path, resolution=0.1)
         return load_map(path)
 
 
@@ -1245,6 +1247,7 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
             "--xy-resolution": 1,
             "--collision-step": 1,
             "--time-limit": 1,
+            "--resolution": 1,
         },
     ),
     "goto": (
