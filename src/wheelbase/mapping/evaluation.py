@@ -181,3 +181,48 @@ def map_agreement(estimate: OccupancyGrid, truth: OccupancyGrid) -> tuple[float,
         return math.nan, 0
     agree = estimate.occupied[ci, cj][both] == truth.occupied.ravel()[both]
     return float(agree.mean()), int(both.sum())
+
+
+def lidar_metrics(log, result) -> dict[str, float | int]:
+    """The ``metrics.json`` figures of a lidar SLAM run (``relative_*`` against the log's
+    reference poses, when it has them: :func:`relation_pairs`, local and loop relations
+    together; ``*_local`` and ``*_loops`` apart).
+
+    Parameters
+    ----------
+    log : ScanLog
+        The scans.
+    result : SlamResult
+        The run.
+
+    Returns
+    -------
+    dict
+    """
+    out: dict[str, float | int] = {
+        "scans": log.n_scans,
+        "keyframes": int(result.keyframes.size),
+        "loop_closures": len(result.loops),
+        "processing_time_s": result.processing_time_s,
+        "real_time_factor": result.real_time_factor,
+        "duration_s": result.duration_s,
+        "invalid_readings": log.invalid_readings,
+        **{k: int(v) for k, v in result.stats.items()},
+    }
+    if log.reference is not None:
+        local, loops = relation_pairs(log.reference, log.t)
+        for suffix, pairs in (("", np.vstack([local, loops])), ("_local", local),
+                              ("_loops", loops)):  # fmt: skip
+            et, er = relative_errors(result.poses, log.reference, pairs)
+            ok = et.size > 0
+            out[f"relative_translation_error_m{suffix}"] = float(et.mean()) if ok else math.nan
+            out[f"relative_translation_error_m{suffix}_std"] = float(et.std()) if ok else math.nan
+            out[f"relative_rotation_error_deg{suffix}"] = (
+                float(np.degrees(er.mean())) if ok else math.nan
+            )
+            out[f"relative_rotation_error_deg{suffix}_std"] = (
+                float(np.degrees(er.std())) if ok else math.nan
+            )
+            out[f"relations{suffix}"] = int(et.size)
+        out["position_rmse_m"] = absolute_trajectory_error(result.poses, log.reference)
+    return out

@@ -293,6 +293,8 @@ class LidarSlam:
             duration_s=log.duration,
             stats=stats,
             snapshots=snapshots,
+            anchors=anchor,
+            offsets=poses,
         )
 
     def render(self, log: ScanLog, poses: np.ndarray, **kwargs) -> LogOddsMap:
@@ -407,6 +409,10 @@ class SlamResult:
         ``loops_accepted``, ``loops_rejected``, ``skipped_scans``, ``optimizations``.
     snapshots : list
         ``(scan index, keyframe poses at that time)`` every ``snapshot_every`` scans.
+    anchors : numpy.ndarray, shape (N,)
+        The keyframe each scan follows.
+    offsets : numpy.ndarray, shape (N, 3)
+        Each scan's pose in its keyframe's frame.
     """
 
     poses: np.ndarray
@@ -419,6 +425,25 @@ class SlamResult:
     duration_s: float
     stats: dict
     snapshots: list = field(default_factory=list, repr=False)
+    anchors: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False)
+    offsets: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)), repr=False)
+
+    def snapshot_poses(self, index: int) -> tuple[int, np.ndarray]:
+        """The scans up to snapshot ``index`` and their poses as estimated then.
+
+        Parameters
+        ----------
+        index : int
+            Row of ``snapshots``.
+
+        Returns
+        -------
+        tuple
+            ``(last scan index, poses of scans 0 … last)``.
+        """
+        last, keyframes = self.snapshots[index]
+        anchors = np.clip(self.anchors[: last + 1], 0, len(keyframes) - 1)
+        return last, compose(keyframes[anchors], self.offsets[: last + 1])
 
     @property
     def real_time_factor(self) -> float:
