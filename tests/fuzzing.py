@@ -1054,8 +1054,8 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
         },
     ),
     "goto": (
-        ["--goal", "0.5", "0.5", "--unit", "m"],
-        {"--goal": 2, "--unit": 1, "--ed": 1, "--eb": 1, "--method": 1, "--seed": 1},
+        ["--goal", "0.5", "0.5"],
+        {"--goal": 2, "--ed": 1, "--eb": 1, "--method": 1, "--seed": 1},
     ),
     "dynamics": (
         ["--no-gif", "--t-end", "2"],

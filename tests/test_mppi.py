@@ -587,9 +587,9 @@ def test_cusp_is_passed_when_the_robot_crosses_its_line():
     path = PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
     mppi = make(samples=100)
     mppi(0.0, (1.7, 0.0, 0.0), path)
-    assert mppi._section == 0
+    assert mppi._path.section == 0
     command = mppi(0.0, (2.01, 0.08, 0.0), path)
-    assert mppi._section == 1 and command[0] <= 0.0
+    assert mppi._path.section == 1 and command[0] <= 0.0
 
 
 def test_reverse_against_path_samples_both_signs():
@@ -642,12 +642,12 @@ def test_conservative_collisions_do_not_freeze_a_clear_robot():
     bike = RearWheelBicycle(wheel_base=2.7, max_steering=0.6)
     mppi = MPPI(bike, 30, 0.05, 200, (0.2, 0.3), 0.03, None, SteeringLimits(0.6, max_speed=1.0),
                 backend="numba", grid=grid, footprint=car)  # fmt: skip
-    now, _ = mppi._clearance(pose)
+    now, _ = mppi._field.clearance(pose)
     assert now <= 0.0
     plan = mppi.plan(pose, PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]]))
     assert plan.status == "ok"
     best = mppi.predict(plan, plan.samples[np.argmin(plan.costs)])
-    assert mppi._clearance(best)[0].min() >= now - 0.01
+    assert mppi._field.clearance(best)[0].min() >= now - 0.01
     # truly inside the wall, every rollout stays lethal: a safe stop
     assert mppi.plan(
         np.array([1.5, 5.0, 0.0]), PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]])
@@ -718,7 +718,7 @@ def test_a_huge_step_keeps_the_path_window_to_the_path():
     # never holds more than the path has.
     mppi = MPPI(Unicycle(), 10, 157409.0, 32, 0.2, 0.1, None, LIMITS)
     assert mppi(0.0, (0.5, 0.0, 0.0), STRAIGHT).shape == (2,)
-    assert mppi._window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2
+    assert mppi._path.window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2
 
 
 def test_a_long_horizon_smooths_without_a_horizon_squared_matrix():

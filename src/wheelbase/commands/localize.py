@@ -17,6 +17,7 @@ from typing import Annotated
 import typer
 
 from wheelbase._validate import check_choice, integer
+from wheelbase.commands.options import out_option
 
 __all__ = ["LOCALIZE_FILES", "register"]
 
@@ -35,7 +36,9 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def localize(
         data_dir: Annotated[Path, typer.Argument(help="Folder of one MRCLAM data set.")],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("localize", ", ".join(LOCALIZE_FILES))
+        ] = "wheelbase-localize",
         robot: int = typer.Option(1, "--robot", help="Robot number, 1-5."),
         filter: str = typer.Option("ekf", "--filter", help="ekf, ukf or pf."),
         seed: int = typer.Option(0, "--seed", help="Seed of the particle filter."),

@@ -24,6 +24,7 @@ import numpy as np
 import typer
 
 from wheelbase._validate import check_choice
+from wheelbase.commands.options import out_option
 
 __all__ = ["MAP_FILES", "POSEGRAPH_FILES", "SLAM_LANDMARK_FILES", "SLAM_LIDAR_FILES", "register"]
 
@@ -42,7 +43,9 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def posegraph(
         graph_file: Annotated[Path, typer.Argument(help="A 2-D g2o file (VERTEX_SE2, EDGE_SE2).")],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("posegraph", ", ".join(POSEGRAPH_FILES))
+        ] = "wheelbase-posegraph",
         initial: str = typer.Option("chordal", "--initial", help="chordal or graph."),
         robust: str = typer.Option("none", "--robust", help="none, huber, cauchy or dcs."),
         robust_scale: float = typer.Option(1.0, "--robust-scale", help="The kernel's k."),

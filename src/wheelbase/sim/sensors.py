@@ -202,6 +202,7 @@ class SensorSuite:
         poses: np.ndarray,
         streams: SensorStreams,
         index: np.ndarray | None = None,
+        cast: Any = None,
     ) -> Readings:
         """Read the sensors that are due after step ``step`` at true ``poses``.
 
@@ -217,6 +218,10 @@ class SensorSuite:
             Every robot's generators.
         index : numpy.ndarray of int, shape (M,), optional
             Which robots these are (default 0 … M − 1).
+        cast : callable, optional
+            ``cast(sensor_poses (M, 3), beam_angles, max_range, index) -> (M, beams)`` true
+            ranges in a world beyond the map (:meth:`~wheelbase.sim.Surroundings.caster`);
+            default the map alone.
 
         Returns
         -------
@@ -227,12 +232,18 @@ class SensorSuite:
         lidar_due, landmarks_due = self.due(step, dt)
         scan = ids = z = None
         if lidar_due and poses.shape[0]:
-            scan = self.scan(poses, [streams.lidar[i] for i in index])
+            scan = self.scan(poses, [streams.lidar[i] for i in index], cast, index)
         if landmarks_due and poses.shape[0]:
             ids, z = self.observe(poses, [streams.landmarks[i] for i in index])
         return Readings(scan, ids, z)
 
-    def scan(self, poses: np.ndarray, generators: list[np.random.Generator]) -> np.ndarray:
+    def scan(
+        self,
+        poses: np.ndarray,
+        generators: list[np.random.Generator],
+        cast: Any = None,
+        index: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Lidar scans ``(M, beams)`` at ``poses``, robot i's noise from ``generators[i]``.
 
         Parameters
@@ -241,15 +252,23 @@ class SensorSuite:
             True robot poses.
         generators : list of numpy.random.Generator
             One per pose.
+        cast : callable, optional
+            The true ranges in a world beyond the map (see :meth:`read`).
+        index : numpy.ndarray of int, shape (M,), optional
+            Which robots these are (for ``cast``).
         """
         from wheelbase.sensors import scan_rays
 
         lidar = self.lidar
         sensor = lidar.sensor_poses(poses)
-        true = scan_rays(
-            self.world, sensor[:, :2], sensor[:, 2], lidar.beam_angles, lidar.max_range,
-            self.method,
-        )  # fmt: skip
+        if cast is not None:
+            where = np.arange(poses.shape[0]) if index is None else index
+            true = cast(sensor, lidar.beam_angles, lidar.max_range, where)
+        else:
+            true = scan_rays(
+                self.world, sensor[:, :2], sensor[:, 2], lidar.beam_angles, lidar.max_range,
+                self.method,
+            )  # fmt: skip
         return np.stack(
             [lidar.readings(true[i], generator) for i, generator in enumerate(generators)]
         )
