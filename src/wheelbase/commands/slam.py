@@ -224,7 +224,7 @@ def register_slam(app: typer.Typer) -> None:
     @app.command("map")
     def map_command(
         data: Annotated[Path, typer.Argument(help="A CARMEN log or a ROS 2 bag.")],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[Path, out_option("map", ", ".join(MAP_FILES))] = "wheelbase-map",
         poses: str = typer.Option("reference", "--poses", help="reference or odometry."),
         resolution: float = typer.Option(0.05, "--resolution", help="Cell side [m]."),
         max_range: float = typer.Option(30.0, "--max-range", help="Longest reading used [m]."),

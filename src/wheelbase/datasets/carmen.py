@@ -8,11 +8,12 @@ hold one message per line. Read here:
     spaced 180°/n (1° for n = 180, 0.5° for 360), the pose of the laser and the robot's
     odometry. CARMEN's SICK driver reports "no return" as its maximum, 81.83 m: readings at or
     beyond ``max_range`` (81.0 m by default) are no return.
-``ROBOTLASER1 type start fov resolution max_range accuracy remission_mode n r₁ … rₙ m e₁ … eₘ
-laser_x laser_y laser_θ robot_x robot_y robot_θ tv rv forward side turn ipc_time host
-logger_time``
-    The newer format: its own beam geometry and maximum range, and the laser and robot poses
-    (the mount is the laser pose in the robot's frame, from the first scan).
+``ROBOTLASER1``
+    The newer format, ``ROBOTLASER1 type start fov resolution max_range accuracy
+    remission_mode n r₁ … rₙ m e₁ … eₘ laser_x laser_y laser_θ robot_x robot_y robot_θ tv rv
+    forward side turn ipc_time host logger_time``: its own beam geometry and maximum range,
+    and the laser and robot poses (the mount is the laser pose in the robot's frame, from the
+    first scan).
 ``ODOM x y θ tv rv accel ipc_time host logger_time``
     Counted; the scans carry their odometry pose already.
 
