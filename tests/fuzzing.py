@@ -49,11 +49,14 @@ __all__ = [
     "run_world",
     "scenario_cases",
     "scenario_file_cases",
+    "slam_file",
+    "slam_file_cases",
     "warm_up",
     "world_cases",
 ]
 
 BUDGET_S = {
+    "slam_file": 30.0,
     "scenario": 30.0,
     "scenario_file": 30.0,
     "map_file": 10.0,
@@ -725,6 +728,87 @@ def run_world(spec: Any) -> Any:
     world.cast(poses, np.linspace(-np.pi, np.pi, 90, endpoint=False), 8.0, index, state,
                robots, np.zeros(2, np.int64))  # fmt: skip
     return world.distances(poses, footprint, index, state, robots, np.zeros(2, np.int64))
+# =========================================================================== SLAM inputs
+_G2O_LINES = [
+    "VERTEX_SE2 0 0 0 0",
+    "VERTEX_SE2 1 1 0 0.1",
+    "VERTEX_SE2 2 2 0.1 0.2",
+    "EDGE_SE2 0 1 1 0 0.1 100 0 0 100 0 400",
+    "EDGE_SE2 1 2 1 0.1 0.1 100 0 0 100 0 400",
+    "EDGE_SE2 0 2 2 0.1 0.2 50 0 0 50 0 200",
+    "FIX 0",
+]
+
+
+def _flaser(ranges: list[str], pose: str = "1 2 0.5", t: str = "1.0") -> str:
+    return f"FLASER {len(ranges)} {' '.join(ranges)} {pose} {pose} {t} host {t}"
+
+
+@st.composite
+def _g2o(draw) -> tuple[str, bytes]:
+    lines = list(_G2O_LINES)
+    for _ in range(draw(st.integers(0, 3))):
+        k = draw(st.integers(0, len(lines) - 1))
+        tokens = lines[k].split()
+        j = draw(st.integers(0, len(tokens) - 1))
+        tokens[j] = draw(st.sampled_from(HOSTILE_TEXT))
+        lines[k] = " ".join(tokens) if draw(st.booleans()) else " ".join(tokens[: j + 1])
+    if draw(st.booleans()):
+        lines = draw(st.permutations(lines))[: draw(st.integers(0, len(lines)))]
+    return ".g2o", "\n".join(lines).encode()
+
+
+@st.composite
+def _carmen(draw) -> tuple[str, bytes]:
+    scans = draw(st.integers(0, 6))
+    beams = draw(st.sampled_from([1, 4, 30]))
+    lines = ["# CARMEN", "PARAM robot_x 0 host 0", "ODOM 0 0 0 0 0 0 1 h 1"]
+    moving = draw(st.booleans())  # a robot that never moves, or one that does
+    for k in range(scans):
+        ranges = [draw(st.sampled_from(["1.0", "2.5", "nan", "inf", "-1", "81.83", "0",
+                                        "1e300"])) for _ in range(beams)]  # fmt: skip
+        pose = f"{0.3 * k if moving else 0.0} 0 0"
+        lines.append(_flaser(ranges, pose, str(1.0 + k)))
+    for _ in range(draw(st.integers(0, 2))):
+        if lines:
+            k = draw(st.integers(0, len(lines) - 1))
+            tokens = lines[k].split()
+            j = draw(st.integers(0, len(tokens) - 1))
+            tokens[j] = draw(st.sampled_from(HOSTILE_TEXT))
+            lines[k] = " ".join(tokens)
+    return draw(st.sampled_from([".log", ".clf"])), "\n".join(lines).encode()
+
+
+@st.composite
+def slam_file_cases(draw) -> tuple[str, bytes, dict[str, Any]]:
+    """(suffix, bytes, options) of a g2o graph or a CARMEN log, possibly damaged, and the
+    mapping options to build its map with (resolution, max_cells, max_range)."""
+    suffix, content = draw(st.one_of(_g2o(), _carmen()))
+    options = {
+        "resolution": draw(st.sampled_from([0.05, 0.5, 1e-5, 0.0, -1.0, float("nan")])),
+        "max_cells": draw(st.sampled_from([10**6, 10, 1])),
+        "max_range": draw(st.sampled_from([30.0, 1e-9, float("inf")])),
+    }
+    return suffix, content, options
+
+
+def slam_file(case: tuple[str, bytes, dict[str, Any]]) -> Any:
+    """Read a SLAM input as a user would and run what reads it: a g2o file is optimised, a
+    CARMEN log mapped with its own poses (within ``max_cells``) and run through lidar SLAM."""
+    from wheelbase.datasets import read_carmen, read_g2o
+    from wheelbase.mapping import LidarSlam, OccupancyMapper, optimize_pose_graph
+
+    suffix, content, options = case
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"data{suffix}"
+        path.write_bytes(content)
+        if suffix == ".g2o":
+            return optimize_pose_graph(read_g2o(path), initial="chordal")
+        log = read_carmen(path)
+    mapper = OccupancyMapper(resolution=options["resolution"], max_range=options["max_range"])
+    mapper.build(log.reference, log.ranges, log.angles, sensor_max_range=log.max_range,
+                 max_cells=options["max_cells"])  # fmt: skip
+    return LidarSlam().run(log)
 
 
 # =========================================================================== constructors

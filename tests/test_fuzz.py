@@ -155,3 +155,31 @@ def test_outcome_classifies_and_stops_a_hang():
     assert fuzzing.outcome(lambda: 1 / 0, 1.0).kind == "raw"
     stopped = fuzzing.outcome(loop, 0.2)
     assert stopped.kind == "hang" and stopped.seconds < 1.0
+
+
+@settings(**FAST, **_examples(40, 1000))
+@given(fuzzing.slam_file_cases())
+@example(
+    (
+        ".g2o",
+        b"VERTEX_SE2 0 0 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n",
+        {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0},
+    )
+)  # missing vertex
+@example(
+    (
+        ".g2o",
+        b"EDGE_SE2 0 1 1 0 0 1 0 0 -1 0 1\n",
+        {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0},
+    )
+)  # not positive definite
+@example((".log", b"", {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0}))
+@example(
+    (
+        ".log",
+        b"FLASER 2 nan inf 0 0 0 0 0 0 1 h 1\nFLASER 2 1 1 0 0 0 0 0 0 2 h 2\n",
+        {"resolution": 1e-5, "max_cells": 10, "max_range": 30.0},
+    )
+)  # map over the limit
+def test_slam_files(case):
+    check(fuzzing.slam_file, case, "slam_file")
