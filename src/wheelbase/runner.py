@@ -442,8 +442,9 @@ class RunResult:
             raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
         plan = None if self.plan is None else self.plan.poses
         return figure_map(
-            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
-        )
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name,
+            terrain=self.terrain,
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- run
@@ -924,6 +925,9 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
+    from wheelbase.scenario_ground import terrain_metrics
+
+    metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
     every = max(1, len(one.t) // 400)
     clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle

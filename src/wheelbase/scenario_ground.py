@@ -38,6 +38,7 @@ __all__ = [
     "ground_active",
     "payload_timeline",
     "surface_of",
+    "terrain_metrics",
     "wrap_controller",
 ]
 
@@ -350,3 +351,36 @@ def build_stuck(scenario: Scenario) -> Any:
     from wheelbase.sim.stuck import Stuck
 
     return Stuck(time=scenario.terrain.stuck_time, distance=max(0.1, scenario.goal_tolerance[0]))
+
+
+def terrain_metrics(log: Any) -> dict[str, float]:
+    """What the ground did to a robot's run (robot 0 of ``log``): largest slip ratio and
+    sinkage, and the energy budget [J] — the work of the wheel torques, what slip, rolling
+    resistance and soil dissipated, the work done against gravity. Empty for a run without a
+    terrain plant.
+
+    Parameters
+    ----------
+    log : Log
+        One robot's record.
+    """
+    extras = log.extras
+    if "slip_left" not in extras:
+        return {}
+    n = int(log.length[0])
+
+    def spent(name: str) -> float:
+        values = extras[name][0, :n]
+        return float(values[-1] - values[0])
+
+    slip = np.abs(np.concatenate([extras["slip_left"][0, :n], extras["slip_right"][0, :n]]))
+    sink = np.concatenate([extras["sinkage_left"][0, :n], extras["sinkage_right"][0, :n]])
+    return {
+        "max_slip": float(slip.max()),
+        "max_sinkage_m": float(sink.max()),
+        "energy_wheels_j": spent("energy_work_wheels"),
+        "energy_slip_j": spent("energy_dissipated_slip"),
+        "energy_rolling_j": spent("energy_dissipated_rolling"),
+        "energy_soil_j": spent("energy_dissipated_soil"),
+        "energy_gravity_j": -spent("energy_work_gravity"),
+    }
