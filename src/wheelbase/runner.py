@@ -122,6 +122,9 @@ def build_robot(spec) -> Robot:
             "footprint": (0.66, 0.455),
         }
         values.update({k: v for k, v in preset.items() if values.get(k) is None})
+        wheels = {"wheel_radius": values["wheel_radius"], "half_track": values["half_track"]}
+        if tuple(wheels.values()) != (RM100.wheel_radius, RM100.half_track):
+            dynamics = replace(RM100, **wheels)  # its own wheels on the RM100's body
     model_name = spec.model
     if model_name in ("diffdrive", "unicycle"):
         radius = values["wheel_radius"] or 0.05
@@ -323,7 +326,7 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
-ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread")
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread", "force_drift")
 """Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
 
 
@@ -547,6 +550,10 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
+    if scenario.controller.law == "adaptive_computed_torque":
+        from wheelbase.scenario_ground import adaptive_defaults
+
+        gains = {**adaptive_defaults(scenario), **gains}
     if scenario.controller.law == "mppi":
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
@@ -635,8 +642,8 @@ def prepare(
         from wheelbase import scenario_ground as ground
 
         timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        terrain = ground.build_terrain(scenario, grid)
         if ground.ground_active(scenario):
-            terrain = ground.build_terrain(scenario, grid)
             plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
@@ -664,7 +671,7 @@ def prepare(
             for timed, leg in zip(references, plans, strict=True)
         )
     if dynamic:  # the payload changes the controller knows of, traction control
-        controller = ground.wrap_controller(scenario, controller, robot, timeline)
+        controller = ground.wrap_controller(scenario, controller, robot, timeline, terrain)
     control_every = 1
     if scenario.control_rate_hz is not None:
         control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))

@@ -117,8 +117,15 @@ def figure_traction(log: Any, terrain: Any = None, *, robot: int = 0):
         for code in np.unique(codes):
             label = names[code] if names is not None and code < len(names) else str(code)
             mask = codes == code
-            axes[2].fill_between(t, k, k + 0.8, where=mask, step="post",
-                                 color=_colour(label, int(code)), label=label if k == 0 else None)
+            axes[2].fill_between(
+                t,
+                k,
+                k + 0.8,
+                where=mask,
+                step="post",
+                color=_colour(label, int(code)),
+                label=label if k == 0 else None,
+            )
     sinkage = np.maximum(extras["sinkage_left"][robot, :n], extras["sinkage_right"][robot, :n])
     if np.any(sinkage > 0):
         twin = axes[2].twinx()
