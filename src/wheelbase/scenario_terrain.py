@@ -192,7 +192,7 @@ class TerrainSpec(_Strict):
         None, gt=0, description="Cell size of the terrain raster [m] (default: the map's)."
     )
     slip_speed: float = Field(
-        0.05, gt=0, le=10, description="v_ε [m/s]: the slip ratio's denominator at standstill."
+        0.05, ge=1e-4, le=10, description="v_ε [m/s]: the slip ratio's denominator at standstill."
     )
     stuck_time: float = Field(
         5.0, gt=0, description="Seconds commanded to move without moving before 'stuck'."
