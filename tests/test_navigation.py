@@ -147,3 +147,57 @@ def test_bad_options_name_the_key():
         NavigatorOptions(behaviours=("wait", "dance"))
     with pytest.raises(ConfigError, match="lookahead"):
         NavigatorOptions(lookahead=-1.0)
+
+
+def corridor_view(*boxes):
+    """The bundled corridor_bay map as a costmap, with lethal boxes (x0, x1, y0, y1) marked."""
+    from wheelbase.planning.maps import load_map
+
+    grid = load_map("corridor_bay")
+    cost = np.where(grid.occupied, 254, 0).astype(np.uint8)
+    for x0, x1, y0, y1 in boxes:
+        r0, r1 = int(y0 / grid.resolution), int(y1 / grid.resolution)
+        c0, c1 = int(x0 / grid.resolution), int(x1 / grid.resolution)
+        cost[r0:r1, c0:c1] = 254
+    return View(Costmap(cost, grid.resolution, grid.origin)), grid
+
+
+def drive(nav, route, view, pose, t, seconds, dt=0.05):
+    """Integrate the navigator's (v, ω) on a unicycle; the statuses seen on the way."""
+    seen = []
+    for _ in range(round(seconds / dt)):
+        v, omega = nav(t, pose, route, perception=view)
+        seen.append(nav.status)
+        pose = pose + dt * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), omega])
+        pose[2] = math.remainder(pose[2], 2 * math.pi)
+        t += dt
+    return pose, t, seen
+
+
+def test_a_robot_without_the_right_of_way_waits_in_the_passing_bay_then_goes_on():
+    from wheelbase.control import PurePursuit
+
+    square = Footprint.rectangle(0.7, 0.7)
+
+    def corridor_planner(grid, start, goals):
+        planner = HybridAStar(grid, footprint=(0.8, 0.8), turning_radius=0.0)
+        path = planner.plan(start, goals[0])
+        return path if path.success else None
+
+    free, grid = corridor_view()
+    start, goal = np.array([8.6, 0.8, math.pi]), np.array([1.0, 0.8, math.pi])
+    first = corridor_planner(OccupancyGrid(grid.occupied, grid.resolution), start, [goal])
+    local = PurePursuit(speed=0.3)
+    nav = Navigator(local, corridor_planner, square, NavigatorOptions(rate_hz=0.0))
+    other = corridor_view((5.4, 6.1, 0.45, 1.15))[0]  # a stopped robot in the corridor ahead
+    pose, t, seen = drive(nav, Route(first, (goal,), priority=1), other, start, 0.0, 20.0)
+    assert nav.yields == 1 and seen[-1] == "yielding"
+    assert 6.75 < pose[0] < 9.25 and pose[1] > 1.6  # in the bay, out of the corridor
+    # the same wait for the robot with the right of way: it recovers, it does not yield
+    boss = Navigator(PurePursuit(speed=0.3), corridor_planner, square, NavigatorOptions())
+    drive(boss, Route(first, (goal,), priority=0), other, start, 0.0, 3.0)
+    assert boss.yields == 0 and boss.recoveries >= 1
+    # the other robot has gone by: the way is clear, the yielding robot goes on to its goal
+    pose, t, seen = drive(nav, Route(first, (goal,), priority=1), free, pose, t, 40.0)
+    assert seen[-1] != "yielding" and nav.yields == 1
+    assert math.hypot(*(pose[:2] - goal[:2])) < 0.3

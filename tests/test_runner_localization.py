@@ -196,3 +196,12 @@ def test_bad_sensor_and_localization_keys_are_clear_errors(change, match):
 
     with pytest.raises(ScenarioError, match=match):
         prepare({**AISLE, **change})
+
+
+@pytest.mark.parametrize("beta", [0.0, 0.5])
+def test_a_ukf_beta_of_zero_stays_zero(beta):
+    from wheelbase.runner import prepare
+
+    prepared = prepare(scenario("ukf", LANDMARKS, beta=beta, kappa=0.0, alpha=0.5))
+    ukf = prepared.engine.estimator.filter
+    assert (ukf.beta, ukf.kappa, ukf.alpha) == (beta, 0.0, 0.5)

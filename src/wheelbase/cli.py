@@ -13,9 +13,10 @@ Commands
 Angles, rates, lengths and poses follow one rule, parsed by :mod:`wheelbase.commands.options`
 (angles in degrees unless written ``1.57rad``, rates in rad/s, lengths in metres, poses
 ``X,Y,HEADING``), converted to SI on entry. Every :class:`~wheelbase.errors.WheelbaseError`,
-``FileExistsError`` and usage error ends the program with one red line ``error: ...`` on stderr
-and exit code 2; no traceback. Sub-commands of other areas live in :mod:`wheelbase.commands`
-(each module there has ``register(app)``) and are added here.
+``FileExistsError``, ``OSError`` of a file or folder and usage error ends the program with one
+red line ``error: ...`` on stderr and exit code 2; no traceback. What commands print goes
+through :mod:`wheelbase.commands.output`. Sub-commands of other areas live in
+:mod:`wheelbase.commands` (each module there has ``register(app)``) and are added here.
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
@@ -45,6 +45,8 @@ from wheelbase.commands.options import (
     pose_option,
     rate_option,
 )
+from wheelbase.commands.output import console as make_console
+from wheelbase.commands.output import plural
 from wheelbase.errors import ConfigError, WheelbaseError
 from wheelbase.integrate import METHODS, SimResult, simulate
 
@@ -69,7 +71,7 @@ DEMO_DIR = "wheelbase-kinematics-demo"
 def _error_line(message: str) -> None:
     """One red line on stderr (no markup interpretation, no wrapping)."""
     line = " ".join(str(message).split())
-    Console(stderr=True, highlight=False).print(Text(f"error: {line}", style="red"), soft_wrap=True)
+    make_console(stderr=True).print(Text(f"error: {line}", style="red"), soft_wrap=True)
 
 
 class _OneLineErrors(PoseGroup):
@@ -88,6 +90,10 @@ class _OneLineErrors(PoseGroup):
             code = super().main(*args, standalone_mode=False, **kwargs)
         except (WheelbaseError, FileExistsError) as error:
             _error_line(str(error))
+            sys.exit(2)
+        except OSError as error:  # a folder that cannot be made or a file that cannot be written
+            where = f": {error.filename}" if error.filename else ""
+            _error_line(f"{error.strerror or error}{where}")
             sys.exit(2)
         except typer.Abort:
             _error_line("aborted")
@@ -450,10 +456,12 @@ def simulate_command(
     result.to_csv(paths["trajectory.csv"], overwrite=True)
     title = f"{model}, {method}, dt = {dt:g} s"
     _write_figures(result, paths, footprint, title, gif=gif)
-    console = Console()
+    console = make_console()
     console.print(_summary(result, model, "wheelbase simulate"))
     console.print(
-        f"wrote {len(paths)} files to {out}/: " + ", ".join(names), soft_wrap=True, markup=False
+        f"wrote {plural(len(paths), 'file')} to {out}/: " + ", ".join(names),
+        soft_wrap=True,
+        markup=False,
     )
 
 
@@ -517,7 +525,7 @@ def demo_command(
     """Run document 000 §3.2's kinematics demo: three wheel-speed cases on one plot [SI units]
     and the animation of case 1."""
     batch, paths = run_demo(out)
-    console = Console()
+    console = make_console()
     table = Table(title="document 000 §3.2, Euler, dt = 0.1 s, 100 s")
     for column in ("ω_L, ω_R [rad/s]", "final x [m]", "final y [m]", "final θ [rad]"):
         table.add_column(Text(column), justify="right")

@@ -355,8 +355,27 @@ def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = 
     ), "path"
 
 
+def _dwa(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
+    """The dynamic window approach (Fox, Burgard and Thrun; Nav2's DWB critics) along the
+    planned path, for (v, ω) robots."""
+    from wheelbase.control.dwa import DWA
+
+    if robot.kind != "diff":
+        raise ConfigError("dwa drives (v, omega) robots: use mppi for a car-like robot")
+    defaults: dict[str, Any] = {
+        "max_speed": limits.max_speed,
+        "max_yaw_rate": limits.max_yaw_rate,
+        "max_acceleration": limits.max_acceleration,
+        "max_yaw_acceleration": limits.max_yaw_acceleration,
+    }
+    return DWA.from_gains(
+        robot.model, grid=grid, footprint=_footprint(robot), **{**defaults, **gains}
+    ), "path"
+
+
 LAWS: dict[str, Callable[..., Any]] = {
     "mppi": _mppi,
+    "dwa": _dwa,
     "computed_torque": _computed_torque,
     "adaptive_computed_torque": _adaptive_computed_torque,
     "kanayama": _tracker("Kanayama"),
@@ -554,7 +573,7 @@ def prepare(
         from wheelbase.scenario_ground import adaptive_defaults
 
         gains = {**adaptive_defaults(scenario), **gains}
-    if scenario.controller.law == "mppi":
+    if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
         position, heading_deg = scenario.goal_tolerance
@@ -599,6 +618,8 @@ def prepare(
     ):
         raise ScenarioError("controller: a steering law cannot drive a differential drive")
     robots = _fleet(scenario, start, goals)
+    if len(robots) > 1:
+        _check_fleet_apart(robots, _footprint(robot))
     plans, planning = [], {}
     for index, (robot_start, robot_goals) in enumerate(robots):
         if index:
@@ -661,7 +682,8 @@ def prepare(
         from wheelbase.navigation import Route
 
         routes = tuple(
-            Route(leg, tuple(leg_goals)) for leg, (_, leg_goals) in zip(plans, robots, strict=True)
+            Route(leg, tuple(leg_goals), priority)
+            for priority, (leg, (_, leg_goals)) in enumerate(zip(plans, robots, strict=True))
         )
         engine_reference = routes[0]
         fleet_references = routes if len(routes) > 1 else None
@@ -719,6 +741,29 @@ def _fleet(scenario: Scenario, start: np.ndarray, goals: list[np.ndarray]) -> li
     return [(_pose(robot.start), [_pose(goal) for goal in robot.goals]) for robot in scenario.fleet]
 
 
+def _check_fleet_apart(robots: list, footprint) -> None:
+    """Two robots of a fleet may not start (or end) where their footprints overlap."""
+    import shapely
+
+    def outline(pose):
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        body = footprint.polygon
+        return shapely.Polygon(
+            np.column_stack([pose[0] + c * body[:, 0] - s * body[:, 1],
+                             pose[1] + s * body[:, 0] + c * body[:, 1]])
+        )  # fmt: skip
+
+    for what, pick in (("start", lambda r: r[0]), ("goal", lambda r: r[1][-1])):
+        shapes = [outline(pick(r)) for r in robots]
+        for i in range(len(shapes)):
+            for j in range(i):
+                if shapes[i].intersects(shapes[j]):
+                    raise ScenarioError(
+                        f"fleet[{i}].{what} overlaps fleet[{j}].{what}: the robots' footprints "
+                        "touch there; place them apart"
+                    )
+
+
 def _sum_planning(total: dict[str, Any], stats: dict[str, Any]) -> dict[str, Any]:
     """Planning figures of a fleet: times, nodes, lengths and cusps summed over its robots."""
     out = dict(total)
@@ -760,6 +805,16 @@ def _surroundings(scenario, grid, robot: Robot, footprint, robots, plans, seed):
     return Surroundings(world, footprint, len(robots), np.array(keep), tuple(labels))
 
 
+def _reach(law) -> float:
+    """How far ahead a local controller looks [m]: MPPI's horizon, DWA's simulated time, at
+    full speed (0 for a law without a horizon)."""
+    limits = getattr(law, "limits", None)
+    speed = float(getattr(limits, "max_speed", 0.0) or getattr(law, "max_speed", 0.0) or 0.0)
+    if hasattr(law, "horizon_steps"):
+        return law.horizon_steps * law.dt * speed
+    return float(getattr(law, "sim_time", 0.0)) * speed
+
+
 def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
     """The path law wrapped in a :class:`~wheelbase.navigation.Navigator` (replanning and
     recovery on the robot's costmap); on a dynamic plant inside the torque loop."""
@@ -787,7 +842,10 @@ def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
         )
         legs, leg_start = [], start
         for goal in goals:
-            leg = planner.plan(leg_start, goal)
+            try:
+                leg = planner.plan(leg_start, goal)
+            except PlanningError:  # the start or a goal inside what the robot now sees
+                return None
             if not leg.success:
                 return None
             legs.append(leg)
@@ -797,7 +855,7 @@ def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
         return legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
 
     navigator = Navigator(
-        inner, plan_route, footprint, navigator_options(scenario), kind=robot.kind
+        inner, plan_route, footprint, navigator_options(scenario, _reach(inner)), kind=robot.kind
     )
     if isinstance(law, TwistTorqueLoop):
         return TwistTorqueLoop(
@@ -957,7 +1015,15 @@ def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, An
     if extras:
         speed = float(np.hypot(*one.twist[0, -1, :2]))
         out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed))
+    if "track_matches" in one.extras:
+        matches = float(one.extras["track_matches"][0, -1])
+        for name, key in (("position", "track_position_rmse_m"),
+                          ("velocity", "track_velocity_rmse_m_s")):  # fmt: skip
+            total = float(one.extras[f"track_{name}_sq_sum"][0, -1])
+            out[key] = math.sqrt(total / matches) if matches else None
+        out["track_matches"] = int(matches)
     out["replans"] = int(summary.get("replans", 0))
+    out["yields"] = int(summary.get("yields", 0))
     out["recoveries"] = int(summary.get("recoveries", 0))
     speed = np.hypot(one.twist[0, :-1, 0], one.twist[0, :-1, 1])
     out["time_stopped_s"] = float(np.sum(np.diff(one.t)[speed < 0.01]))

@@ -152,17 +152,17 @@ def build_perception(scenario: Scenario, grid: Any, footprint: Any, sensors: Any
     """
     if not perceives(scenario) or sensors is None or sensors.lidar is None:
         return None
-    from wheelbase.perception import CostmapSpec, LayeredCostmap, Tracker, TrackerSpec
+    from wheelbase.perception import CostmapSpec, LayeredCostmap, TrackerSpec
     from wheelbase.scenario_sensors import world_grid
     from wheelbase.sim.perceiving import PerceptionSuite
 
     spec = CostmapSpec.from_mapping(scenario.costmap)
     costmap = LayeredCostmap.from_map(spec, world_grid(grid), footprint)
-    tracker = Tracker(TrackerSpec.from_mapping(scenario.tracker), world_grid(grid))
-    return PerceptionSuite(costmap, sensors.lidar, tracker)
+    tracker = TrackerSpec.from_mapping(scenario.tracker)
+    return PerceptionSuite(costmap, sensors.lidar, tracker, world_grid(grid))
 
 
-def navigator_options(scenario: Scenario) -> Any:
+def navigator_options(scenario: Scenario, reach: float = 0.0) -> Any:
     """The ``replanning`` and ``recovery`` sections as navigator options
     (:class:`~wheelbase.navigation.NavigatorOptions`).
 
@@ -170,10 +170,15 @@ def navigator_options(scenario: Scenario) -> Any:
     ----------
     scenario : Scenario
         The validated scenario.
+    reach : float
+        How far ahead the local controller looks [m] (its horizon at full speed): its rolling
+        window is at least 1 m wider than twice that, whatever ``costmap.window`` says.
     """
     from wheelbase.navigation import NavigatorOptions
+    from wheelbase.perception import CostmapSpec
 
     replanning, recovery = scenario.replanning, scenario.recovery
+    window = max(CostmapSpec.from_mapping(scenario.costmap).window, 2.0 * reach + 1.0)
     return NavigatorOptions(
         replan=replanning.enabled,
         rate_hz=replanning.rate_hz,
@@ -186,4 +191,6 @@ def navigator_options(scenario: Scenario) -> Any:
         back_up_speed=recovery.back_up_speed,
         spin_angle=math.radians(recovery.spin_angle_deg),
         spin_rate=math.radians(recovery.spin_rate_deg),
+        yield_time=recovery.yield_time,
+        local_window=window,
     )

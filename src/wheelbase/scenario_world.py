@@ -171,4 +171,11 @@ class RecoverySpec(_Strict):
     spin_angle_deg: float = Field(
         90.0, gt=0, le=360, description="How far spin turns on the spot [deg]."
     )
+    yield_time: float = Field(
+        60.0,
+        ge=0,
+        le=3600,
+        description="Longest a robot of a fleet other than the first waits aside for a robot "
+        "with the right of way [s] (the fleet's order is its priority; 0: never yield).",
+    )
     spin_rate_deg: float = Field(60.0, gt=0, le=3600, description="Yaw rate of spin [deg/s].")

@@ -23,10 +23,10 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 
 from wheelbase._validate import check_choice, positive
 from wheelbase.commands.options import out_option, pose_option, rate_option
+from wheelbase.commands.output import console as make_console
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.pose import POSE_LAWS, make_pose_law
 from wheelbase.errors import ConfigError, InputError
@@ -163,7 +163,7 @@ def _mppi_run(map_name, start, goal, out, *, force, max_speed, max_yaw_rate, t_e
         "dt": 0.05,
         "duration": t_end,
     }
-    _run_and_report(scenario, Path(out), force=force, gif=True, console=Console())
+    _run_and_report(scenario, Path(out), force=force, gif=True, console=make_console())
 
 
 # --------------------------------------------------------------------------- command
@@ -201,7 +201,7 @@ def register(app: typer.Typer) -> None:
         force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
     ) -> None:
         """Drive to a pose with one of the pose laws (document 002), or MPPI on a map."""
-        console = Console()
+        console = make_console()
         if start is None:
             raise ConfigError("--start X,Y,HEADING is required")
         check_choice("law", law, LAWS)

@@ -202,9 +202,9 @@ def register(app: typer.Typer) -> None:
         force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
     ) -> None:
         """Trapezoidal waypoint trajectory, inverse dynamics, open loop vs computed-torque PID."""
-        from rich.console import Console
         from rich.table import Table
 
+        from wheelbase.commands.output import console
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
         from wheelbase.dynamics import inverse_dynamics
         from wheelbase.dynamics_plot import plot_inverse_dynamics, plot_tracking
@@ -281,6 +281,6 @@ def register(app: typer.Typer) -> None:
                 f"{m['tracking_rms_position_error_m']:.3g}",
                 f"{m['tracking_rms_heading_error_deg']:.3g}",
             )
-        Console(highlight=False).print(table)
+        console().print(table)
         written = [p for name, p in paths.items() if gif or name != "animation.gif"]
         typer.echo(f"wrote {', '.join(map(str, written))}")

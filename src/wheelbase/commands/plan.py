@@ -31,6 +31,7 @@ import numpy as np
 import typer
 
 from wheelbase.commands.options import out_option, pose_option
+from wheelbase.commands.output import console, plural
 from wheelbase.errors import ConfigError
 
 __all__ = ["PLAN_FILES", "plan_to_files", "register"]
@@ -174,7 +175,7 @@ def plan_to_files(
     ax = plot_path(path, grid=grid, footprint=planner.footprint, start=start, goal=goal)
     ax.set_title(
         f"Hybrid A*: {metrics['message']}"
-        + (f", {path.length:.2f} m, {path.cusps} cusps" if path.success else "")
+        + (f", {path.length:.2f} m, {plural(path.cusps, 'cusp')}" if path.success else "")
     )
     ax.figure.savefig(paths["path.png"], dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
@@ -279,7 +280,6 @@ def register(app: typer.Typer) -> None:
             force=force,
             planner_options=options,
         )
-        from rich.console import Console
         from rich.table import Table
 
         table = Table(title=f"wheelbase plan → {out}")
@@ -288,4 +288,4 @@ def register(app: typer.Typer) -> None:
         for key, value in metrics.items():
             text = f"{value:.4g}" if isinstance(value, float) else str(value)
             table.add_row(key, text)
-        Console().print(table)
+        console().print(table)

@@ -34,9 +34,9 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def posegraph(
         graph_file: Annotated[Path, typer.Argument(help="A 2-D g2o file (VERTEX_SE2, EDGE_SE2).")],
-        out: Annotated[Path, out_option("posegraph", ", ".join(POSEGRAPH_FILES))] = default_out(
-            "posegraph"
-        ),
+        out: Annotated[
+            Path, out_option("posegraph", ", ".join(POSEGRAPH_FILES))
+        ] = "wheelbase-posegraph",
         initial: str = typer.Option("chordal", "--initial", help="chordal or graph."),
         robust: str = typer.Option("none", "--robust", help="none, huber, cauchy or dcs."),
         robust_scale: float = typer.Option(1.0, "--robust-scale", help="The kernel's k."),

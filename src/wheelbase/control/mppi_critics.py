@@ -23,8 +23,8 @@ critic (weight)     cost of one rollout                                         
                     or the costmap or a track is hit (below)
 ``costmap``         mean over t of c_t/252, c_t the costmap cost under the robot      —
                     (Nav2's CostCritic; off within ``near_goal_distance``)
-``dynamic_obstacle`` mean over t of Σ_tracks (r_dyn − max(d − κσ_t, 0))², d the          1/m²
-                    footprint's distance to the track predicted at step t
+``dynamic_obstacle`` Σ over t (and the held final pose) of Σ_tracks (r_dyn + κσ_t − d)²     1/m²
+                    / T, d the footprint's distance to the track predicted at step t
 ``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
 ``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
 ``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
@@ -59,7 +59,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from wheelbase._validate import finite, nonnegative, positive
-from wheelbase.control.obstacle_critics import ACCELERATION_NOISE
+from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME
 from wheelbase.errors import ConfigError
 
 __all__ = ["MPPICritics"]
@@ -92,6 +92,10 @@ class MPPICritics:
     dynamic_acceleration_noise : float
         q [m²/s³], >= 0: the tracks' white-acceleration prediction noise
         (:data:`~wheelbase.control.obstacle_critics.ACCELERATION_NOISE`).
+    dynamic_hold_time : float
+        Time [s], >= 0, the rollout's final pose is held against the tracks, soft cost only
+        (:data:`~wheelbase.control.obstacle_critics.HOLD_TIME` = 5 s: a rollout should not end
+        in the way of a walker; 0 switches the check off).
     collision_cost : float
         Cost added to a rollout that collides or leaves the map, > 0 (finite: no NaN ever).
     near_goal_distance : float
@@ -128,6 +132,7 @@ class MPPICritics:
     dynamic_inflation: float = 0.5
     dynamic_sigma_scale: float = 1.0
     dynamic_acceleration_noise: float = ACCELERATION_NOISE
+    dynamic_hold_time: float = HOLD_TIME
     goal_distance: float = 0.5
     near_goal_distance: float = 1.0
     path_stride: int = 4
@@ -185,6 +190,9 @@ class MPPICritics:
             self,
             "dynamic_acceleration_noise",
             nonnegative("dynamic_acceleration_noise", self.dynamic_acceleration_noise, "m²/s³"),
+        )
+        object.__setattr__(
+            self, "dynamic_hold_time", nonnegative("dynamic_hold_time", self.dynamic_hold_time, "s")
         )
         object.__setattr__(
             self, "goal_distance", positive("goal_distance", self.goal_distance, "m")

@@ -78,12 +78,14 @@ def _nearest(x, y, window):
 
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def mppi_kernel(
-    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, sigma, seed, call, kind,
+    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, held_from, sigma, seed, call,
+    kind,
     wheel_base, dt, w, df, mp, circles, stride, table, cost_map, near, cgeo, polygon, tracks,
     relief, disks, costs, controls,
 ):  # fmt: skip
     """Draw, roll out and score every sample in one pass (the numba backend).
 
+    Samples ``held_from`` and after hold their first perturbation over the whole horizon.
     The same costs as :func:`wheelbase.control.mppi_numpy.numpy_costs` (to rounding:
     ``fastmath`` lets the compiler reorder the sums), one sample per iteration of the parallel
     loop. ``cost_map`` … ``disks`` are the fields of
@@ -116,19 +118,21 @@ def mppi_kernel(
         cost = 0.0
         collided = False
         next_check = stride - 1
+        held = i >= held_from  # this sample holds its first perturbation all along
         for t in range(steps):
             e2 = 0.0
+            draw = 0 if held else t
             if has_noise:
-                e0, e1 = noise[i, t, 0], noise[i, t, 1]
+                e0, e1 = noise[i, draw, 0], noise[i, draw, 1]
                 if holonomic:
-                    e2 = noise[i, t, 2]
+                    e2 = noise[i, draw, 2]
             else:
-                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t), table)
+                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(draw), table)
                 e0 *= sigma[0]
                 e1 *= sigma[1]
                 if holonomic:  # a third draw from the counters of a step past the horizon
                     e2, _unused = _normal_pair(
-                        seed, call, np.uint64(i), np.uint64(t + steps), table
+                        seed, call, np.uint64(i), np.uint64(draw + steps), table
                     )
                     e2 *= sigma[2]
             u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
@@ -192,7 +196,9 @@ def mppi_kernel(
                 cost += w_costmap * soft
                 collided = collided or hit
             if has_tracks:
-                soft, hit = track_cost_at(x, y, c, s, t, tracks, relief, disks, dynamic_inflation)
+                soft, hit = track_cost_at(
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps
+                )
                 cost += w_dynamic * soft
                 collided = collided or hit
             cost += w_forward * max(-direction * u0, 0.0)
@@ -205,6 +211,13 @@ def mppi_kernel(
             elif kind == 3:
                 cost += w_twirl * abs(u2)
             p0, p1, p2 = u0, u1, u2
+        if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
+            for t in range(steps, tracks.shape[0]):
+                soft, hit = track_cost_at(
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps
+                )
+                cost += w_dynamic * soft
+                collided = collided or hit
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[3]))
         else:

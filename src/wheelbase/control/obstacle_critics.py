@@ -40,18 +40,33 @@ Applications to Tracking and Navigation*, 2001, §6.2.2):
 
     P_pp(τ) = P_pp + τ·(P_pv + P_vp) + τ²·P_vv + (q·τ³/3)·I,     σ(τ) = √λ_max(P_pp(τ)),
 
-q = :data:`ACCELERATION_NOISE` = 0.1 m²/s³ by default (a walker's unmodelled acceleration: σ grows
-by 0.33 m in 1.5 s and 0.52 m in 2 s, about the spread of constant-velocity pedestrian
-predictions over those horizons). Rollout step k (the pose after k + 1 steps of dt, τ_k =
-(t − view time) + (k + 1)·dt) is compared with the prediction at τ_k — time-indexed, so a walker
-that crosses the path before the robot gets there costs nothing. With d the least over the
+q = :data:`ACCELERATION_NOISE` = 0.03 m²/s³ by default (a walker's unmodelled acceleration: σ
+grows to 0.18 m in 1.5 s, 0.52 m in 3 s and 1.05 m in 4.8 s, of the order of the displacement
+errors of constant-velocity pedestrian prediction, about 1 m after 4.8 s on the ETH/UCY data:
+Schöller, Aravantinos, Lay & Knoll, IEEE RA-L 5(2), 2020). Rollout step k (the pose after
+k + 1 steps of dt, τ_k = (t − view time) + (k + 1)·dt) is compared with the prediction at
+τ_k — time-indexed, so a walker that crosses the path before the robot gets there costs
+nothing. With d the least over the
 footprint's covering disks of |disk centre − mean| − disk radius − track radius:
 
 - the step collides at contact, d <= 0 (with a relief as for the costmap: a track already in
   contact now collides only where it gets 1 cm deeper);
-- the soft cost is Σ_tracks (r_dyn − max(d − κ·σ(τ_k), 0))² for d − κ·σ < r_dyn: zero beyond the
-  inflation distance r_dyn past the uncertainty, largest (r_dyn²) inside it. κ (``sigma_scale``)
-  = 1 by default.
+- the soft cost is Σ_tracks (r_dyn + κ·σ(τ_k) − d)² for d < r_dyn + κ·σ: zero beyond the
+  inflation distance r_dyn past the uncertainty, and still growing inside it, so that a rollout
+  nearer the predicted path of a track always pays more, however uncertain the prediction.
+  κ (``sigma_scale``) = 1 by default.
+
+A horizon of a few seconds is myopic about a walker coming straight at the robot: a rollout
+that slows down pushes the contact past its end and looks safe, and the robot stops in the
+walker's way (measured: a disc coming head-on at 0.5 m/s then runs into a stopped robot). So the
+rollout's final pose is also *held* (the robot stopped there) for ``hold_time`` seconds more
+(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.1 s) and scored against the
+predictions at those times, with the soft cost only: standing in the predicted way of a track
+costs (the idea of the braking inevitable-collision-state test of Fraichard & Asama, "Inevitable
+collision states", Advanced Robotics 18(10), 2004), but is not lethal, since the robot need not
+stay there (a lethal hold stopped DWA in the walker's way: its arcs could not leave the line
+within one window). There the soft distance is not clamped at contact (d < 0 costs more than
+d = 0), so a held pose deeper in a track's way always pays more.
 
 Tracks that cannot come within reach of the robot over the horizon (its top speed × τ + the
 footprint's radius) are dropped before the kernels run.
@@ -70,6 +85,8 @@ from wheelbase.errors import InputError
 
 __all__ = [
     "ACCELERATION_NOISE",
+    "HOLD_STEP",
+    "HOLD_TIME",
     "INSCRIBED",
     "LETHAL",
     "MAX_INFLATED",
@@ -89,8 +106,14 @@ __all__ = [
 MAX_INFLATED, INSCRIBED, LETHAL, UNKNOWN = 252, 253, 254, 255
 """Nav2's cell costs: the highest inflated cost, inscribed, lethal, unknown (0 is free)."""
 
-ACCELERATION_NOISE = 0.1
+ACCELERATION_NOISE = 0.03
 """Default q [m²/s³] of the tracks' white-acceleration prediction noise (module docstring)."""
+
+HOLD_TIME = 5.0
+"""Default time [s] a rollout's final pose is held against the predicted tracks."""
+
+HOLD_STEP = 0.1
+"""Spacing [s] of the checks of the held final pose."""
 
 CONTACT_RELIEF = 0.01
 """How much deeper [m] a rollout must get into what it already touches to count as colliding."""
@@ -234,9 +257,9 @@ def predict_tracks(
     Examples
     --------
     >>> mean, sigma = predict_tracks(np.zeros((1, 2)), np.array([[1.0, 0.0]]),
-    ...                              np.zeros((1, 4, 4)), np.array([0.0, 3.0]), 0.1)
+    ...                              np.zeros((1, 4, 4)), np.array([0.0, 3.0]), 0.03)
     >>> mean[1, 0].tolist(), round(float(sigma[1, 0]), 3)
-    ([3.0, 0.0], 0.949)
+    ([3.0, 0.0], 0.52)
     """
     tau = np.asarray(times, dtype=np.float64)[:, None]  # (T, 1)
     mean = position[None] + tau[..., None] * velocity[None]
@@ -269,9 +292,9 @@ class PerceptionArrays:
         costmap on 0/1, inscribed rule on 0/1).
     polygon : numpy.ndarray, shape (V, 2)
         The footprint's outline [m] in the body frame ((0, 2) for a point robot).
-    table : numpy.ndarray, shape (T, J, 4)
-        Per rollout step and track: predicted (x, y) [m] relative to the robot, track radius
-        [m], κ·σ [m].
+    table : numpy.ndarray, shape (T + H, J, 4)
+        Per rollout step (then per check of the held final pose) and track: predicted (x, y)
+        [m] relative to the robot, track radius [m], κ·σ [m].
     relief : numpy.ndarray, shape (J,)
         Contact threshold [m] of each track (0, or deeper than now for one already touched).
     disks : numpy.ndarray, shape (D, 3)
@@ -315,6 +338,8 @@ class PerceptionInputs:
         κ, >= 0.
     acceleration_noise : float
         q [m²/s³], >= 0.
+    hold_time : float
+        Time [s] the final pose is held against the tracks, >= 0.
     """
 
     def __init__(
@@ -324,6 +349,7 @@ class PerceptionInputs:
         inflation: float,
         sigma_scale: float,
         acceleration_noise: float,
+        hold_time: float = HOLD_TIME,
     ) -> None:
         if footprint is None:
             self.polygon = np.zeros((0, 2))
@@ -335,6 +361,7 @@ class PerceptionInputs:
         self.inflation = inflation
         self.sigma_scale = sigma_scale
         self.acceleration_noise = acceleration_noise
+        self.hold_checks = math.ceil(hold_time / HOLD_STEP - 1e-9)
         self._gate: tuple[np.ndarray, float, np.ndarray] | None = None
 
     def empty(self) -> PerceptionArrays:
@@ -416,16 +443,19 @@ class PerceptionInputs:
                 ) from None
             if not math.isfinite(lag):
                 raise InputError(f"perception.time must be finite [s] (got {view_time!r})")
-        tau = np.concatenate([[lag], lag + np.asarray(times, dtype=np.float64)])
-        mean, sigma = predict_tracks(position, velocity, covariance, tau, self.acceleration_noise)
+        times = np.asarray(times, dtype=np.float64)
+        held = times[-1] + HOLD_STEP * np.arange(1, self.hold_checks + 1)
+        ahead = np.concatenate([[0.0], times, held])
+        mean, sigma = predict_tracks(position, velocity, covariance, lag + ahead,
+                                     self.acceleration_noise)  # fmt: skip
         mean = mean - pose[:2]
         sigma = self.sigma_scale * sigma
         # Drop the tracks that cannot come within reach over the horizon.
-        reach = self.radius + speed * np.concatenate([[0.0], times])[:, None] + self.inflation
-        gap = np.hypot(mean[..., 0], mean[..., 1]) - radius[None] - sigma - reach
-        keep = np.any(gap < 0.0, axis=0)
+        moved = speed * np.minimum(ahead, times[-1])[:, None]
+        gap = np.hypot(mean[..., 0], mean[..., 1]) - radius[None] - sigma
+        keep = np.any(gap < self.radius + moved + self.inflation, axis=0)
         mean, sigma, radius = mean[:, keep], sigma[:, keep], radius[keep]
-        table = np.empty((len(times), int(keep.sum()), 4))
+        table = np.empty((len(ahead) - 1, int(keep.sum()), 4))
         table[..., :2] = mean[1:]
         table[..., 2] = radius[None]
         table[..., 3] = sigma[1:]
@@ -500,9 +530,10 @@ def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
 
 
 @numba.njit(cache=True, inline="always")
-def track_cost_at(x, y, c, s, step, table, relief, disks, inflation):
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held):
     """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
-    predicted tracks (module docstring)."""
+    predicted tracks (module docstring); a step past the rollout's is a check of the held final
+    pose."""
     total = 0.0
     hit = False
     for j in range(table.shape[1]):
@@ -513,11 +544,11 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation):
             py = y + s * disks[k, 0] + c * disks[k, 1]
             d = math.hypot(px - mx, py - my) - disks[k, 2] - table[step, j, 2]
             least = min(least, d)
-        if least <= relief[j]:
+        if least <= relief[j] and step < held:
             hit = True
         beyond = least - table[step, j, 3]
         if beyond < inflation:
-            gap = inflation - max(beyond, 0.0)
+            gap = inflation - beyond
             total += gap * gap
     return total, hit
 
@@ -666,8 +697,9 @@ def track_costs(
     ----------
     poses : numpy.ndarray, shape (N, T, 3)
         Rollout poses after steps 1..T, relative to the robot's position.
-    table : numpy.ndarray, shape (T, J, 4)
-        As :attr:`PerceptionArrays.table`.
+    table : numpy.ndarray, shape (T + H, J, 4)
+        As :attr:`PerceptionArrays.table`: its last H rows are checked against the final
+        pose, held.
     relief : numpy.ndarray, shape (J,)
         Contact thresholds [m].
     disks : numpy.ndarray, shape (D, 3)
@@ -677,14 +709,18 @@ def track_costs(
 
     Returns
     -------
-    soft : numpy.ndarray, shape (N, T)
-    collided : numpy.ndarray of bool, shape (N, T)
+    soft : numpy.ndarray, shape (N, T + H)
+    collided : numpy.ndarray of bool, shape (N, T + H)
     """
     if table.shape[1] == 0:
-        zeros = np.zeros(poses.shape[:2])
+        zeros = np.zeros((poses.shape[0], table.shape[0]))
         return zeros, zeros.astype(bool)
+    steps = poses.shape[1]
+    held = table.shape[0] - steps
+    poses = np.concatenate([poses, np.repeat(poses[:, -1:], held, axis=1)], axis=1)
     d = _track_distances(poses, table, disks)
     collided = np.any(d <= relief, axis=-1)
+    collided[:, steps:] = False  # the held pose is scored, never lethal
     beyond = d - table[None, ..., 3]
-    gap = np.where(beyond < inflation, inflation - np.maximum(beyond, 0.0), 0.0)
+    gap = np.where(beyond < inflation, inflation - beyond, 0.0)
     return np.sum(gap * gap, axis=-1), collided

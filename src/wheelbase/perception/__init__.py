@@ -12,9 +12,13 @@ from typing import TYPE_CHECKING
 from wheelbase._lazy import attach
 
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.perception.clusters import Detections, detect
     from wheelbase.perception.costmap import Costmap, CostmapState, LayeredCostmap, update_costmap
     from wheelbase.perception.costs import FREE, INSCRIBED, LETHAL, UNKNOWN, inflation_cost
+    from wheelbase.perception.scoring import TrackErrors, track_errors
     from wheelbase.perception.specs import CostmapSpec, TrackerSpec
+    from wheelbase.perception.tracking import TrackerState, Tracks, update_tracker
+    from wheelbase.perception.view import LocalView
 
 _EXPORTS = {
     "Costmap": "wheelbase.perception.costmap",
@@ -28,6 +32,14 @@ _EXPORTS = {
     "inflation_cost": "wheelbase.perception.costs",
     "CostmapSpec": "wheelbase.perception.specs",
     "TrackerSpec": "wheelbase.perception.specs",
+    "Detections": "wheelbase.perception.clusters",
+    "detect": "wheelbase.perception.clusters",
+    "TrackErrors": "wheelbase.perception.scoring",
+    "track_errors": "wheelbase.perception.scoring",
+    "TrackerState": "wheelbase.perception.tracking",
+    "Tracks": "wheelbase.perception.tracking",
+    "update_tracker": "wheelbase.perception.tracking",
+    "LocalView": "wheelbase.perception.view",
 }
 __getattr__, __dir__ = attach(__name__, _EXPORTS)
 
@@ -39,8 +51,16 @@ __all__ = [
     "Costmap",
     "CostmapSpec",
     "CostmapState",
+    "Detections",
     "LayeredCostmap",
+    "LocalView",
+    "TrackErrors",
     "TrackerSpec",
+    "TrackerState",
+    "Tracks",
+    "detect",
     "inflation_cost",
+    "track_errors",
     "update_costmap",
+    "update_tracker",
 ]

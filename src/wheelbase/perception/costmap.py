@@ -109,6 +109,38 @@ class Costmap:
         """``(rows, cols)``."""
         return self.cost.shape  # type: ignore[return-value]
 
+    def window(self, pose: ArrayLike, cells: int) -> Costmap:
+        """The square window of ``cells`` cells on a side around a pose, aligned with these
+        cells, with the cell holding ``pose`` at index ``cells // 2`` along each axis; outside
+        this costmap its cells are lethal (a rolling window for local control).
+
+        Parameters
+        ----------
+        pose : array_like
+            (x [m], y [m]) or a pose (x, y, θ).
+        cells : int
+            Side of the window in cells, >= 1.
+
+        Returns
+        -------
+        Costmap
+        """
+        xy = as_float_array("pose", pose, min_ndim=1, max_ndim=1)
+        if xy.shape[0] not in (2, 3):
+            raise InputError(f"pose must be (x, y) or (x, y, θ) (got shape {xy.shape})")
+        n = integer("cells", cells, 1)
+        ci = math.floor((xy[1] - self.origin[1]) / self.resolution)
+        cj = math.floor((xy[0] - self.origin[0]) / self.resolution)
+        i0, j0 = ci - n // 2, cj - n // 2
+        rows, cols = self.shape
+        out = np.full((n, n), LETHAL, np.uint8)
+        a0, a1 = max(i0, 0), min(i0 + n, rows)
+        b0, b1 = max(j0, 0), min(j0 + n, cols)
+        if a0 < a1 and b0 < b1:
+            out[a0 - i0 : a1 - i0, b0 - j0 : b1 - j0] = self.cost[a0:a1, b0:b1]
+        origin = (self.origin[0] + j0 * self.resolution, self.origin[1] + i0 * self.resolution)
+        return Costmap(_read_only(out), self.resolution, origin)
+
     @property
     def extent(self) -> tuple[float, float, float, float]:
         """``(x_min, x_max, y_min, y_max)`` [m], e.g. for ``imshow(..., origin="lower")``."""
@@ -445,22 +477,7 @@ class LayeredCostmap:
         -------
         Costmap
         """
-        robot = self._robot(state, robot)
-        xy = as_float_array("pose", pose, min_ndim=1, max_ndim=1)
-        if xy.shape[0] not in (2, 3):
-            raise InputError(f"pose must be (x, y) or (x, y, θ) (got shape {xy.shape})")
-        n = self.window_cells
-        ci = math.floor((xy[1] - self.origin[1]) / self.resolution)
-        cj = math.floor((xy[0] - self.origin[0]) / self.resolution)
-        i0, j0 = ci - n // 2, cj - n // 2
-        rows, cols = self.shape
-        out = np.full((n, n), LETHAL, np.uint8)
-        a0, a1 = max(i0, 0), min(i0 + n, rows)
-        b0, b1 = max(j0, 0), min(j0 + n, cols)
-        if a0 < a1 and b0 < b1:
-            out[a0 - i0 : a1 - i0, b0 - j0 : b1 - j0] = state.cost[robot, a0:a1, b0:b1]
-        origin = (self.origin[0] + j0 * self.resolution, self.origin[1] + i0 * self.resolution)
-        return Costmap(_read_only(out), self.resolution, origin)
+        return self.master(state, robot).window(pose, self.window_cells)
 
 
 def update_costmap(

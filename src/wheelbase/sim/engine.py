@@ -173,6 +173,9 @@ class EngineState:
         What each robot has made of its sensors (costmap, tracks), from ``perception.start``.
     still : numpy.ndarray, shape (N,), or None
         Seconds each robot has stood still while commanded to move (the ``stuck`` rule).
+    track_scores : numpy.ndarray, shape (N, 3), or None
+        For the metrics only (nothing that decides reads it): each robot's running sums of
+        squared track position and velocity errors against the true agents, and of matches.
     """
 
     step: int
@@ -195,6 +198,7 @@ class EngineState:
     world: Any = None
     perception: Any = None
     still: np.ndarray | None = None
+    track_scores: np.ndarray | None = None
 
     @property
     def running(self) -> np.ndarray:
@@ -416,6 +420,17 @@ class Engine:
             world=None if self.surroundings is None else self.surroundings.start(seeds, start),
             perception=None if self.perception is None else self.perception.start(start),
             still=None if self.stuck is None else np.zeros(n),
+            track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
+        )
+
+    @property
+    def _scores_tracks(self) -> bool:
+        """Whether the log scores the robots' tracks against the world's agents."""
+        return (
+            self.surroundings is not None
+            and self.perception is not None
+            and getattr(self.perception, "tracker", None) is not None
+            and getattr(self.surroundings, "has_agents", False)
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -504,6 +519,10 @@ class Engine:
         if estimator_signals is not None and state.estimator is not None:
             signals = {**signals, **estimator_signals(state.estimator)}
         agents = None
+        if state.track_scores is not None:
+            signals = {**signals, "track_position_sq_sum": state.track_scores[:, 0],
+                       "track_velocity_sq_sum": state.track_scores[:, 1],
+                       "track_matches": state.track_scores[:, 2]}  # fmt: skip
         if self.surroundings is not None:
             signals = {**signals, **self.surroundings.signals(state.world, state.pose, state.twist)}
             if self.record_sensors:
@@ -551,6 +570,7 @@ class Engine:
         plant_state = state.plant
         world_state = state.world
         perception_state = state.perception
+        track_scores = state.track_scores
         if active.any():
             index = np.flatnonzero(active)
             new_pose, new_twist, turned, plant_state = self.plant.step(
@@ -598,6 +618,12 @@ class Engine:
                 perception_state = self.perception.update(
                     state.perception, t + self.dt, extra["readings"], estimate[moving], moving
                 )
+                if track_scores is not None:  # evaluation against the truth, for the log
+                    tracks = [self.perception.tracks(perception_state, int(i)) for i in moving]
+                    track_scores = track_scores.copy()
+                    track_scores[moving] += self.surroundings.track_scores(
+                        world_state, tracks, moving
+                    )
         else:
             estimator_state = state.estimator
             if self.surroundings is not None:  # the world goes on around robots that stopped
@@ -625,6 +651,7 @@ class Engine:
             world=world_state,
             perception=perception_state,
             still=still,
+            track_scores=track_scores,
         )
         return new_state, row
 

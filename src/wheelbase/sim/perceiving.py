@@ -46,13 +46,16 @@ class PerceptionSuite:
         The constant part of a robot's costmap (the static layer is the map).
     lidar : Lidar
         The sensor whose scans are read (its mount and beam angles place the beams).
-    tracker : Tracker or None
-        The tracker of moving obstacles (None: costmap only).
+    tracker : TrackerSpec or None
+        The tracker of obstacles off the map (None: costmap only).
+    grid : OccupancyGrid or None
+        The map, whose returns the tracker leaves out (needed with a tracker).
     """
 
     costmap: Any
     lidar: Any
     tracker: Any = None
+    grid: Any = None
 
     def start(self, poses: np.ndarray) -> PerceptionState:
         """Every robot knows only the map at t = 0.
@@ -62,8 +65,12 @@ class PerceptionSuite:
         poses : numpy.ndarray, shape (N, 3)
             Start poses (one robot each).
         """
+        from wheelbase.perception import TrackerState
+
         n = poses.shape[0]
-        trackers = (None,) * n if self.tracker is None else (self.tracker.start(),) * n
+        trackers = (None,) * n
+        if self.tracker is not None:
+            trackers = (TrackerState.initial(self.tracker),) * n  # frozen arrays: shared
         return PerceptionState(self.costmap.initial_state(n), trackers)
 
     def update(
@@ -89,7 +96,7 @@ class PerceptionSuite:
         index : numpy.ndarray of int, shape (M,)
             Which robots scanned.
         """
-        from wheelbase.perception import update_costmap
+        from wheelbase.perception import update_costmap, update_tracker
 
         lidar = self.lidar
         sensor = lidar.sensor_poses(estimates)
@@ -102,9 +109,9 @@ class PerceptionSuite:
         if self.tracker is not None:
             trackers = list(trackers)
             for row, i in enumerate(np.asarray(index)):
-                trackers[int(i)] = self.tracker.update(
-                    trackers[int(i)], t, sensor[row], lidar.beam_angles, ranges[row],
-                    lidar.max_range,
+                trackers[int(i)] = update_tracker(
+                    self.tracker, trackers[int(i)], t, sensor[row], lidar.beam_angles,
+                    ranges[row], lidar.max_range, self.grid,
                 )  # fmt: skip
             trackers = tuple(trackers)
         return PerceptionState(costmap, trackers)
@@ -123,5 +130,19 @@ class PerceptionSuite:
         """
         from wheelbase.perception import LocalView
 
-        tracks = None if self.tracker is None else self.tracker.tracks(state.trackers[i], t)
-        return LocalView(self.costmap.master(state.costmap, i), tracks, t)
+        return LocalView(self.costmap.master(state.costmap, i), self.tracks(state, i), t)
+
+    def tracks(self, state: PerceptionState, i: int) -> Any:
+        """Robot ``i``'s tracks (:class:`~wheelbase.perception.Tracks`; none without a tracker).
+
+        Parameters
+        ----------
+        state : PerceptionState
+            Every robot's perception.
+        i : int
+            The robot.
+        """
+        from wheelbase.perception import Tracks
+
+        tracker = state.trackers[i]
+        return Tracks.empty() if tracker is None else tracker.tracks()

@@ -63,6 +63,11 @@ class Surroundings:
             keep = np.asarray(self.keep_clear, dtype=np.float64).reshape(-1, 3)
             object.__setattr__(self, "keep_clear", keep)
 
+    @property
+    def has_agents(self) -> bool:
+        """Whether the world has moving agents (whose tracking the log scores)."""
+        return self.world.agent_count > 0
+
     # ------------------------------------------------------------------ batch layout
     def _worlds(self, n: int) -> int:
         if n % self.robots_per_world:
@@ -201,6 +206,31 @@ class Surroundings:
             "world_obstacle_closing": closing_obstacle,
             "world_robot_closing": closing_robot,
         }
+
+    def track_scores(self, state: Any, tracks: list, index: np.ndarray) -> np.ndarray:
+        """How well robots ``index`` track the agents of their worlds now: per robot the sums
+        of squared position [m²] and velocity [m²/s²] errors and the number of matched pairs,
+        shape (M, 3) (:func:`wheelbase.perception.track_errors`: confirmed tracks matched to
+        the true agents one to one, pairs farther than 1 m apart left out).
+
+        Parameters
+        ----------
+        state : WorldState
+            The worlds now.
+        tracks : list of Tracks
+            Each robot's tracks.
+        index : numpy.ndarray of int, shape (M,)
+            Which robots.
+        """
+        from wheelbase.perception import track_errors
+
+        position, velocity = self.world.agent_truth(state)
+        out = np.zeros((len(index), 3))
+        for row, (i, found) in enumerate(zip(index, tracks, strict=True)):
+            b = int(i) // self.robots_per_world
+            errors = track_errors(found, position[b], velocity[b])
+            out[row] = (errors.position_square_sum, errors.velocity_square_sum, errors.matches)
+        return out
 
     def agents(self, state: Any) -> np.ndarray:
         """Every agent's (x, y, v_x, v_y) [m, m/s], shape (B, A, 4), for the log."""

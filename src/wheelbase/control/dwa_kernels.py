@@ -1,0 +1,259 @@
+"""Scoring of the dynamic window's trajectories (private helpers of
+:class:`~wheelbase.control.DWA`): one compiled kernel, parallel over the sampled velocities, and
+its NumPy twin.
+
+Each sample (v, ω) is held for the simulated time (Fox, Burgard & Thrun 1997: the robot drives a
+circular arc) and the pose after step j (τ_j = (j + 1)·dt) is the exact arc
+
+    x_j = x_0 + v·τ_j·sinc(ω·τ_j/2)·cos(θ_0 + ω·τ_j/2),
+    y_j = y_0 + v·τ_j·sinc(ω·τ_j/2)·sin(θ_0 + ω·τ_j/2),    θ_j = θ_0 + ω·τ_j,
+
+sinc(u) = sin u / u (the chord of the arc, exact for any ω, no branch at ω = 0). The kernel
+returns the raw critic values per sample, in the order of :data:`SCORES`, and whether the
+trajectory collides; :class:`~wheelbase.control.DWA` weighs them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from wheelbase.control.obstacle_critics import (
+    PerceptionArrays,
+    costmap_cost_at,
+    costmap_costs,
+    track_cost_at,
+    track_costs,
+)
+from wheelbase.geometry import wrap_angle
+
+__all__ = ["SCORES", "arc_poses", "dwa_kernel", "dwa_scores_numpy"]
+
+SCORES = (
+    "path_dist",
+    "goal_dist",
+    "path_align",
+    "goal_align",
+    "costmap",
+    "obstacle",
+    "dynamic_obstacle",
+    "rotate_to_goal",
+)
+"""Raw critic values per trajectory: distance [m] from its end to the path window, and to the
+local goal; the same from the point ``forward_point_distance`` ahead of its end; the means over
+its steps of the costmap cost (0–1), of the map's (r_infl − clearance)² [m²] and of the tracks'
+Σ gap² [m²]; |wrap(θ_end − θ_goal)| [rad]."""
+
+
+@numba.njit(cache=True, inline="always")
+def _sinc(u):
+    if abs(u) < 1.0e-4:
+        return 1.0 - u * u / 6.0
+    return math.sin(u) / u
+
+
+@numba.njit(cache=True, inline="always")
+def _nearest_distance(x, y, window):
+    best = 1.0e300
+    for j in range(window.shape[0]):
+        dx, dy = x - window[j, 0], y - window[j, 1]
+        best = min(best, dx * dx + dy * dy)
+    return math.sqrt(best)
+
+
+@numba.njit(cache=True, parallel=True)
+def dwa_kernel(
+    theta, samples, dt, steps, window, goal, forward, direction, df, mp, circles, map_relief,
+    inflation, cost_map, near, cgeo, polygon, tracks, relief, disks, dynamic_inflation,
+    scores, collided,
+):  # fmt: skip
+    """Score every sample (see the module docstring); positions relative to the robot.
+
+    ``goal`` = (x, y, heading) of the local goal, ``forward`` the forward-point distance [m],
+    ``direction`` ±1 the travel direction of the path section; ``df, mp, circles, map_relief``
+    the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
+    ``disks`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
+    Writes ``scores`` (S, 8) and ``collided`` (S,)."""
+    rows, cols = df.shape[0], df.shape[1]
+    x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
+    margin = math.sqrt(2.0) * res + map_relief
+    has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
+    for i in numba.prange(samples.shape[0]):
+        v, w = samples[i, 0], samples[i, 1]
+        x, y, th = 0.0, 0.0, theta
+        soft_cost, soft_map, soft_dyn = 0.0, 0.0, 0.0
+        hit = False
+        for j in range(steps):
+            tau = (j + 1) * dt
+            half = 0.5 * w * tau
+            chord = v * tau * _sinc(half)
+            x = chord * math.cos(theta + half)
+            y = chord * math.sin(theta + half)
+            th = theta + w * tau
+            c, s = math.cos(th), math.sin(th)
+            if has_map:
+                clearance = 1.0e300
+                for k in range(circles.shape[0]):
+                    px = x + c * circles[k, 0] - s * circles[k, 1]
+                    py = y + s * circles[k, 0] + c * circles[k, 1]
+                    col = math.floor((px - x0) / res)
+                    row = math.floor((py - y0) / res)
+                    if row < 0 or row >= rows or col < 0 or col >= cols:
+                        hit = True
+                        clearance = 0.0
+                        continue
+                    clear = df[row, col] - circles[k, 2] - margin
+                    if clear <= 0.0:
+                        hit = True
+                    clearance = min(clearance, clear)
+                if 0.0 < clearance < inflation:
+                    gap = inflation - clearance
+                    soft_map += gap * gap
+            if has_costmap:
+                soft, bad = costmap_cost_at(x, y, c, s, cost_map, near, cgeo, polygon)
+                soft_cost += soft
+                hit = hit or bad
+            if has_tracks:
+                soft, bad = track_cost_at(
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                )
+                soft_dyn += soft
+                hit = hit or bad
+        if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
+            for j in range(steps, tracks.shape[0]):
+                soft, bad = track_cost_at(
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                )
+                soft_dyn += soft
+                hit = hit or bad
+        fx = x + direction * forward * math.cos(th)
+        fy = y + direction * forward * math.sin(th)
+        scores[i, 0] = _nearest_distance(x, y, window)
+        scores[i, 1] = math.hypot(x - goal[0], y - goal[1])
+        scores[i, 2] = _nearest_distance(fx, fy, window)
+        scores[i, 3] = math.hypot(fx - goal[0], fy - goal[1])
+        scores[i, 4] = soft_cost / steps
+        scores[i, 5] = soft_map / steps
+        scores[i, 6] = soft_dyn / steps
+        turn = math.atan2(math.sin(th - goal[2]), math.cos(th - goal[2]))
+        scores[i, 7] = abs(turn)
+        collided[i] = hit
+
+
+def arc_poses(theta: float, samples: np.ndarray, dt: float, steps: int) -> np.ndarray:
+    """Poses ``(S, steps, 3)`` after steps 1..steps of the arcs of ``samples`` (v [m/s],
+    ω [rad/s]) from (0, 0, θ) (module docstring; heading not wrapped).
+
+    Parameters
+    ----------
+    theta : float
+        Start heading [rad].
+    samples : numpy.ndarray, shape (S, 2)
+        (v, ω) held over the trajectory.
+    dt : float
+        Step [s].
+    steps : int
+        Number of steps.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    tau = dt * np.arange(1, steps + 1)
+    v, w = samples[:, :1], samples[:, 1:]
+    half = 0.5 * w * tau
+    small = np.abs(half) < 1.0e-4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(half) / np.where(small, 1.0, half))
+    chord = v * tau * sinc
+    return np.stack(
+        [chord * np.cos(theta + half), chord * np.sin(theta + half), theta + w * tau], -1
+    )
+
+
+def dwa_scores_numpy(
+    theta: float,
+    samples: np.ndarray,
+    dt: float,
+    steps: int,
+    window: np.ndarray,
+    goal: np.ndarray,
+    forward: float,
+    direction: float,
+    field: object,
+    mp: np.ndarray,
+    map_relief: float,
+    inflation: float,
+    seen: PerceptionArrays,
+    dynamic_inflation: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The NumPy twin of :func:`dwa_kernel`.
+
+    Parameters
+    ----------
+    theta : float
+        Robot heading [rad] (positions relative to the robot).
+    samples : numpy.ndarray, shape (S, 2)
+        (v [m/s], ω [rad/s]).
+    dt : float
+        Step [s].
+    steps : int
+        Steps of the simulated time.
+    window : numpy.ndarray, shape (M, 4)
+        The path window.
+    goal : numpy.ndarray, shape (3,)
+        Local goal (x, y [m], heading [rad]).
+    forward : float
+        Forward-point distance [m].
+    direction : float
+        ±1, the section's direction of travel.
+    field : FootprintField
+        The static map and footprint disks.
+    mp : numpy.ndarray, shape (4,)
+        The map's geometry, origin relative to the robot.
+    map_relief : float
+        Collision relief [m] of the map check.
+    inflation : float
+        r_infl [m] of the map's obstacle critic.
+    seen : PerceptionArrays
+        Costmap and tracks.
+    dynamic_inflation : float
+        r_dyn [m].
+
+    Returns
+    -------
+    scores : numpy.ndarray, shape (S, 8)
+    collided : numpy.ndarray of bool, shape (S,)
+    """
+    poses = arc_poses(theta, samples, dt, steps)
+    n = samples.shape[0]
+    scores = np.zeros((n, len(SCORES)))
+    collided = np.zeros(n, bool)
+    if field.enabled:
+        clearance, hit = field.clearance(poses, map_relief, mp)
+        collided |= hit.any(axis=1)
+        gap = np.where(clearance > 0.0, np.maximum(inflation - clearance, 0.0), 0.0)
+        scores[:, 5] = np.mean(gap * gap, axis=1)
+    if seen.has_costmap:
+        soft, hit = costmap_costs(poses, seen.cost, seen.near, seen.geometry, seen.polygon)
+        scores[:, 4] = np.mean(soft, axis=1)
+        collided |= hit.any(axis=1)
+    if seen.has_tracks:
+        soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation)
+        scores[:, 6] = np.sum(soft, axis=1) / steps  # the held checks added, as the kernel
+        collided |= hit.any(axis=1)
+    end = poses[:, -1]
+    ahead = end[:, :2] + direction * forward * np.stack([np.cos(end[:, 2]), np.sin(end[:, 2])], -1)
+
+    def nearest(points: np.ndarray) -> np.ndarray:
+        d2 = (points[:, 0, None] - window[:, 0]) ** 2 + (points[:, 1, None] - window[:, 1]) ** 2
+        return np.sqrt(d2.min(axis=1))
+
+    scores[:, 0] = nearest(end[:, :2])
+    scores[:, 1] = np.hypot(end[:, 0] - goal[0], end[:, 1] - goal[1])
+    scores[:, 2] = nearest(ahead)
+    scores[:, 3] = np.hypot(ahead[:, 0] - goal[0], ahead[:, 1] - goal[1])
+    scores[:, 7] = np.abs(wrap_angle(end[:, 2] - goal[2]))
+    return scores, collided
