@@ -247,6 +247,41 @@ BASES: list[dict[str, Any]] = [
         "dt": 0.02,
         "duration": 10.0,
     },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {
+            "model": "diffdrive",
+            "preset": "rm100",
+            "payload": {"mass": 10.0, "position": [0.1, 0.0], "inertia": 0.2},
+            "contacts": {"drive_load_share": 0.6},
+        },
+        "plant": "dynamic",
+        "controller": {
+            "law": "adaptive_computed_torque",
+            "model_payload": False,
+            "traction_control": {"friction": "map"},
+        },
+        "terrain": {
+            "surface": "dry_concrete",
+            "regions": [
+                {
+                    "polygon": [[0.3, -1.0], [0.8, -1.0], [0.8, 1.0], [0.3, 1.0]],
+                    "surface": "ice",
+                    "grade_percent": 5.0,
+                    "uphill_deg": 0.0,
+                },
+                {
+                    "polygon": [[1.0, -1.0], [1.4, -1.0], [1.4, 1.0], [1.0, 1.0]],
+                    "surface": {"like": "grass", "peak_friction": 0.3},
+                },
+            ],
+        },
+        "start": [0.0, 0.0, 0.0],
+        "goals": [[0.8, 0.0, 0.0], {"pose": [1.5, 0.0, 0.0], "payload": None}],
+        "dt": 0.02,
+        "duration": 10.0,
+    },
 ]
 for _base in BASES:
     _base["resources"] = dict(_FUZZ_RESOURCES)
@@ -283,7 +318,43 @@ def _scenario_paths() -> list[tuple[str, ...]]:
     paths += [("controller", "gains", name) for name in sorted(gains - {"model", "limits"})]
     options = set(inspect.signature(HybridAStar).parameters)
     paths += [("planner", "options", name) for name in sorted(options)]
+    paths += _ground_paths()
     return paths
+
+
+def _ground_paths() -> list[tuple[str, ...]]:
+    """The keys of the terrain, payload and coping-control sections (issue 24), whose
+    sections are optional (``X | None``) and so not walked from the schema."""
+    from pydantic import BaseModel
+
+    from wheelbase.runner import ADAPTIVE_GAINS
+    from wheelbase.scenario_terrain import (
+        ContactsSpec,
+        PayloadSpec,
+        RegionSpec,
+        SoilSpec,
+        SurfaceSpec,
+        TerrainSpec,
+        TractionSpec,
+    )
+
+    def keys(model: type[BaseModel], prefix: tuple[str, ...]) -> list[tuple[str, ...]]:
+        return [(*prefix, name) for name in model.model_fields]
+
+    region = ("terrain", "regions", 0)
+    return [
+        *keys(TerrainSpec, ("terrain",)),
+        *keys(SurfaceSpec, ("terrain", "surface")),
+        *keys(SoilSpec, ("terrain", "surface", "soil")),
+        *keys(RegionSpec, region),
+        *keys(SurfaceSpec, (*region, "surface")),
+        *keys(PayloadSpec, ("robot", "payload")),
+        *keys(ContactsSpec, ("robot", "contacts")),
+        *keys(TractionSpec, ("controller", "traction_control")),
+        ("controller", "model_payload"),
+        ("goal_payloads",),
+        *[("controller", "gains", name) for name in ADAPTIVE_GAINS],
+    ]
 
 
 _PATHS: list[tuple[str, ...]] = []
@@ -333,6 +404,10 @@ def _mutation(paths: list[tuple[str, ...]]) -> st.SearchStrategy:
                 "exact",
                 "encoders",
                 "trinary",
+                "ice",
+                "dry_sand",
+                "map",
+                "adaptive_computed_torque",
             ]
         ),
     )
@@ -347,6 +422,11 @@ def _apply(data: dict[str, Any], mutation: tuple) -> None:
     path, action, value = mutation
     node: Any = data
     for key in path[:-1]:
+        if isinstance(node, list) and isinstance(key, int):  # a list entry (terrain regions)
+            if key >= len(node):
+                return
+            node = node[key]
+            continue
         if not isinstance(node, dict):
             return
         node = node.setdefault(key, {}) if action == "set" else node.get(key)
@@ -728,6 +808,8 @@ def run_world(spec: Any) -> Any:
     world.cast(poses, np.linspace(-np.pi, np.pi, 90, endpoint=False), 8.0, index, state,
                robots, np.zeros(2, np.int64))  # fmt: skip
     return world.distances(poses, footprint, index, state, robots, np.zeros(2, np.int64))
+
+
 # =========================================================================== SLAM inputs
 _G2O_LINES = [
     "VERTEX_SE2 0 0 0 0",

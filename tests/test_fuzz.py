@@ -47,6 +47,10 @@ def check(call, case, kind: str) -> None:
 @example({**fuzzing.BASES[3], "controller": {"law": "mppi", "gains": {"seed": 2**70}}})
 @example({**fuzzing.BASES[0], "planner": {"options": {"headings": float("inf")}}})
 @example({**fuzzing.BASES[0], "trajectory": {"max_speed": 1e-300}})  # 1e301 reference samples
+@example({**fuzzing.BASES[5], "terrain": {"surface": "ice", "slip_speed": 1e-300}})
+@example({**fuzzing.BASES[5], "robot": {"preset": "rm100", "payload": {"mass": 1e5}}})
+@example({**fuzzing.BASES[5], "terrain": {"resolution": 1e-9}})  # a raster of 1e20 cells
+@example({**fuzzing.BASES[5], "goals": [{"pose": [1, 0, 0], "payload": {"mass": "x"}}]})
 def test_scenario_fields(case):
     check(fuzzing.run_scenario, case, "scenario")
 

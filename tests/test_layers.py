@@ -35,6 +35,7 @@ LAYERS = (
         "scenario_navigation",
         "scenario_terrain",
         "scenario_ground",
+        "terrain_plot",
         "report",
         "dynamics_plot",
         "mcap_export",

@@ -15,6 +15,7 @@ from wheelbase.sim import Log
 __all__ = [
     "MCAP_FILE",
     "REPORT_FILES",
+    "TRACTION_FILE",
     "animate_run",
     "figure_commands",
     "figure_errors",
@@ -52,8 +53,9 @@ def _outline(pose: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     return transform_points(pose, closed)
 
 
-def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
-    """Map with the plan, the driven path, the odometry estimate and footprints.
+def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = "", terrain=None):
+    """Map with the plan, the driven path, the odometry estimate and footprints (and the
+    terrain's surfaces and slopes under them).
 
     Parameters
     ----------
@@ -67,11 +69,17 @@ def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
         Footprint outline in the body frame, drawn at the start, the end and along the way.
     title : str
         Figure title.
+    terrain : TerrainMap, optional
+        The ground, coloured by surface (:func:`wheelbase.terrain_plot.draw_terrain`).
     """
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 7))
     _draw_map(ax, grid)
+    if terrain is not None:  # over the map's white, translucent over its obstacles
+        from wheelbase.terrain_plot import draw_terrain
+
+        draw_terrain(ax, terrain)
     if plan_poses is not None:
         ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.5, label="plan")
     ax.plot(
@@ -316,6 +324,9 @@ REPORT_FILES = (
 MCAP_FILE = "run.mcap"
 """The report's MCAP file for Foxglove (written on request: ``wheelbase run --mcap``)."""
 
+TRACTION_FILE = "traction.png"
+"""The report's slip and traction figure (a run on terrain or with a payload)."""
+
 
 def write_report(
     result, folder, *, force: bool = False, gif: bool = True, mcap: bool = False
@@ -352,7 +363,7 @@ def write_report(
     import matplotlib.pyplot as plt
 
     folder = Path(folder)
-    names = (*REPORT_FILES, MCAP_FILE) if mcap else REPORT_FILES
+    names = (*REPORT_FILES, TRACTION_FILE, *((MCAP_FILE,) if mcap else ()))
     if mcap:
         from wheelbase.mcap_export import require_foxglove
 
@@ -379,11 +390,18 @@ def write_report(
         written.append(write_mcap(result, folder / MCAP_FILE))
     plan = None if result.plan is None else result.plan.poses
     polygon = result.footprint_polygon
+    terrain = getattr(result, "terrain", None)
     figures = {
-        "map.png": figure_map(result.grid, plan, result.log, polygon, title=result.scenario.name),
+        "map.png": figure_map(
+            result.grid, plan, result.log, polygon, title=result.scenario.name, terrain=terrain
+        ),
         "errors.png": figure_errors(result.log),
         "commands.png": figure_commands(result.log),
     }
+    from wheelbase.terrain_plot import figure_traction, has_traction
+
+    if has_traction(result.log):
+        figures[TRACTION_FILE] = figure_traction(result.log, terrain)
     for name, fig in figures.items():
         fig.savefig(folder / name, dpi=110)
         plt.close(fig)

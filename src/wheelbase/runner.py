@@ -122,6 +122,9 @@ def build_robot(spec) -> Robot:
             "footprint": (0.66, 0.455),
         }
         values.update({k: v for k, v in preset.items() if values.get(k) is None})
+        wheels = {"wheel_radius": values["wheel_radius"], "half_track": values["half_track"]}
+        if tuple(wheels.values()) != (RM100.wheel_radius, RM100.half_track):
+            dynamics = replace(RM100, **wheels)  # its own wheels on the RM100's body
     model_name = spec.model
     if model_name in ("diffdrive", "unicycle"):
         radius = values["wheel_radius"] or 0.05
@@ -323,7 +326,7 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
-ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread")
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread", "force_drift")
 """Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
 
 
@@ -461,8 +464,9 @@ class RunResult:
             raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
         plan = None if self.plan is None else self.plan.poses
         return figure_map(
-            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
-        )
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name,
+            terrain=self.terrain,
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- run
@@ -565,6 +569,10 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
+    if scenario.controller.law == "adaptive_computed_torque":
+        from wheelbase.scenario_ground import adaptive_defaults
+
+        gains = {**adaptive_defaults(scenario), **gains}
     if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
@@ -655,8 +663,8 @@ def prepare(
         from wheelbase import scenario_ground as ground
 
         timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        terrain = ground.build_terrain(scenario, grid)
         if ground.ground_active(scenario):
-            terrain = ground.build_terrain(scenario, grid)
             plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
@@ -685,7 +693,7 @@ def prepare(
             for timed, leg in zip(references, plans, strict=True)
         )
     if dynamic:  # the payload changes the controller knows of, traction control
-        controller = ground.wrap_controller(scenario, controller, robot, timeline)
+        controller = ground.wrap_controller(scenario, controller, robot, timeline, terrain)
     control_every = 1
     if scenario.control_rate_hz is not None:
         control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))
@@ -1000,6 +1008,9 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
+    from wheelbase.scenario_ground import terrain_metrics
+
+    metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
     every = max(1, len(one.t) // 400)
     clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
