@@ -38,6 +38,7 @@ LAYERS = (
         "terrain_plot",
         "report",
         "dynamics_plot",
+        "world_plot",
         "mcap_export",
     },
     {"gym"},

@@ -434,6 +434,8 @@ class RunResult:
         The sensors the robot read (a lidar, landmarks), for drawing.
     terrain : TerrainMap or None
         The ground it drove on (a scenario with terrain or a payload), for drawing.
+    world : World or None
+        The world beyond the map it drove in (the truth, for drawing and evaluation).
     """
 
     scenario: Scenario
@@ -445,6 +447,7 @@ class RunResult:
     metrics: dict[str, Any]
     sensors: Any = None
     terrain: Any = None
+    world: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -919,6 +922,7 @@ def run(
         metrics,
         prepared.engine.sensors,
         getattr(getattr(prepared.engine.plant, "model", None), "terrain", None),
+        None if prepared.engine.surroundings is None else prepared.engine.surroundings.world,
     )
 
 
