@@ -31,6 +31,33 @@ def test_check_env_passes_without_a_warning(robot):
     env.close()
 
 
+def _steps_to_truncation(env, limit: int) -> int:
+    """Steps until the episode ends while the robot turns on the spot (never arriving)."""
+    env.reset(seed=3)
+    for k in range(1, limit + 1):
+        _, _, terminated, truncated, _ = env.step(np.array([0.0, 1.0], np.float32))
+        assert not terminated
+        if truncated:
+            return k
+    return limit + 1
+
+
+@pytest.mark.parametrize(("limit", "expected"), [(None, 300), (1000, 1000), (7, 7)])
+def test_make_honours_max_episode_steps(limit, expected):
+    # gymnasium.make(..., max_episode_steps=1000) was cut at the task's own 300 steps
+    kwargs = {} if limit is None else {"max_episode_steps": limit}
+    env = gymnasium.make("wheelbase/Navigate-v0", **kwargs)
+    assert env.spec.max_episode_steps == expected
+    assert _steps_to_truncation(env, 1100) == expected
+    envs = gymnasium.make_vec("wheelbase/Navigate-v0", num_envs=2,
+                              vectorization_mode="vector_entry_point", **kwargs)  # fmt: skip
+    assert envs.unwrapped.task.max_episode_steps == expected
+    # Built directly, the environment cuts episodes only when asked to (Gymnasium's way: the
+    # TimeLimit wrapper of gymnasium.make does it).
+    assert _steps_to_truncation(NavigateEnv(max_episode_steps=5), 10) == 5
+    assert NavigateEnv().task.max_episode_steps is None
+
+
 def test_observation_is_lidar_goal_and_twist():
     env = NavigateEnv()
     start, goal = np.array([3.0, 4.0, 0.5]), np.array([7.0, 6.0, 0.0])

@@ -190,7 +190,7 @@ def test_track_waypoints_command_writes_metrics_matching_the_api(tmp_path):
 
     out = tmp_path / "run"
     args = ["track-waypoints", "--out", str(out), "--waypoints", "0,0 2,2 4,0",
-            "--peak-velocity", "0.2", "--peak-yaw-rate", "30deg", "--dt", "0.02", "--no-gif",
+            "--peak-velocity", "0.2", "--peak-yaw-rate", "30deg/s", "--dt", "0.02", "--no-gif",
             "--model-error", "0.2"]  # fmt: skip
     result = CliRunner().invoke(_cli(), args)
     assert result.exit_code == 0, result.output

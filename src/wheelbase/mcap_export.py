@@ -54,7 +54,13 @@ from wheelbase.errors import DependencyError, InputError
 from wheelbase.geometry import compose, inverse_pose
 from wheelbase.sim import STATUSES, Log
 
-__all__ = ["MCAP_TOPICS", "require_foxglove", "write_log_mcap", "write_mcap"]
+__all__ = [
+    "MCAP_TOPICS",
+    "require_foxglove",
+    "write_log_mcap",
+    "write_map_growth_mcap",
+    "write_mcap",
+]
 
 MCAP_TOPICS = (
     "/map",
@@ -487,3 +493,52 @@ def write_mcap(result: Any, path: str | Path, *, overwrite: bool = False) -> Pat
         overwrite=overwrite,
         lidar=None if result.sensors is None else result.sensors.lidar,
     )
+
+
+def write_map_growth_mcap(
+    frames: list[tuple[float, Any, np.ndarray]],
+    path: str | Path,
+    *,
+    overwrite: bool = False,
+) -> Path:
+    """Write a map as it grows (SLAM) to an MCAP file: ``/map`` (``foxglove.Grid``, 0 free,
+    100 occupied; unknown cells 50 when the grid has an unknown mask) and ``/path``
+    (``foxglove.PosesInFrame``, the trajectory estimated so far) at each frame's time, and
+    ``/pose/estimated`` at its last pose.
+
+    Parameters
+    ----------
+    frames : list of tuple
+        ``(t [s], OccupancyGrid, poses (T, 3))`` in time order.
+    path : str or Path
+        Output file.
+    overwrite : bool
+        Replace an existing file (default: raise FileExistsError).
+
+    Returns
+    -------
+    Path
+    """
+    pb = require_foxglove()
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    with path.open("wb") as handle:
+        out = _File(handle, pb)
+        for t, grid, poses in frames:
+            message = _grid(pb, grid)
+            if grid.unknown is not None:
+                cells = np.where(grid.occupied & ~grid.unknown, 100, 0).astype(np.uint8)
+                cells[grid.unknown] = 50
+                message.data = cells.tobytes()
+            _stamp(message, t)
+            out.protobuf("/map", t, message)
+            trail = pb["PosesInFrame"](frame_id="map", poses=[_pose(pb, q) for q in poses])
+            _stamp(trail, t)
+            out.protobuf("/path", t, trail)
+            if len(poses):
+                pose = pb["PoseInFrame"](frame_id="map", pose=_pose(pb, poses[-1]))
+                _stamp(pose, t)
+                out.protobuf("/pose/estimated", t, pose)
+        out.finish()
+    return path

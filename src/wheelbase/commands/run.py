@@ -9,9 +9,12 @@ from pathlib import Path
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.progress import BarColumn, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from wheelbase.commands.output import console as make_console
+from wheelbase.commands.output import plural
+from wheelbase.commands.output import progress as progress_bar
 from wheelbase.errors import WheelbaseError
 
 __all__ = ["DEMO_SCENARIO", "register"]
@@ -70,13 +73,12 @@ def _run_and_report(
 
         require_foxglove()  # before the run: a missing extra should not cost a run
     started = time.perf_counter()
-    with Progress(
+    with progress_bar(
+        console,
         TextColumn("[progress.description]{task.description}"),
         BarColumn(),
         TextColumn("{task.completed:.0f}/{task.total:.0f} s simulated"),
         TimeRemainingColumn(),
-        console=console,
-        transient=True,
     ) as bar:
         task = bar.add_task(f"running {scenario.name}", total=None, visible=False)
 
@@ -94,7 +96,9 @@ def _run_and_report(
     console.print(
         _summary(result.metrics, f"{scenario.name} ({time.perf_counter() - started:.1f} s)")
     )
-    console.print(f"report written to {out.resolve()}/ ({len(written)} files)", markup=False)
+    console.print(
+        f"report written to {out.resolve()}/ ({plural(len(written), 'file')})", markup=False
+    )
     return result.metrics
 
 
@@ -127,7 +131,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Run the bundled demo: the RM100 reverse-parks into a warehouse bay (Hybrid A*,
         dynamic plant, computed-torque tracking, encoder odometry) and writes a report."""
-        console = Console()
+        console = make_console()
         _run_and_report(DEMO_SCENARIO, out, force=True, gif=gif, console=console)
 
     @app.command("run")
@@ -146,7 +150,7 @@ def register(app: typer.Typer) -> None:
 
         name = load_scenario(scenario).name
         target = out if out is not None else Path(name)
-        _run_and_report(scenario, target, force=force, gif=gif, console=Console(), mcap=mcap)
+        _run_and_report(scenario, target, force=force, gif=gif, console=make_console(), mcap=mcap)
 
     @app.command("schema")
     def schema_command() -> None:
@@ -168,7 +172,7 @@ def register(app: typer.Typer) -> None:
             s = load_scenario(path)
             robot = s.robot.preset or s.robot.model
             table.add_row(name, s.map, robot, s.plant, s.controller.law, str(len(s.goals)))
-        Console().print(table)
+        make_console().print(table)
 
     @app.command("batch")
     def batch_command(
@@ -213,7 +217,7 @@ def register(app: typer.Typer) -> None:
                 )
         if force and (out / JOURNAL).exists():
             (out / JOURNAL).unlink()
-        console = Console()
+        console = make_console()
         executor = None
         client = None
         if scheduler:
@@ -228,7 +232,7 @@ def register(app: typer.Typer) -> None:
         elif workers > 1:
             executor = ProcessPoolExecutor(max_workers=workers)
         try:
-            with Progress(console=console, transient=True) as bar:
+            with progress_bar(console) as bar:
                 task = bar.add_task("runs", total=None)
                 result = run_batch(
                     scenarios,
@@ -246,7 +250,7 @@ def register(app: typer.Typer) -> None:
                 executor.shutdown()
         result.write(out, force=force or resume)
         summary = result.summary()
-        table = Table(title=f"{len(result.rows)} runs in {result.wall_time_s:.1f} s "
+        table = Table(title=f"{plural(len(result.rows), 'run')} in {result.wall_time_s:.1f} s "
                       f"({result.runs_per_second:.2f} runs/s)")  # fmt: skip
         for column in ("metric", "mean", "p50", "p90", "max"):
             table.add_column(column, justify="right" if column != "metric" else "left")

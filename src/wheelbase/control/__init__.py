@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 from wheelbase._lazy import attach
 
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.control.adaptive import AdaptiveComputedTorque
     from wheelbase.control.base import (
         STEERING_COMMAND,
         VELOCITY_COMMAND,
@@ -46,6 +47,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         ViaPoint,
         make_pose_law,
     )
+    from wheelbase.control.schedule import ModelSchedule
     from wheelbase.control.torque import (
         ComputedTorquePID,
         InverseDynamicsTorques,
@@ -53,8 +55,12 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         TwistTorqueLoop,
     )
     from wheelbase.control.tracking import Kanayama, LinearTracker
+    from wheelbase.control.traction import TractionControl
 
 _EXPORTS = {
+    "AdaptiveComputedTorque": "wheelbase.control.adaptive",
+    "ModelSchedule": "wheelbase.control.schedule",
+    "TractionControl": "wheelbase.control.traction",
     "STEERING_COMMAND": "wheelbase.control.base",
     "VELOCITY_COMMAND": "wheelbase.control.base",
     "Controller": "wheelbase.control.base",
@@ -114,6 +120,7 @@ __all__: list[str] = [
     "POSE_LAWS",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
+    "AdaptiveComputedTorque",
     "Aicardi",
     "ComputedTorquePID",
     "Controller",
@@ -129,6 +136,7 @@ __all__: list[str] = [
     "LinearTracker",
     "MPPICritics",
     "MPPIPlan",
+    "ModelSchedule",
     "PathFollower",
     "PolarPose",
     "PurePursuit",
@@ -137,6 +145,7 @@ __all__: list[str] = [
     "Stanley",
     "SteeringLimits",
     "TorqueGains",
+    "TractionControl",
     "TwistTorqueLoop",
     "VelocityLimits",
     "ViaDirection",

@@ -23,7 +23,8 @@ Reward (:class:`RewardWeights`)
 Termination
     ``terminated`` on arrival (within ``goal_tolerance`` of the goal by the arrival rule;
     with ``stop_at_goal`` also at rest) or on a collision of the footprint; ``truncated`` after
-    ``max_episode_steps``.
+    ``max_episode_steps`` (``gymnasium.make`` and ``make_vec`` take it: :data:`EPISODE_STEPS`
+    unless ``max_episode_steps=`` says otherwise).
 """
 
 from __future__ import annotations
@@ -42,7 +43,11 @@ from wheelbase.planning import Footprint, OccupancyGrid
 from wheelbase.sensors import Lidar
 from wheelbase.sim import Arrival, Engine, EngineState, KinematicPlant
 
-__all__ = ["ROOM_SIZE", "NavigateTask", "RewardWeights"]
+__all__ = ["EPISODE_STEPS", "ROOM_SIZE", "NavigateTask", "RewardWeights"]
+
+EPISODE_STEPS = 300
+"""Steps of an episode of ``wheelbase/Navigate-v0`` unless ``max_episode_steps`` says otherwise
+(the registered spec's limit; 30 s at the default 0.1 s step)."""
 
 ROOM_SIZE = 10.0
 """Side [m] of the walled empty room of ``map="empty"``."""
@@ -140,8 +145,9 @@ class NavigateTask:
         The sensor (default: 60 beams over 360°, 5 m range, no noise).
     dt : float
         Control step [s].
-    max_episode_steps : int
-        Steps before an episode is truncated.
+    max_episode_steps : int or None
+        Steps before an episode is truncated; None: never (a wrapper such as Gymnasium's
+        ``TimeLimit`` cuts it).
     max_speed : float
         Speed at action a₀ = ±1 [m/s].
     max_yaw_rate : float
@@ -166,7 +172,7 @@ class NavigateTask:
         robot: Any = None,
         lidar: Lidar | None = None,
         dt: float = 0.1,
-        max_episode_steps: int = 300,
+        max_episode_steps: int | None = EPISODE_STEPS,
         max_speed: float = 1.0,
         max_yaw_rate: float = 2.0,
         goal_tolerance: float = 0.3,
@@ -182,7 +188,11 @@ class NavigateTask:
         if not isinstance(self.lidar, Lidar):
             raise ConfigError(f"lidar must be a wheelbase.sensors.Lidar (got {self.lidar!r})")
         self.dt = positive("dt", dt, "s")
-        self.max_episode_steps = integer("max_episode_steps", max_episode_steps, minimum=1)
+        self.max_episode_steps = (
+            None
+            if max_episode_steps is None
+            else integer("max_episode_steps", max_episode_steps, minimum=1)
+        )
         self.max_speed = positive("max_speed", max_speed, "m/s")
         self.goal_tolerance = positive("goal_tolerance", goal_tolerance, "m")
         self.min_goal_distance = nonnegative("min_goal_distance", min_goal_distance, "m")
@@ -334,7 +344,12 @@ class NavigateTask:
         reward += w.arrival * arrived - w.collision * collided
         self.state, self.distance = state, distance
         self.elapsed += 1
-        truncated = (self.elapsed >= self.max_episode_steps) & ~(arrived | collided)
+        limit = self.max_episode_steps
+        truncated = (
+            np.zeros(self.n, dtype=bool)
+            if limit is None
+            else (self.elapsed >= limit) & ~(arrived | collided)
+        )
         noisy = self.lidar.range_std > 0.0 or self.lidar.beam_model.z_hit < 1.0
         self.ranges = self._scan(pose, rng if noisy else None)
         return reward, arrived, collided, truncated

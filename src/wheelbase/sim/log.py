@@ -100,6 +100,17 @@ class Log:
     particles : dict of (int, int) to numpy.ndarray
         A particle filter's particles ``(P, 3)`` keyed by (robot, row), now and then: the
         belief behind that row's estimate.
+    perceived : dict of (int, int) to dict
+        Now and then, what a robot perceived (its lidar's marks ``(M, 2)`` [m] and its
+        confirmed tracks ``(K, 5)`` = (x, y, v_x, v_y, radius)) keyed by (robot, row), for
+        drawing.
+    summaries : tuple of dict
+        What each robot's controller says of its whole run at the end (a navigator's replans,
+        recoveries and plans), when it says anything (``summary()``); else empty.
+    agents : numpy.ndarray, shape (B, T, A, 4), or None
+        The moving agents of each world (x [m], y [m], v_x [m/s], v_y [m/s]) at every row
+        (float32; robot i lives in world i // R for a fleet of R robots), when the run had a
+        world with agents and kept its sensors.
     """
 
     t: np.ndarray
@@ -122,6 +133,9 @@ class Log:
     rollout_fans: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
     scans: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
     particles: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
+    agents: np.ndarray | None = None
+    summaries: tuple = ()
+    perceived: dict[tuple[int, int], dict] = field(default_factory=dict)
 
     # ------------------------------------------------------------------ picking robots
     @property
@@ -188,7 +202,18 @@ class Log:
             rollout_fans={(0, row): fan for (r, row), fan in self.rollout_fans.items() if r == i},
             scans={(0, row): scan for (r, row), scan in self.scans.items() if r == i},
             particles={(0, row): cloud for (r, row), cloud in self.particles.items() if r == i},
+            agents=self._agents_of(i, rows),
+            summaries=self.summaries[i : i + 1],
+            perceived={(0, row): seen for (r, row), seen in self.perceived.items() if r == i},
         )
+
+    def _agents_of(self, i: int, rows: int) -> np.ndarray | None:
+        """Robot i's world's agents: its own world in a batch of one robot per world, else
+        every world (a fleet shares one)."""
+        if self.agents is None:
+            return None
+        worlds = self.agents if self.agents.shape[0] != self.n_robots else self.agents[i : i + 1]
+        return worlds[:, :rows].copy()
 
     def controller_status_counts(self, index: int = 0) -> dict[str, int]:
         """How many steps robot ``index``'s controller reported each status.
