@@ -23,8 +23,8 @@ critic (weight)     cost of one rollout                                         
                     or the costmap or a track is hit (below)
 ``costmap``         mean over t of c_t/252, c_t the costmap cost under the robot      —
                     (Nav2's CostCritic; off within ``near_goal_distance``)
-``dynamic_obstacle`` Σ over t (and the held final pose) of Σ_tracks (r_dyn + κσ_t − d)²     1/m²
-                    / T, d the footprint's distance to the track predicted at step t
+``dynamic_obstacle`` Σ over t (and the held final pose) of Σ_tracks g² / T, g the         1/m²
+                    scaled gap to the track predicted at step t
 ``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
 ``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
 ``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
@@ -78,10 +78,10 @@ class MPPICritics:
         Weight of the costmap critic, >= 0 (default 3.81: Nav2's ``CostCritic.cost_weight``,
         whose cost is also the mean over the trajectory of the cell cost / 254).
     dynamic_obstacle : float
-        Weight [1/m²] of the dynamic-obstacle critic, >= 0 (default 30: three times
-        ``obstacle``, since a walker's position is less certain than a wall's and it can
-        close in on the robot; a robot that keeps 0.5 m off the path for the whole horizon pays
-        the path critic 10, inside r_dyn of a track all along 7.5).
+        Weight [1/m²] of the dynamic-obstacle critic, >= 0 (default 100, set on a disc coming
+        head-on at 0.5 m/s, ``tests/test_mppi_perception.py``: 30 and 60 passed it 2-7 cm off,
+        100 0.30-0.35 m; inside r_dyn of a track all along then costs 25, what 1.25 m off the
+        path for the whole horizon does).
     inflation : float
         Clearance r_infl [m] below which the obstacle critic starts to cost, > 0.
     dynamic_inflation : float
@@ -127,7 +127,7 @@ class MPPICritics:
     rate: float = 0.1
     twirl: float = 0.0
     costmap: float = 3.81
-    dynamic_obstacle: float = 30.0
+    dynamic_obstacle: float = 100.0
     inflation: float = 0.4
     collision_cost: float = 1.0e6
     dynamic_inflation: float = 0.5

@@ -51,10 +51,13 @@ footprint's covering disks of |disk centre − mean| − disk radius − track r
 
 - the step collides at contact, d <= 0 (with a relief as for the costmap: a track already in
   contact now collides only where it gets 1 cm deeper);
-- the soft cost is Σ_tracks (r_dyn + κ·σ(τ_k) − d)² for d < r_dyn + κ·σ: zero beyond the
-  inflation distance r_dyn past the uncertainty, and still growing inside it, so that a rollout
-  nearer the predicted path of a track always pays more, however uncertain the prediction.
-  κ (``sigma_scale``) = 1 by default.
+- the soft cost is Σ_tracks g² for d < z = r_dyn + κ·σ(τ_k), with g = r_dyn·(z − max(d, 0))/z
+  + max(−d, 0): zero beyond the inflation distance r_dyn past the uncertainty, r_dyn at contact,
+  plus the depth of the overlap inside it (which only the held checks below can reach), so a
+  rollout nearer the predicted path of a track always pays more. The scaling by z keeps an
+  uncertain prediction from costing more than a sure one: it widens the zone, not the price
+  (unscaled, a walker predicted 8 s ahead, σ 2.3 m, cost 40 times a sure contact, and in a crowd
+  of 20 wandering walkers MPPI stood still). κ (``sigma_scale``) = 1 by default.
 
 A horizon of a few seconds is myopic about a walker coming straight at the robot: a rollout
 that slows down pushes the contact past its end and looks safe, and the robot stops in the
@@ -612,9 +615,10 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach
             least = min(least, d)
         if least <= relief[j] and step < held:
             hit = True
-        beyond = least - table[step, j, 3]
-        if beyond < inflation:
-            gap = inflation - beyond
+        zone = inflation + table[step, j, 3]  # r_dyn + κσ
+        if least < zone:
+            # r_dyn at contact whatever σ, and the depth of the overlap on top inside it
+            gap = inflation * (zone - max(least, 0.0)) / zone + max(-least, 0.0)
             total += gap * gap
     return total, hit
 
@@ -800,8 +804,9 @@ def track_costs(
     d = _track_distances(poses, table, disks)
     collided = np.any(d <= relief, axis=-1)
     collided[:, steps:] = False  # the held pose is scored, never lethal
-    beyond = d - table[None, ..., 3]
-    gap = np.where(beyond < inflation, inflation - beyond, 0.0)
+    zone = inflation + table[None, ..., 3]
+    inside = inflation * (zone - np.maximum(d, 0.0)) / zone + np.maximum(-d, 0.0)
+    gap = np.where(d < zone, inside, 0.0)
     soft = np.sum(gap * gap, axis=-1)
     soft[:, steps:] *= hold_weight
     return soft, collided
