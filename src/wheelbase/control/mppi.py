@@ -84,9 +84,9 @@ from wheelbase.control.mppi_bounds import (
     command_bounds,
     model_kind,
 )
-from wheelbase.control.mppi_critics import MPPICritics
+from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
-from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel
+from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
 from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
@@ -373,15 +373,8 @@ class MPPI:
         >>> MPPI.from_gains(Unicycle(), samples=100, obstacle=30.0).critics.obstacle
         30.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, MPPICritics)
         critic_names = {f.name for f in dataclass_fields(MPPICritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = model_kind(model)
@@ -581,7 +574,8 @@ class MPPI:
         costs = np.empty(self.samples)
         controls = np.empty((self.samples, self.horizon_steps, self.nu))
         local, mean, lo, hi, scale, window, info, last, weights = args
-        mppi_kernel(
+        run_kernel(
+            mppi_kernel, self.samples * self.horizon_steps,
             local, mean, lo, hi, scale, window, info, last, buffer, has_noise, held_from,
             self.noise_std,
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
