@@ -157,3 +157,33 @@ def test_least_clearance_is_the_brute_force_minimum():
                                  rng.uniform(-np.pi, np.pi, 300)])  # fmt: skip
         expected = float(np.min(grid.footprint_clearance(footprint, poses)))
         assert _min_clearance(grid, footprint, poses) == expected
+
+
+SLOW_FOLLOWER = {
+    "name": "slow",
+    "map": "empty",
+    "robot": {"model": "unicycle"},
+    "controller": {"law": "pure_pursuit", "gains": {"speed": 0.2}},
+    "odometry": {"mode": "perfect"},
+    "start": [0.0, 0.0, 0.0],
+    "goal": [6.0, 0.0, 0.0],
+    "trajectory": {"max_speed": 1.0, "max_acceleration": 1.0},
+    "dt": 0.05,
+    "duration": 60.0,
+}
+
+
+def test_duration_governs_a_robot_slower_than_its_reference():
+    # The reference reaches the goal in about 7 s; the follower, at 0.2 m/s, in about 30 s:
+    # more than 15 s late (the old settle time), well within the duration.
+    m = run(SLOW_FOLLOWER).metrics
+    assert m["status"] == "arrived"
+    assert m["trajectory_duration_s"] < 8.0 and 25.0 < m["duration_s"] < 60.0
+    assert m["arrival_delay_s"] == pytest.approx(m["duration_s"] - m["trajectory_duration_s"])
+    assert m["arrival_delay_s"] > 15.0
+    # a settle time, when given, ends the run that long after the reference instead
+    cut = run({**SLOW_FOLLOWER, "settle_time": 5.0}).metrics
+    assert cut["status"] == "timeout" and "arrival_delay_s" not in cut
+    assert cut["duration_s"] == pytest.approx(cut["trajectory_duration_s"] + 5.0, abs=0.051)
+    with pytest.raises(ScenarioError, match="settle_time"):
+        run({**SLOW_FOLLOWER, "settle_time": -1.0})

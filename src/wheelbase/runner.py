@@ -16,8 +16,12 @@ silent:
 - Multiple goals are planned leg by leg (each from the previous goal) and tracked as one
   trajectory that stops at every goal.
 - The run ends when the true pose is within the goal tolerance after the trajectory has ended
-  and the robot has (nearly) stopped, at a collision, or ``settle_time`` = 15 s after the
-  trajectory has ended (status ``timeout``), whichever comes first, and never after ``duration``.
+  and the robot has (nearly) stopped, at a collision, or at the time limit ``duration``
+  (status ``timeout``), whichever comes first: a robot slower than its reference (a path
+  follower, MPPI, one that waits for someone to pass) has until ``duration``. A scenario's
+  ``settle_time`` ends the run that long after the trajectory's end instead, when that comes
+  before ``duration``. ``arrival_delay_s`` says how much later than the reference's end the
+  robot stopped.
 """
 
 from __future__ import annotations
@@ -52,7 +56,6 @@ __all__ = [
     "run_seeds",
 ]
 
-SETTLE_TIME = 15.0  # s after the end of the trajectory
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
 TURNING_MARGIN = 1.2
 
@@ -701,7 +704,7 @@ def prepare(
             np.array([robot_goals[-1] for _, robot_goals in robots]),
             (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
             end_time=end_time,
-            settle_time=SETTLE_TIME,
+            settle_time=math.inf if scenario.settle_time is None else scenario.settle_time,
         ),
         collides=lambda poses: grid.in_collision(footprint, poses),
         reference_pose=reference_pose,
@@ -866,8 +869,8 @@ def run(
     The run ends as the engine's one arrival rule says (:class:`wheelbase.sim.Arrival`): the
     robot stops when its *estimate* is within the goal tolerance, at rest, after the
     trajectory has ended; the *true* pose then decides ``arrived`` or ``missed_goal``. A
-    collision, ``settle_time`` = 15 s after the trajectory's end, or ``duration`` end it
-    earlier (``collision``, ``timeout``).
+    collision or ``duration`` (or the scenario's ``settle_time`` after the trajectory's end,
+    when given and earlier) end it earlier (``collision``, ``timeout``).
 
     Parameters
     ----------
@@ -971,6 +974,8 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     metrics = {**_base_metrics(prepared, seed), **one.metrics()[0]}
     metrics.pop("controller_statuses", None)
     metrics["trajectory_duration_s"] = float(reference.t[-1])
+    if metrics["status"] in ("arrived", "missed_goal"):  # it stopped: how late
+        metrics["arrival_delay_s"] = metrics["duration_s"] - metrics["trajectory_duration_s"]
     counts = one.controller_status_counts(0)
     if counts:
         metrics["controller_statuses"] = counts
