@@ -500,6 +500,9 @@ class Prepared:
     plans, references : tuple
         Every robot's plan and its time-parametrised reference (``plan`` and ``reference``
         are robot 0's).
+    follows_path : bool
+        The controller follows the path (its tracking error is the distance to the path),
+        not the timed trajectory.
     """
 
     scenario: Scenario
@@ -515,6 +518,7 @@ class Prepared:
     starts: np.ndarray | None = None
     plans: tuple = ()
     references: tuple = ()
+    follows_path: bool = False
 
 
 def prepare(
@@ -720,6 +724,7 @@ def prepare(
     return Prepared(
         scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,
         np.array([robot_start for robot_start, _ in robots]), tuple(plans), tuple(references),
+        reference_kind == "path",
     )  # fmt: skip
 
 
@@ -983,12 +988,19 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     deviation = distance_to_polyline(true_pose[:, :2], plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))
+    if prepared.follows_path:
+        # a path law is scored by its distance to the path; the error against the timed
+        # reference (where the trajectory would be at that time) keeps its own name
+        for name in ("rms_position_error_m", "max_position_error_m", "rms_heading_error_deg"):
+            metrics[f"timed_{name}"] = metrics.pop(f"tracking_{name}")
+        metrics["tracking_rms_position_error_m"] = metrics["path_deviation_rms_m"]
+        metrics["tracking_max_position_error_m"] = metrics["path_deviation_max_m"]
+    metrics["tracking_error_of"] = "path" if prepared.follows_path else "trajectory"
     if one.torques is not None:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
-    every = max(1, len(one.t) // 400)
-    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
+    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose)  # every pose
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end

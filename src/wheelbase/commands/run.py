@@ -35,8 +35,10 @@ SUMMARY_KEYS = (
     ("tracking_rms_position_error_m", "tracking RMS error [m]", "{:.4f}"),
     ("tracking_max_position_error_m", "tracking max error [m]", "{:.4f}"),
     ("final_position_error_true_m", "final error, true [m]", "{:.4f}"),
-    ("final_position_error_estimated_m", "final error, odometry [m]", "{:.4f}"),
+    ("final_position_error_estimated_m", "final error, estimated [m]", "{:.4f}"),
     ("odometry_drift_m", "odometry drift [m]", "{:.4f}"),
+    ("localization_final_error_m", "localisation final error [m]", "{:.4f}"),
+    ("arrival_delay_s", "arrived after the reference by [s]", "{:.1f}"),
     ("min_clearance_m", "min clearance [m]", "{:.3f}"),
     ("wheel_energy_j", "wheel energy [J]", "{:.1f}"),
 )
