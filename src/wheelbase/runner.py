@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import nonnegative
+from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
@@ -46,6 +46,7 @@ from wheelbase.timing import SpeedLimits, time_parametrize
 
 __all__ = [
     "LAWS",
+    "LOG_COPIES",
     "Prepared",
     "Robot",
     "RunResult",
@@ -54,6 +55,7 @@ __all__ = [
     "run",
     "run_metrics",
     "run_seeds",
+    "seeds_per_chunk",
 ]
 
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
@@ -926,11 +928,23 @@ def run(
     )
 
 
-def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> list[dict[str, Any]]:
-    """Run one scenario over many noise seeds as one vectorised batch; metrics per seed.
+LOG_COPIES = 3
+"""A run's record is held about three times while it is made: the rows of every step, the
+stacked arrays of the log, and the per-robot copies its metrics are taken from."""
+
+
+def run_seeds(
+    scenario: Scenario | str | Path | dict[str, Any],
+    seeds: Any,
+    *,
+    memory_budget: float | None = None,
+) -> list[dict[str, Any]]:
+    """Run one scenario over many noise seeds in vectorised chunks; metrics per seed.
 
     The plan is made once (it does not depend on the seed); the engine then steps one robot
-    per seed in lockstep. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
+    per seed in lockstep, as many seeds at a time as :func:`seeds_per_chunk` lets into
+    ``memory_budget``, and keeps only each finished chunk's metrics: memory stays flat however
+    many seeds there are. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
 
     Parameters
     ----------
@@ -938,20 +952,74 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
         The scenario (its own ``seed`` is ignored).
     seeds : sequence of int
         Noise seeds, one run each.
+    memory_budget : float, optional
+        Bytes the logs of one chunk may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB), > 0.
 
     Returns
     -------
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
+    from wheelbase.limits import BATCH_MEMORY
+
+    budget = BATCH_MEMORY if memory_budget is None else memory_budget
+    budget = positive("memory_budget", budget, "bytes")
     prepared = prepare(scenario)
     seeds = [int(seed) for seed in seeds]
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
-    starts = np.tile(prepared.start, (len(seeds), 1))
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    log = engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
-    return [run_metrics(prepared, log, i) for i in range(len(seeds))]
+    size = seeds_per_chunk(engine, prepared.start, budget) if seeds else 1
+    rows: list[dict[str, Any]] = []
+    for first in range(0, len(seeds), size):
+        chunk = seeds[first : first + size]
+        starts = np.tile(prepared.start, (len(chunk), 1))
+        log = engine.run(starts, seeds=np.array(chunk, dtype=np.int64))
+        rows.extend(run_metrics(prepared, log, i) for i in range(len(chunk)))
+        del log  # only the rows outlive the chunk
+    return rows
+
+
+def seeds_per_chunk(engine: Engine, start: np.ndarray, budget: float) -> int:
+    """How many robots of ``engine`` one vectorised run can hold within ``budget`` bytes.
+
+    One step of one robot is recorded (its row's arrays: poses, command, wheel rates, ticks,
+    the estimator's and plant's signals) and counted :data:`LOG_COPIES` times for each of the
+    engine's ``steps`` (the longest a run can last).
+
+    Parameters
+    ----------
+    engine : Engine
+        The closed loop.
+    start : numpy.ndarray, shape (3,)
+        A start pose.
+    budget : float
+        Bytes.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    _, row = engine.step(engine.reset(start.reshape(1, 3), seeds=[0]))
+    per_step = _nbytes(row) + 64  # and the row's own bookkeeping
+    return max(1, int(budget // (per_step * engine.steps * LOG_COPIES)))
+
+
+def _nbytes(value: Any) -> int:
+    """Bytes of the arrays in a value (a dataclass, dict, list or array), recursively."""
+    import dataclasses
+
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return sum(_nbytes(getattr(value, f.name)) for f in dataclasses.fields(value))
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value) + 8 * len(value)
+    return 0
 
 
 def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
