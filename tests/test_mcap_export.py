@@ -325,3 +325,56 @@ def test_lidar_scans_are_laser_scans_in_the_robot_frame(tmp_path):
     assert scan.start_angle == pytest.approx(-math.radians(135))
     assert scan.end_angle == pytest.approx(math.radians(135))
     assert scan.pose.position.x == 0.0 and scan.pose.orientation.w == 1.0
+
+
+def test_agents_costmap_and_tracks_of_a_run_among_walkers(tmp_path):
+    scenario = {
+        "name": "walkers",
+        "map": "room20",
+        "robot": {"model": "unicycle", "footprint": [0.4, 0.4]},
+        "controller": {"law": "mppi", "gains": {"samples": 200}},
+        "control_rate_hz": 10,
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 90, "max_range": 6.0, "range_std": 0.01, "rate_hz": 10}},
+        "world": {
+            "obstacles": [{"box": [10.0, 4.0, 0.6, 0.6, 0.0]}],
+            "agents": [{"count": 4, "radius": 0.25, "region": [4, 4, 9, 9]}],
+        },
+        "start": [2.0, 2.0, 45.0],
+        "goal": [8.0, 8.0, 45.0],
+        "dt": 0.05,
+        "duration": 4.0,
+    }
+    result = run(scenario)
+    path = write_mcap(result, tmp_path / "walkers.mcap")
+    topics: dict[str, list] = {}
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        for _, channel, message, proto in reader.iter_decoded_messages(
+            topics=["/world/obstacles", "/world/agents", "/costmap", "/tracks"]
+        ):
+            topics.setdefault(channel.topic, []).append((message.log_time, proto))
+    log = result.log
+    # agents every 0.1 s at their logged positions, discs of their radius
+    agents = topics["/world/agents"]
+    assert len(agents) == pytest.approx(log.t[-1] / 0.1 + 1, abs=1)
+    stamp, update = agents[-1]
+    row = int(np.argmin(np.abs(log.t - stamp / 1e9)))
+    first = update.entities[0]
+    centre = np.mean([[p.x, p.y] for p in first.lines[0].points], axis=0)
+    np.testing.assert_allclose(centre, log.agents[0, row, 0, :2], atol=1e-6)
+    assert len(update.entities) == 4
+    # the box off the map, once
+    ((_, obstacles),) = topics["/world/obstacles"]
+    ring = np.array([[p.x, p.y] for p in obstacles.entities[0].lines[0].points])
+    np.testing.assert_allclose(np.sort(ring[:, 0]), [9.7, 9.7, 10.3, 10.3], atol=1e-9)
+    # what the robot believes, once a second: the map plus the cells its lidar marked
+    assert len(topics["/costmap"]) == len(log.perceived) >= 3
+    _, grid = topics["/costmap"][-1]
+    cells = np.frombuffer(grid.data, np.uint8).reshape(-1, grid.column_count)
+    marked = np.asarray(max(log.perceived.items())[1]["marks"], dtype=np.float64)
+    assert len(marked) > 0  # the walls at least
+    where = result.grid.world_to_cell(marked)
+    assert np.all(cells[where[:, 0], where[:, 1]] == 100)
+    np.testing.assert_array_equal(cells[result.grid.occupied], 100)
+    assert len(topics["/tracks"]) == len(log.perceived)

@@ -190,7 +190,7 @@ def test_traction_control_keeps_the_wheels_below_the_peak_slip_on_ice():
     ice = _with(terrain={"surface": "ice"}, trajectory={"max_speed": 0.5, "max_acceleration": 1.0})
     free = run(ice)
     held = run({**ice, "controller": {**ice["controller"],
-                                      "traction_control": {"friction": 0.1}}})  # fmt: skip
+                                      "traction_control": {"friction": "map"}}})  # fmt: skip
     spin_free = np.abs(free.log.extras["slip_left"]).max()
     spin_held = np.abs(held.log.extras["slip_left"]).max()
     assert spin_free > 0.2
@@ -209,6 +209,12 @@ def test_traction_control_limits_each_wheel_torque():
     out = control(0.0, np.zeros((2, 6)), None)
     limit = 0.8 * RM100.wheel_radius * 0.1 * 0.5 * RM100.body.mass * 9.80665 / 2
     assert out == pytest.approx(np.tile([limit, -limit], (2, 1)))
-    assert math.isclose(control.limits()[0, 0], limit)
+    # turning, the lateral force takes its share of the friction circle
+    turning = np.array([[0.0, 0.0, 0.0, 0.3, 0.0, 0.5]])
+    grip = 0.1 * 0.5 * RM100.body.mass * 9.80665 / 2
+    lateral = 0.5 * RM100.body.mass * 0.15
+    assert math.isclose(
+        control.limits(turning)[0, 0], 0.8 * RM100.wheel_radius * math.sqrt(grip**2 - lateral**2)
+    )
     with pytest.raises(ConfigError, match="wheel torques"):
         TractionControl(lambda t, s, r: 0, RM100)

@@ -127,6 +127,9 @@ def build_robot(spec) -> Robot:
             "footprint": (0.66, 0.455),
         }
         values.update({k: v for k, v in preset.items() if values.get(k) is None})
+        wheels = {"wheel_radius": values["wheel_radius"], "half_track": values["half_track"]}
+        if tuple(wheels.values()) != (RM100.wheel_radius, RM100.half_track):
+            dynamics = replace(RM100, **wheels)  # its own wheels on the RM100's body
     model_name = spec.model
     if model_name in ("diffdrive", "unicycle"):
         radius = values["wheel_radius"] or 0.05
@@ -328,7 +331,7 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
-ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread")
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread", "force_drift")
 """Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
 
 
@@ -436,6 +439,8 @@ class RunResult:
         The sensors the robot read (a lidar, landmarks), for drawing.
     terrain : TerrainMap or None
         The ground it drove on (a scenario with terrain or a payload), for drawing.
+    world : World or None
+        The world beyond the map it drove in (the truth, for drawing and evaluation).
     """
 
     scenario: Scenario
@@ -447,6 +452,7 @@ class RunResult:
     metrics: dict[str, Any]
     sensors: Any = None
     terrain: Any = None
+    world: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -466,8 +472,9 @@ class RunResult:
             raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
         plan = None if self.plan is None else self.plan.poses
         return figure_map(
-            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
-        )
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name,
+            terrain=self.terrain,
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- run
@@ -574,6 +581,10 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
+    if scenario.controller.law == "adaptive_computed_torque":
+        from wheelbase.scenario_ground import adaptive_defaults
+
+        gains = {**adaptive_defaults(scenario), **gains}
     if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
@@ -664,8 +675,8 @@ def prepare(
         from wheelbase import scenario_ground as ground
 
         timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        terrain = ground.build_terrain(scenario, grid)
         if ground.ground_active(scenario):
-            terrain = ground.build_terrain(scenario, grid)
             plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
@@ -694,7 +705,7 @@ def prepare(
             for timed, leg in zip(references, plans, strict=True)
         )
     if dynamic:  # the payload changes the controller knows of, traction control
-        controller = ground.wrap_controller(scenario, controller, robot, timeline)
+        controller = ground.wrap_controller(scenario, controller, robot, timeline, terrain)
     control_every = 1
     if scenario.control_rate_hz is not None:
         control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))
@@ -910,11 +921,7 @@ def run(
         )
     starts = prepared.starts if prepared.starts is not None else prepared.start[None]
     log = prepared.engine.run(starts, seeds=np.full(len(starts), prepared.scenario.seed))
-    metrics = run_metrics(prepared, log, 0)
-    if len(starts) > 1:  # a fleet: every robot's figures, and the fleet's status
-        robots = [run_metrics(prepared, log, i) for i in range(len(starts))]
-        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
-        metrics = {**metrics, "status": worst, "robots": robots}
+    metrics = _world_metrics(prepared, log, 0)
     return RunResult(
         prepared.scenario,
         prepared.robot,
@@ -925,6 +932,7 @@ def run(
         metrics,
         prepared.engine.sensors,
         getattr(getattr(prepared.engine.plant, "model", None), "terrain", None),
+        None if prepared.engine.surroundings is None else prepared.engine.surroundings.world,
     )
 
 
@@ -965,26 +973,54 @@ def run_seeds(
 
     budget = BATCH_MEMORY if memory_budget is None else memory_budget
     budget = positive("memory_budget", budget, "bytes")
-    prepared = prepare(scenario)
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
+    if scenario.world is not None and scenario.world.path_boxes is not None:
+        # each seed drops its own boxes: its own world, run alone
+        return [
+            row
+            for seed in seeds
+            for row in _run_batch(prepare(scenario, seed=seed), [seed], budget)
+        ]
+    return _run_batch(prepare(scenario), seeds, budget)
+
+
+def _run_batch(prepared: Prepared, seeds: list[int], budget: float) -> list[dict[str, Any]]:
+    """Engine runs of a prepared scenario for ``seeds`` (a world of R robots per seed), as many
+    worlds at a time as fit ``budget`` bytes (:func:`seeds_per_chunk`)."""
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
+    fleet = len(prepared.starts)
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    size = seeds_per_chunk(engine, prepared.start, budget) if seeds else 1
+    size = seeds_per_chunk(engine, prepared.starts, budget) if seeds else 1
     rows: list[dict[str, Any]] = []
     for first in range(0, len(seeds), size):
         chunk = seeds[first : first + size]
-        starts = np.tile(prepared.start, (len(chunk), 1))
-        log = engine.run(starts, seeds=np.array(chunk, dtype=np.int64))
-        rows.extend(run_metrics(prepared, log, i) for i in range(len(chunk)))
+        starts = np.tile(prepared.starts, (len(chunk), 1))
+        log = engine.run(starts, seeds=np.repeat(np.array(chunk, dtype=np.int64), fleet))
+        rows.extend(_world_metrics(prepared, log, k) for k in range(len(chunk)))
         del log  # only the rows outlive the chunk
     return rows
 
 
-def seeds_per_chunk(engine: Engine, start: np.ndarray, budget: float) -> int:
-    """How many robots of ``engine`` one vectorised run can hold within ``budget`` bytes.
+def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
+    """The metrics of world ``world`` of a run: its robot's, or a fleet's first robot's with
+    ``robots`` (each robot's) and the fleet's status (the first that is not ``arrived``)."""
+    fleet = len(prepared.starts) if prepared.starts is not None else 1
+    metrics = run_metrics(prepared, log, world * fleet)
+    if fleet > 1:
+        robots = [run_metrics(prepared, log, world * fleet + i) for i in range(fleet)]
+        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
+        metrics = {**metrics, "status": worst, "robots": robots}
+    return metrics
 
-    One step of one robot is recorded (its row's arrays: poses, command, wheel rates, ticks,
+
+def seeds_per_chunk(engine: Engine, starts: np.ndarray, budget: float) -> int:
+    """How many worlds (seeds) of ``engine`` one vectorised run can hold within ``budget``
+    bytes, a world being the robots of ``starts`` (one, or a fleet).
+
+    One step of one world is recorded (its rows' arrays: poses, command, wheel rates, ticks,
     the estimator's and plant's signals) and counted :data:`LOG_COPIES` times for each of the
     engine's ``steps`` (the longest a run can last).
 
@@ -992,8 +1028,8 @@ def seeds_per_chunk(engine: Engine, start: np.ndarray, budget: float) -> int:
     ----------
     engine : Engine
         The closed loop.
-    start : numpy.ndarray, shape (3,)
-        A start pose.
+    starts : numpy.ndarray, shape (3,) or (R, 3)
+        The start pose(s) of one world.
     budget : float
         Bytes.
 
@@ -1002,7 +1038,9 @@ def seeds_per_chunk(engine: Engine, start: np.ndarray, budget: float) -> int:
     int
         At least 1.
     """
-    _, row = engine.step(engine.reset(start.reshape(1, 3), seeds=[0]))
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    seeds = np.zeros(len(starts), dtype=np.int64)
+    _, row = engine.step(engine.reset(starts, seeds=seeds))
     per_step = _nbytes(row) + 64  # and the row's own bookkeeping
     return max(1, int(budget // (per_step * engine.steps * LOG_COPIES)))
 
@@ -1068,6 +1106,9 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
+    from wheelbase.scenario_ground import terrain_metrics
+
+    metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
     clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose)  # every pose
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
@@ -1090,7 +1131,8 @@ def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, An
     extras = {key: value[0] for key, value in one.extras.items() if key.startswith("world_")}
     if extras:
         speed = float(np.hypot(*one.twist[0, -1, :2]))
-        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed))
+        dt = np.append(np.diff(one.t), 0.0)
+        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed, dt))
     if "track_matches" in one.extras:
         matches = float(one.extras["track_matches"][0, -1])
         for name, key in (("position", "track_position_rmse_m"),

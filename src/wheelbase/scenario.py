@@ -424,8 +424,9 @@ class Scenario(_Strict):
     name: str = Field("scenario", description="Name used in reports.")
     map: str = Field(
         "warehouse",
-        description="Bundled map name, path to a ROS YAML / Moving AI .map / image map, or "
-        "'empty' for an obstacle-free field around the start and goals.",
+        description="Bundled map name, path to a ROS YAML (an image with its resolution) / "
+        "Moving AI .map / polygon world, or 'empty' for an obstacle-free field around the "
+        "start and goals.",
     )
     robot: RobotSpec = Field(default_factory=RobotSpec)
     plant: Literal["kinematic", "dynamic"] = Field("kinematic")

@@ -14,7 +14,9 @@ rest at the goal that carries the change (the robot is there, within its trackin
 terrain raster has the map's cells (a ``map: empty`` field's 5 cm) unless
 ``terrain.resolution`` says otherwise; without a ``terrain`` section a robot with a payload
 rolls without slipping on a floor without rolling resistance, which is the existing dynamic
-model with the payload's body.
+model with the payload's body; the adaptive computed torque lets its force F_0 drift at 1 N/√s
+on graded terrain (the pull of a slope changes with the grade and the heading) and keeps it
+constant on level ground (:func:`adaptive_defaults`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from wheelbase.inertial import Payload, with_payload
 from wheelbase.scenario import Scenario
 
 __all__ = [
+    "adaptive_defaults",
     "build_contacts",
     "build_plant",
     "build_stuck",
@@ -38,6 +41,7 @@ __all__ = [
     "ground_active",
     "payload_timeline",
     "surface_of",
+    "terrain_metrics",
     "wrap_controller",
 ]
 
@@ -51,6 +55,19 @@ def ground_active(scenario: Scenario) -> bool:
         or scenario.robot.payload is not None
         or scenario.goal_payloads is not None
     )
+
+
+def adaptive_defaults(scenario: Scenario) -> dict[str, float]:
+    """Gains of ``adaptive_computed_torque`` that depend on the ground (module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+    """
+    terrain = scenario.terrain
+    graded = terrain is not None and any(region.grade_percent > 0 for region in terrain.regions)
+    return {"force_drift": 1.0} if graded else {}
 
 
 def _payload(spec: Any) -> Payload | None:
@@ -298,6 +315,7 @@ def wrap_controller(
     controller: Any,
     robot: Any,
     timeline: list[tuple[float, Payload | None]],
+    terrain: Any = None,
 ) -> Any:
     """The controller with the payload changes it knows of and traction control.
 
@@ -311,6 +329,8 @@ def wrap_controller(
         The resolved robot (``robot.dynamics`` without payload).
     timeline : list of (float, Payload or None)
         :func:`payload_timeline`.
+    terrain : TerrainMap, optional
+        The floor the robot knows (traction control's ``friction: map``).
     """
     from wheelbase.control.schedule import ModelSchedule
     from wheelbase.control.traction import TractionControl
@@ -329,8 +349,7 @@ def wrap_controller(
         try:
             controller = TractionControl(
                 controller, model, friction=spec.friction, margin=spec.margin,
-                drive_load_share=contacts.drive_load_share,
-                wheel_inertia=contacts.wheel_inertia,
+                drive_load_share=contacts.drive_load_share, terrain=terrain,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None
@@ -350,3 +369,36 @@ def build_stuck(scenario: Scenario) -> Any:
     from wheelbase.sim.stuck import Stuck
 
     return Stuck(time=scenario.terrain.stuck_time, distance=max(0.1, scenario.goal_tolerance[0]))
+
+
+def terrain_metrics(log: Any) -> dict[str, float]:
+    """What the ground did to a robot's run (robot 0 of ``log``): largest slip ratio and
+    sinkage, and the energy budget [J] — the work of the wheel torques, what slip, rolling
+    resistance and soil dissipated, the work done against gravity. Empty for a run without a
+    terrain plant.
+
+    Parameters
+    ----------
+    log : Log
+        One robot's record.
+    """
+    extras = log.extras
+    if "slip_left" not in extras:
+        return {}
+    n = int(log.length[0])
+
+    def spent(name: str) -> float:
+        values = extras[name][0, :n]
+        return float(values[-1] - values[0])
+
+    slip = np.abs(np.concatenate([extras["slip_left"][0, :n], extras["slip_right"][0, :n]]))
+    sink = np.concatenate([extras["sinkage_left"][0, :n], extras["sinkage_right"][0, :n]])
+    return {
+        "max_slip": float(slip.max()),
+        "max_sinkage_m": float(sink.max()),
+        "energy_wheels_j": spent("energy_work_wheels"),
+        "energy_slip_j": spent("energy_dissipated_slip"),
+        "energy_rolling_j": spent("energy_dissipated_rolling"),
+        "energy_soil_j": spent("energy_dissipated_soil"),
+        "energy_gravity_j": -spent("energy_work_gravity"),
+    }

@@ -192,7 +192,7 @@ class TerrainSpec(_Strict):
         None, gt=0, description="Cell size of the terrain raster [m] (default: the map's)."
     )
     slip_speed: float = Field(
-        0.05, gt=0, le=10, description="v_ε [m/s]: the slip ratio's denominator at standstill."
+        0.05, ge=1e-4, le=10, description="v_ε [m/s]: the slip ratio's denominator at standstill."
     )
     stuck_time: float = Field(
         5.0, gt=0, description="Seconds commanded to move without moving before 'stuck'."
@@ -202,9 +202,9 @@ class TerrainSpec(_Strict):
 class TractionSpec(_Strict):
     """Wheel torques limited by the friction (:class:`wheelbase.control.TractionControl`)."""
 
-    friction: Literal["auto"] | float = Field(
-        "auto", description="The friction coefficient to respect: 'auto' estimates it from the "
-        "wheels' spin, a number is known."
+    friction: Literal["map"] | float = Field(
+        "map", description="The friction coefficient to respect: 'map', the peak friction of "
+        "the terrain under each wheel (the robot knows its floor), or a number."
     )  # fmt: skip
     margin: float = Field(
         0.8, gt=0, le=1, description="Share of the friction limit the torques may use."
@@ -213,6 +213,6 @@ class TractionSpec(_Strict):
     @field_validator("friction")
     @classmethod
     def _positive(cls, value):
-        if value != "auto" and not (math.isfinite(value) and 0 < value <= 3):
-            raise ValueError(f"must be 'auto' or a coefficient in (0, 3] (got {value})")
+        if value != "map" and not (math.isfinite(value) and 0 < value <= 3):
+            raise ValueError(f"must be 'map' or a coefficient in (0, 3] (got {value})")
         return value

@@ -91,6 +91,7 @@ def plan_to_files(
     reverse: bool = True,
     force: bool = False,
     planner_options: dict[str, Any] | None = None,
+    map_resolution: float | None = None,
 ) -> dict[str, Any]:
     """Plan and write ``path.csv``, ``path.png`` and ``metrics.json`` into ``out``.
 
@@ -118,6 +119,9 @@ def plan_to_files(
     planner_options : dict or None
         Further :class:`~wheelbase.planning.HybridAStar` keywords (``headings``,
         ``xy_resolution``, ``collision_step``, ``time_limit``, ``moves_to_contact``, …).
+    map_resolution : float or None
+        Cell side [m/pixel] of a bare image map (required there; see
+        :func:`wheelbase.planning.load_map`).
 
     Returns
     -------
@@ -143,7 +147,7 @@ def plan_to_files(
 
         grid = empty_map([start, goal])
     else:
-        grid = load_map(map_name)
+        grid = load_map(map_name, resolution=map_resolution)
     planner = HybridAStar(
         grid,
         footprint,
@@ -245,6 +249,13 @@ def register(app: typer.Typer) -> None:
         time_limit: Annotated[
             float | None, typer.Option(help="Search time limit [s] (default 5).")
         ] = None,
+        resolution: Annotated[
+            float | None,
+            typer.Option(
+                help="Cell side of a bare image MAP [m/pixel] (required for one: an image "
+                "carries no scale; other maps carry their own)."
+            ),
+        ] = None,
         moves_to_contact: Annotated[
             bool | None,
             typer.Option(
@@ -279,6 +290,7 @@ def register(app: typer.Typer) -> None:
             reverse=reverse,
             force=force,
             planner_options=options,
+            map_resolution=resolution,
         )
         from rich.table import Table
 

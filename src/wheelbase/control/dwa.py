@@ -24,9 +24,8 @@ critic (weight)       score of one trajectory                                   
 ``path_align``        ``path_dist`` of the point ``forward_point_distance``        640 /m
                       ahead of its end (DWB PathAlign)
 ``goal_align``        ``goal_dist`` of that point (DWB GoalAlign)                 480 /m
-``costmap``           mean over its steps of the costmap cost / 252 (DWB           45
-                      BaseObstacle: 0.02 per cost unit summed over the 9 poses of
-                      its default trajectory)
+``costmap``           mean over its steps of the costmap cost / 252 (DWB           3000
+                      BaseObstacle; see below)
 ``obstacle``          mean over its steps of (r_infl − c)², c the footprint's      320 /m²
                       clearance on the static map, as MPPI's (half ``path_dist``,
                       MPPI's balance)
@@ -38,8 +37,11 @@ critic (weight)       score of one trajectory                                   
                       [rad] (+ ``slowing_factor``·v² while still slowing down)
 ====================  ==========================================================  ==========
 
-The dynamic-obstacle default was set on a disc coming head-on at 0.5 m/s (the test case of
-``tests/test_dwa.py``): 1000 let the robot graze it (2.6 cm), 3000 passes it 0.5 m off.
+Two defaults were set on the cases of ``tests/test_dwa.py``, not taken from Nav2: ``costmap``
+(DWB's BaseObstacle scale, 0.02 per cost unit summed over the 9 poses of its default
+trajectory, is 45 here: DWA then grazed a 0.6 m box on the path, 0 m; 1000: 0 m; 3000: 6.5 cm
+off) and ``dynamic_obstacle`` (a disc coming head-on at 0.5 m/s: 1000 grazed it, 2.6 cm; 3000
+passes it 0.5 m off).
 Collisions (the static map's footprint disks, the costmap's lethal and inscribed cells,
 contact with a predicted track) make a trajectory inadmissible, as Fox et al.'s admissible
 velocities; ``path_align`` and ``goal_align`` are off within ``forward_point_distance`` of the
@@ -79,11 +81,22 @@ from wheelbase._validate import (
     positive,
 )
 from wheelbase.control.base import VELOCITY_COMMAND
-from wheelbase.control.dwa_kernels import SCORES, arc_poses, dwa_kernel, dwa_scores_numpy
+from wheelbase.control.dwa_kernels import (
+    SCORES,
+    arc_poses,
+    dwa_kernel,
+    dwa_scores_numpy,
+    goal_distance_field,
+)
 from wheelbase.control.footprint_field import FootprintField, footprint_disks
 from wheelbase.control.local_path import PathWindow
 from wheelbase.control.mppi_bounds import KIND_VELOCITY, model_kind
-from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME, PerceptionInputs
+from wheelbase.control.obstacle_critics import (
+    ACCELERATION_NOISE,
+    HOLD_TIME,
+    PerceptionInputs,
+    path_blocked,
+)
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_SAMPLE_STEPS
@@ -133,7 +146,7 @@ class DWACritics:
     goal_dist: float = 480.0
     path_align: float = 640.0
     goal_align: float = 480.0
-    costmap: float = 45.0
+    costmap: float = 3000.0
     obstacle: float = 320.0
     dynamic_obstacle: float = 3000.0
     rotate_to_goal: float = 32.0
@@ -508,36 +521,40 @@ class DWA:
         local_map[:2] -= pose[:2]
         relief = self._field.relief(pose, local_map)
         seen = self._perception.arrays(perception, pose, t, self._step_times, self.max_speed)
-        goal = window[-1, :3].copy()
-        if near_goal:
-            goal[:] = info[1], info[2], info[3]
+        goal, field, fgeo = self._local_goal(window, info, near_goal, seen)
         c = self.critics
         forward, direction = c.forward_point_distance, float(info[4])
         if self.backend == "numba":
             scores = np.empty((samples.shape[0], len(SCORES)))
             collided = np.empty(samples.shape[0], np.bool_)
             dwa_kernel(
-                pose[2], samples, self.sim_dt, self.steps, window, goal, forward, direction,
-                self._field.distance_field, local_map, self._field.circles, relief, c.inflation,
-                seen.cost, seen.near, seen.geometry, seen.polygon, seen.table, seen.relief,
-                seen.disks, c.dynamic_inflation, scores, collided,
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3].copy(), direction, self._field.distance_field, local_map,
+                self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
+                seen.polygon, seen.table, seen.relief, seen.disks, c.dynamic_inflation, scores,
+                collided,
             )  # fmt: skip
         else:
             scores, collided = dwa_scores_numpy(
-                pose[2], samples, self.sim_dt, self.steps, window, goal, forward, direction,
-                self._field, local_map, relief, c.inflation, seen, c.dynamic_inflation,
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3], direction, self._field, local_map, relief, c.inflation, seen,
+                c.dynamic_inflation,
             )  # fmt: skip
         weights = c.vector()
         if info[5] <= forward:
             weights[2] = weights[3] = 0.0  # align critics off at the section's end
+        if path_blocked(window, self._field, local_map, seen):
+            weights[0] = weights[2] = 0.0  # the path collides: do not pull the robot onto it
         rotating = False
         if near_goal:
             # DWB's RotateToGoal: slow down, then turn in place once a stop is within reach
             rotating = abs(self._velocity[0]) <= self.max_deceleration * period
         else:
             weights[7] = 0.0
+        unreachable = scores[:, 1] < 0.0  # DWB: "trajectory hits unreachable area"
+        scores[unreachable, 1] = scores[unreachable, 3] = np.max(scores[:, 1], initial=0.0)
         costs = scores @ weights
-        legal = ~collided
+        legal = ~collided & ~unreachable
         if near_goal:
             v = samples[:, 0]
             if rotating:
@@ -563,6 +580,31 @@ class DWA:
         plan = DWAPlan(command, samples, costs, scores, collided, legal, "ok", pose.copy())
         self.last_plan = plan
         return plan
+
+    def _local_goal(self, window: np.ndarray, info: np.ndarray, near_goal: bool, seen: Any):
+        """The local goal (x, y, heading) relative to the robot and its distance field: the
+        last window point on a passable cell of the costmap (DWB: where the path leaves the
+        local costmap), or the path's end near the goal; without a costmap straight
+        distances."""
+        goal = window[-1, :3].copy()
+        if near_goal:
+            goal[:] = info[1], info[2], info[3]
+        if not seen.has_costmap:
+            return goal, np.full((1, 1), -1.0), np.array([0.0, 0.0, 1.0, 0.0])
+        reach = self.lookahead + self.max_speed * self.sim_time + 0.5
+        if not near_goal:
+            x0, y0, res = seen.geometry[:3]
+            rows, cols = seen.cost.shape
+            col = np.floor((window[:, 0] - x0) / res)
+            row = np.floor((window[:, 1] - y0) / res)
+            inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+            r = np.clip(row, 0, rows - 1).astype(np.int64)
+            q = np.clip(col, 0, cols - 1).astype(np.int64)
+            passable = np.flatnonzero(inside & (seen.cost[r, q] < 253))
+            if passable.size:  # a goal inside an obstacle would make every end unreachable
+                goal = window[passable[-1], :3].copy()
+        field, fgeo = goal_distance_field(seen.cost, seen.geometry, goal[:2], reach)
+        return goal, field, fgeo
 
     def window_samples(self, period: float | None = None) -> np.ndarray:
         """The sampled velocities ``(S, 2)`` (v [m/s], ω [rad/s]) of the dynamic window from

@@ -88,7 +88,7 @@ from wheelbase.control.mppi_critics import MPPICritics
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
 from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
-from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, costmap_check
+from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
@@ -515,7 +515,7 @@ class MPPI:
         if last_section and info[5] <= self.critics.near_goal_distance:
             # obstacle and costmap repulsion off near the goal (collisions stay lethal)
             weights[5] = weights[12] = 0.0
-        blocked = self._path_blocked(window, local_map, seen)
+        blocked = path_blocked(window, self._field, local_map, seen)
         info[6] = self._field.relief(pose, local_map)  # see FootprintField.relief
         if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
@@ -590,18 +590,6 @@ class MPPI:
             seen.polygon, seen.table, seen.relief, seen.disks, costs, controls,
         )  # fmt: skip
         return costs, controls
-
-    def _path_blocked(self, window: np.ndarray, mp: np.ndarray, seen: PerceptionArrays) -> bool:
-        """Whether more than 7 % of the window's poses put the footprint in collision with the
-        map or the costmap (Nav2's ``max_path_occupancy_ratio``): the path critics are then
-        switched off for this call."""
-        collided = np.zeros(window.shape[0], bool)
-        if self._field.enabled:
-            collided |= self._field.clearance(window[:, :3], geometry=mp)[1]
-        if seen.has_costmap:
-            collided |= costmap_check(window[:, :3], seen.cost, seen.near, seen.geometry,
-                                      seen.polygon)[1]  # fmt: skip
-        return bool(np.mean(collided) > 0.07)
 
     def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
         self.status = status

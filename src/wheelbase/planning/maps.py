@@ -17,11 +17,12 @@ import numpy as np
 import yaml
 
 from wheelbase._validate import check_choice, integer
+from wheelbase.errors import MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.world import PolygonWorld
 
-__all__ = ["BUNDLED_MAPS", "IMAGE_RESOLUTION", "PlanningScenario", "bundled_scenarios", "load_map"]
+__all__ = ["BUNDLED_MAPS", "PlanningScenario", "bundled_scenarios", "load_map"]
 
 BUNDLED_MAPS = (
     "parking_lot",
@@ -36,8 +37,6 @@ BUNDLED_MAPS = (
     "perpendicular_bay",
     "pythonrobotics_maze",
 )
-IMAGE_RESOLUTION = 0.05
-"""Cell side [m/pixel] assumed for a plain image map (ROS maps carry their own)."""
 _IMAGE_SUFFIXES = (".png", ".pgm", ".bmp", ".jpg", ".jpeg")
 
 
@@ -46,7 +45,10 @@ def _data_dir() -> FilePath:
 
 
 def load_map(
-    name_or_path: str | FilePath, *, max_cells: int = MAX_MAP_CELLS
+    name_or_path: str | FilePath,
+    *,
+    max_cells: int = MAX_MAP_CELLS,
+    resolution: float | None = None,
 ) -> OccupancyGrid | PolygonWorld:
     """Load a bundled map or world by name, or any map or world file by path.
 
@@ -56,11 +58,20 @@ def load_map(
         One of :data:`BUNDLED_MAPS`, or a file path (``.yaml``/``.yml``: a polygon world, or
         a ROS map_server map when it names an ``image``; ``.geojson``/``.json``: a GeoJSON
         polygon world (see :mod:`wheelbase.planning.world_io`); ``.map``: Moving AI at
-        1 m/cell; an image: dark pixels occupied, at :data:`IMAGE_RESOLUTION` m/pixel with its
+        1 m/cell; a bare image: dark pixels occupied, at ``resolution`` m/pixel with its
         lower-left corner at the origin).
     max_cells : int
         Most cells (pixels) a map file may have, checked before it is decoded (default
         :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8); a polygon world's raster counts too.
+    resolution : float, optional
+        Cell side [m/pixel] of a bare image, which is required there: an image (a screenshot,
+        a drawing) says nothing of its scale, and a guessed one would be silently wrong. Every
+        other kind of map carries its own (a ROS map YAML beside the image gives it).
+
+    Raises
+    ------
+    MapError
+        A bare image without ``resolution``, or ``resolution`` for a map that has its own.
 
     Returns
     -------
@@ -80,8 +91,20 @@ def load_map(
         return read_world_file(path, max_cells=max_cells)
     if path.suffix.lower() == ".map":
         return OccupancyGrid.from_movingai(path, max_cells=max_cells)
-    if path.suffix.lower() in _IMAGE_SUFFIXES:
-        return OccupancyGrid.from_image(path, IMAGE_RESOLUTION, max_cells=max_cells)
+    image = path.suffix.lower() in _IMAGE_SUFFIXES
+    if image and resolution is None:
+        raise MapError(
+            f"{text} is a bare image: give its resolution [m/pixel] (resolution=, wheelbase "
+            "plan --resolution), or a ROS map_server YAML that names the image and its "
+            "resolution"
+        )
+    if not image and resolution is not None:
+        raise MapError(
+            f"resolution applies to a bare image map only; {text} carries its own "
+            f"(got resolution={resolution!r})"
+        )
+    if image:
+        return OccupancyGrid.from_image(path, resolution, max_cells=max_cells)
     check_choice("map", text, BUNDLED_MAPS)
     return read_world_file(_data_dir() / f"{text}.yaml", max_cells=max_cells)
 

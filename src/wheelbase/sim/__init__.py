@@ -1,6 +1,7 @@
 """The one closed-loop engine: N robots in lockstep → one batched :class:`Log`.
 
-- :mod:`wheelbase.sim.plants`: what moves (kinematic or dynamic), and its encoder axle;
+- :mod:`wheelbase.sim.plants`: what moves (kinematic, dynamic, or dynamic on terrain with
+  slip and payloads), and its encoder axle;
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
@@ -11,6 +12,7 @@
 - :mod:`wheelbase.sim.perceiving`: each robot's costmap and tracks from its lidar;
 - :mod:`wheelbase.sim.engine`: the step (estimator → controller → limits → rules → plant →
   encoders) and the run;
+- :mod:`wheelbase.sim.stuck`: the ``stuck`` rule (commanded to move, not moving);
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.
 """
 

@@ -704,6 +704,7 @@ class Engine:
         fans: dict[tuple[int, int], np.ndarray] = {}
         particles: dict[tuple[int, int], np.ndarray] = {}
         particles_of = getattr(self.estimator, "particles_of", None)
+        perceived: dict[tuple[int, int], dict] = {}
         status_names: list[str] = []
         while True:
             was_running = state.running
@@ -712,6 +713,11 @@ class Engine:
                 for i in np.flatnonzero(was_running):  # the belief of this row's estimate
                     cloud = particles_of(state.estimator, int(i))
                     particles[(int(i), len(rows))] = np.asarray(cloud, dtype=np.float32)
+            if fan_now and self.perception is not None and self.record_sensors:
+                for i in np.flatnonzero(was_running):  # what this row's controller saw
+                    perceived[(int(i), len(rows))] = self.perception.snapshot(
+                        state.perception, int(i)
+                    )
             state, row = self.step(state)
             rows.append(row)
             if fan_now:  # the plans the controllers just made for this row's poses
@@ -727,6 +733,8 @@ class Engine:
         if self.progress is not None:
             self.progress(rows[-1].t)
         log = self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        if perceived:
+            log = replace(log, perceived=perceived)
         summaries = [getattr(law, "summary", None) for law in state.controllers]
         if len(state.controllers) == n and any(callable(s) for s in summaries):
             log = replace(log, summaries=tuple(s() if callable(s) else {} for s in summaries))

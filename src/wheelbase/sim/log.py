@@ -100,6 +100,10 @@ class Log:
     particles : dict of (int, int) to numpy.ndarray
         A particle filter's particles ``(P, 3)`` keyed by (robot, row), now and then: the
         belief behind that row's estimate.
+    perceived : dict of (int, int) to dict
+        Now and then, what a robot perceived (its lidar's marks ``(M, 2)`` [m] and its
+        confirmed tracks ``(K, 5)`` = (x, y, v_x, v_y, radius)) keyed by (robot, row), for
+        drawing.
     summaries : tuple of dict
         What each robot's controller says of its whole run at the end (a navigator's replans,
         recoveries and plans), when it says anything (``summary()``); else empty.
@@ -131,6 +135,7 @@ class Log:
     particles: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
     agents: np.ndarray | None = None
     summaries: tuple = ()
+    perceived: dict[tuple[int, int], dict] = field(default_factory=dict)
 
     # ------------------------------------------------------------------ picking robots
     @property
@@ -199,6 +204,7 @@ class Log:
             particles={(0, row): cloud for (r, row), cloud in self.particles.items() if r == i},
             agents=self._agents_of(i, rows),
             summaries=self.summaries[i : i + 1],
+            perceived={(0, row): seen for (r, row), seen in self.perceived.items() if r == i},
         )
 
     def _agents_of(self, i: int, rows: int) -> np.ndarray | None:
