@@ -1491,7 +1491,7 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
     "scenarios": ([], {}),
     "batch": (
         ["demo", "--seeds", "2"],
-        {"--seeds": 1, "--workers": 1, "--chunk-size": 1},  # (--scheduler: a network wait)
+        {"--seeds": 1, "--workers": 1, "--chunk-size": 1, "--memory-mb": 1},  # not --scheduler
     ),
     "localize": (
         [str(_MRCLAM), "--robot", "1", "--filter", "ekf"],

@@ -14,9 +14,13 @@ topic                     schema                        content
 ``/plan``                 ``foxglove.PosesInFrame``     the planned path in ``map``, t=0
 ``/pose/true``            ``foxglove.PoseInFrame``      the true pose in ``map``, every row
 ``/pose/estimated``       ``foxglove.PoseInFrame``      the estimator's pose in ``map``, every row
-``/tf``                   ``foxglove.FrameTransforms``  ``map → odom`` (true ∘ estimate⁻¹: the
-                                                        odometry drift) and ``odom → base_link``
-                                                        (the estimate), every row
+``/tf``                   ``foxglove.FrameTransforms``  the estimator's tree (REP 105): ``map →
+                                                        odom`` (its correction, estimate ∘
+                                                        odometry⁻¹; the identity without a
+                                                        filter) and ``odom → base_link`` (the
+                                                        wheel odometry), every row
+``/tf_true``              ``foxglove.FrameTransforms``  ``map → base_link_true``: the true pose,
+                                                        every row
 ``/markers``              ``foxglove.SceneUpdate``      the footprint (frame ``base_link``) and the
                                                         goals (frame ``map``), t=0
 ``/scan``                 ``foxglove.LaserScan``        the lidar's scans (frame ``base_link``, the
@@ -37,10 +41,11 @@ topic                     schema                        content
 ``/metrics``              JSON                          the run's metrics, at its last row
 ========================  ============================  ===========================================
 
-So ``map → odom → base_link`` composes to the true pose, and the odom frame moving against the
-map is the drift of the odometry. Times are simulated time from t = 0 (``log_time`` and every
-message's ``timestamp``, in integer nanoseconds). Poses are written as float64 positions and
-unit quaternions about z (θ = 2·atan2(q_z, q_w)).
+So ``map → odom → base_link`` composes to the estimate, as REP 105 and Nav2 publish it: the odom
+frame jumps against the map when a filter corrects the odometry; the truth is on its own topics
+(``/pose/true``, ``/tf_true``), never in the robot's tree. Times are simulated time from t = 0
+(``log_time`` and every message's ``timestamp``, in integer nanoseconds). Poses are written as
+float64 positions and unit quaternions about z (θ = 2·atan2(q_z, q_w)).
 
 The Foxglove protobuf schemas come from ``foxglove-schemas-protobuf`` and the file is written by
 ``mcap``; both are the optional extra ``wheelbase[foxglove]``.
@@ -75,6 +80,7 @@ MCAP_TOPICS = (
     "/pose/true",
     "/pose/estimated",
     "/tf",
+    "/tf_true",
     "/markers",
     "/scan",
     "/particles",
@@ -491,8 +497,10 @@ def _write_robot(
     clouds = {row: cloud for (robot, row), cloud in log.particles.items() if robot == i}
     rows = int(log.length[i])
     true, estimate = log.true_pose[i, :rows], log.estimated_pose[i, :rows]
-    # map → odom is the pose that carries the estimate onto the truth: true ∘ estimate⁻¹.
-    drift = compose(true, inverse_pose(estimate))
+    # REP 105: odom → base_link is the wheel odometry, map → odom the estimator's correction
+    # (estimate ∘ odometry⁻¹); without a filter the odometry is the estimate (identity).
+    odom = log.extras["odom_pose"][i, :rows] if "odom_pose" in log.extras else estimate
+    correction = compose(estimate, inverse_pose(odom))
     command_names = tuple(log.command_names)
     twist_names, wheel_names = ("u", "v", "r"), ("left", "right")
     for k in range(rows):
@@ -503,11 +511,15 @@ def _write_robot(
             out.protobuf(prefix + topic, t, message)
         tf = pb["FrameTransforms"](
             transforms=[
-                _transform(pb, t, "map", frames[0], drift[k]),
-                _transform(pb, t, frames[0], frames[1], estimate[k]),
+                _transform(pb, t, "map", frames[0], correction[k]),
+                _transform(pb, t, frames[0], frames[1], odom[k]),
             ]
         )
         out.protobuf(prefix + "/tf", t, tf)
+        truth = pb["FrameTransforms"](
+            transforms=[_transform(pb, t, "map", frames[1] + "_true", true[k])]
+        )
+        out.protobuf(prefix + "/tf_true", t, truth)
         if k in scans:
             scan = pb["LaserScan"](
                 frame_id=frames[1], pose=_pose(pb, mount), start_angle=float(angles[0]),

@@ -450,7 +450,14 @@ class Scenario(_Strict):
     goal_tolerance: tuple[float, float] = Field(
         (0.05, 5.0), description="Arrival tolerance (position [m], heading [deg])."
     )
-    duration: float = Field(120.0, gt=0, description="Longest run [s].")
+    duration: float = Field(
+        120.0, gt=0, description="Longest run [s]: the time limit (status timeout)."
+    )
+    settle_time: float | None = Field(
+        None, ge=0, description="End the run this long [s] after the reference trajectory "
+        "ends (status timeout), when that comes before duration (default: none, duration "
+        "governs)."
+    )  # fmt: skip
     dt: float = Field(0.01, gt=0, description="Simulation and control step [s].")
     resources: ResourceSpec = Field(
         default_factory=ResourceSpec, description="Resource limits (raise them on purpose)."
@@ -572,10 +579,10 @@ class Scenario(_Strict):
             )
         return self
 
-    @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
+    @field_validator("start", "goals", "goal_tolerance", "duration", "dt", "settle_time")
     @classmethod
     def _finite(cls, value):
-        if not all(math.isfinite(number) for number in _numbers(value)):
+        if value is not None and not all(math.isfinite(number) for number in _numbers(value)):
             raise ValueError(f"must be finite (got {value})")
         return value
 
