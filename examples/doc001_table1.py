@@ -22,15 +22,15 @@ The inputs we use, and how we found them
 θ₀ that turns by Δθ, the chord from start to end points along θ₀ + Δθ/2 (the inscribed-angle
 theorem): Δθ = −69.8° requires the end point at bearing −34.9° from heading 0°, but the printed
 (9.56, −7.42) lies at −37.8°, far outside the rounding of two decimals (±0.04°). A least-squares
-fit of ω_R, ω_L and T of the exact arc to the four printed rows (:func:`fit_exact_arc`,
+fit of ω_R, ω_L and T of the exact arc to the four printed rows (``fit_exact_arc``,
 scipy.optimize.least_squares, 1° of θ weighted like 1 m) indeed leaves position residuals of up
 to 0.59 m (turn −69.86°); letting the turn drift to −72.9° still leaves 0.28 m.
 
 The printed column *is* reproduced, to every printed digit of all four rows, by 12 steps of
 H = 0.5 s of Euler's method that updates the heading first and then moves along the *new*
-heading (θ_{k+1} = θ_k + Hω, x_{k+1} = x_k + Hv·cos θ_{k+1}, …; :func:`document_actual`): its
+heading (θ_{k+1} = θ_k + Hω, x_{k+1} = x_k + Hv·cos θ_{k+1}, …; ``document_actual``): its
 chord points along θ₀ + (n + 1)Δθ/(2n), which is −37.81° for n = 12 steps and no other n. Fitting
-v and ω of that scheme (:func:`fit_document_actual`) and rounding to wheel speeds in 0.01 rad/s
+v and ω of that scheme (``fit_document_actual``) and rounding to wheel speeds in 0.01 rad/s
 gives the inputs used throughout:
 
     ω_L = 222.77 rad/s, ω_R = 206.53 rad/s (document order: u₁ = ω_R, u₂ = ω_L), T = 6 s,
@@ -128,7 +128,7 @@ class Row:
     printed_actual, printed_simpson : float
         Document 001's Table I values (as printed).
     document_actual : float
-        Our reconstruction of the printed "Actual" (:func:`document_actual`).
+        Our reconstruction of the printed "Actual" (``document_actual``).
     exact : float
         The exact closed-form arc ("actual").
     methods : dict
@@ -180,7 +180,7 @@ def _printed_residuals(end_pose, metres_per_degree: float = 0.1) -> np.ndarray:
 
 
 def fit_document_actual() -> tuple[float, float]:
-    """Fit v [m/s] and ω [rad/s] of :func:`document_actual` (12 steps of H) to Table I."""
+    """Fit v [m/s] and ω [rad/s] of ``document_actual`` (12 steps of H) to Table I."""
     fit = least_squares(
         lambda p: _printed_residuals(lambda h: document_actual(h, p[0], p[1])),
         x0=[2.0, -0.2],

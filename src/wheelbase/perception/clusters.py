@@ -20,8 +20,8 @@ The rule, step by step:
    disc at any range, up to the beam spacing and the range noise. Clusters with ρ >
    ``max_radius`` (or spanning half the view and more) are dropped: long unmapped walls are
    left to the costmap.
-5. The measurement covariance is the points' spread over their number plus the floor
-   ``measurement_std``²: R = C/n + σ² I, with C the points' covariance (divided by n).
+5. The measurement covariance is the points' spread over their number plus the floor σ²
+   (σ = ``measurement_std``): R = C/n + σ² I, with C the points' covariance (divided by n).
 """
 
 from __future__ import annotations
