@@ -51,3 +51,43 @@ def test_quick_build_has_no_warning_and_documents_the_api(tmp_path):
     gallery = {path.stem for path in (out / "auto_examples").glob("*.html")}
     scripts = {path.stem for path in (DOCS.parent / "examples").glob("*.py")}
     assert scripts - {"gym_ppo"} <= gallery
+
+
+# Nav2's AMCL parameters (nav2_amcl, the parameters page of the Nav2 documentation)
+NAV2_AMCL = {
+    "alpha1", "alpha2", "alpha3", "alpha4", "alpha5", "base_frame_id", "beam_skip_distance",
+    "beam_skip_error_threshold", "beam_skip_threshold", "do_beamskip", "global_frame_id",
+    "lambda_short", "laser_likelihood_max_dist", "laser_max_range", "laser_min_range",
+    "laser_model_type", "set_initial_pose", "initial_pose", "max_beams", "max_particles",
+    "min_particles", "odom_frame_id", "pf_err", "pf_z", "recovery_alpha_fast",
+    "recovery_alpha_slow", "resample_interval", "robot_model_type", "save_pose_rate",
+    "sigma_hit", "tf_broadcast", "transform_tolerance", "update_min_a", "update_min_d", "z_hit",
+    "z_max", "z_rand", "z_short", "scan_topic", "map_topic",
+}  # fmt: skip
+
+
+def test_the_nav2_amcl_mapping_names_real_parameters_on_both_sides():
+    # the page said AMCL takes "the same names" as nav2_amcl: it lists each name now, and a name
+    # said to be the same must be the same
+    import re
+
+    from wheelbase.localization import AMCL, OdometryMotion
+    from wheelbase.sensors import Lidar
+
+    text = (DOCS / "coming_from.rst").read_text()
+    assert "the same\nnames" not in text and "(the same names" not in text
+    table = text[text.index("``nav2_amcl`` parameters and their names") :]
+    rows = re.findall(r"^(``\S.*?)\s{2,}(``.*?``)\s{2,}(.*)$", table, re.M)
+    assert len(rows) >= 15
+    owners = {"motion": OdometryMotion, "lidar": Lidar}
+    for nav2, ours, note in rows:
+        nav2_names = re.findall(r"``(\w+)``", nav2)
+        our_names = re.findall(r"``([\w.]+)``", ours)
+        assert set(nav2_names) <= NAV2_AMCL | {"nav2_amcl"}, nav2
+        owner = ""
+        for name in our_names:  # "motion.alpha1 … alpha4": alpha4 is the motion model's too
+            owner, _, attribute = name.rpartition(".") if "." in name else (owner, ".", name)
+            cls = owners.get(owner, AMCL)
+            assert attribute in cls.__dataclass_fields__ or hasattr(cls, attribute), name
+        if note.startswith("same name"):
+            assert [n.split(".")[-1] for n in our_names] == nav2_names[: len(our_names)]
