@@ -51,3 +51,20 @@ def test_every_python_block_runs(page, tmp_path, monkeypatch):
         code = compile(block, f"{page.name} block {number}", "exec")
         exec(code, namespace)  # the documentation's own examples
     plt.close("all")
+
+
+_BLOCK = re.compile(r"^\.\. code-block:: \w+\n((?:[ \t]*\n|   .*\n)+)", re.M)
+CODE_WIDTH = 79
+"""Columns a code block of the docs may use: wider lines overflow the theme's text column."""
+
+
+def test_no_code_block_of_the_docs_is_wider_than_the_page():
+    # the localise page's blocks ran 94 characters wide and scrolled sideways
+    wide = []
+    for page in sorted((ROOT / "docs").rglob("*.rst")):
+        if {"_build", "auto_examples"} & set(page.parts):
+            continue
+        for block in _BLOCK.findall(page.read_text(encoding="utf-8")):
+            wide += [f"{page.name}: {line.strip()}" for line in block.splitlines()
+                     if len(line) - 3 > CODE_WIDTH]  # fmt: skip
+    assert not wide, "\n".join(wide)
