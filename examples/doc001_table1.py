@@ -3,7 +3,8 @@ Document 001, Table I: the trajectory model evaluated with Simpson's 1/3 rule, r
 =========================================================================================
 
 Run ``python examples/doc001_table1.py [--out doc001_table1.csv] [--overwrite]``: prints the
-table (rich) and writes it to CSV, one row per initial heading and variable.
+table (rich), writes it to CSV, one row per initial heading and variable, and draws the four
+arcs with the printed end points beside them (``doc001_table1.png``).
 
 What the document gives
 -----------------------
@@ -348,6 +349,43 @@ def print_table(rows: list[Row]) -> None:
     Console().print(table)
 
 
+def plot_arcs(path: Path, *, overwrite: bool = False) -> Path:
+    """Draw the exact arc from each initial heading with the printed "Actual" and "Simpson's"
+    end points and our reconstruction of "Actual" (``document_actual``); write ``path`` (PNG).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from wheelbase import simulate
+    from wheelbase.plot import save_figure
+
+    v, omega = body_speeds(*WHEEL_SPEEDS)
+    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+    ax = fig.add_subplot()
+    for k, heading in enumerate(HEADINGS_DEG):
+        arc = simulate(ROBOT, [0.0, 0.0, math.radians(heading)], WHEEL_SPEEDS, DURATION_S,
+                       STEP_S / 20, "exact")  # fmt: skip
+        colour = f"C{k}"
+        ax.plot(*arc.poses[:, :2].T, color=colour, label=f"exact arc from {heading:g}°")
+        printed = PRINTED[heading]
+        ax.plot(*printed["actual"][:2], "o", mfc="none", color=colour, ms=9)
+        ax.plot(*printed["simpson"][:2], "s", mfc="none", color=colour, ms=7)
+        ax.plot(*document_actual(heading, v, omega)[:2], "x", color=colour, ms=8)
+    ax.plot([], [], "ko", mfc="none", label='printed "Actual"')
+    ax.plot([], [], "ks", mfc="none", label='printed "Simpson\'s"')
+    ax.plot([], [], "kx", label="heading-first Euler (reproduces the printed Actual)")
+    ax.plot(0, 0, "k+", ms=10)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("Document 001, Table I: 6 s at (ω_L, ω_R) = (222.77, 206.53) rad/s")
+    ax.legend(fontsize=7, loc="lower left")
+    return save_figure(fig, path, overwrite=overwrite)
+
+
 def main(argv: list[str] | None = None) -> list[Row]:
     """Print Table I, write it to CSV and return its rows."""
     parser = argparse.ArgumentParser(description="Document 001, Table I, reproduced")
@@ -371,7 +409,8 @@ def main(argv: list[str] | None = None) -> list[Row]:
     )
     print(f"Simpson: largest position error {worst_simpson:.2e} m <= bound {bound:.2e} m")
     path = write_csv(rows, args.out, overwrite=args.overwrite)
-    print(f"wrote {path}")
+    figure = plot_arcs(args.out.with_suffix(".png"), overwrite=args.overwrite)
+    print(f"wrote {path} and {figure}")
     return rows
 
 
