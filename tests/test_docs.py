@@ -91,3 +91,20 @@ def test_the_nav2_amcl_mapping_names_real_parameters_on_both_sides():
             assert attribute in cls.__dataclass_fields__ or hasattr(cls, attribute), name
         if note.startswith("same name"):
             assert [n.split(".")[-1] for n in our_names] == nav2_names[: len(our_names)]
+
+
+def test_the_localise_page_says_what_was_fitted_on_which_robot():
+    # it said one parameter set "serves every robot" with no figure for any robot but 1
+    import re
+
+    text = (DOCS / "tasks" / "localise.rst").read_text()
+    assert "fitted on **robot 1 of data set 6** alone" in text
+    rows = dict(
+        re.findall(r"^(robot \d)[^\n]*?\s{2,}([\d.]+ m\s+[\d.]+ m\s+[\d.]+ m)$", text, re.M)
+    )
+    assert set(rows) == {"robot 1", "robot 2", "robot 3"}
+    assert rows["robot 2"].split()[::2] == ["0.150", "0.125", "0.130"]
+    assert rows["robot 3"].split()[::2] == ["0.108", "0.091", "0.093"]
+    # robot 1's row is the figures the page reports for it
+    ekf, ukf, pf = rows["robot 1"].split()[::2]
+    assert f"EKF {ekf} m RMSE" in text and f"UKF {ukf} m" in text and f"PF {pf} m" in text
