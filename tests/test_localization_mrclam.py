@@ -8,14 +8,12 @@ import pytest
 from typer.testing import CliRunner
 
 from wheelbase.cli import app
+from wheelbase.datasets.mrclam import find_mrclam_files, load_landmarks, load_measurements
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import compose
 from wheelbase.localization.mrclam import (
     CameraRange,
     _retrodict,
-    find_mrclam_files,
-    load_landmarks,
-    load_measurements,
     localize,
 )
 from wheelbase.sensors import range_bearing
