@@ -21,9 +21,11 @@ For each scan, in time order:
    Each candidate's submap (its neighbours along the path) is searched by branch and bound
    over the wide window ``loop_linear_window`` × ``loop_angular_window`` around the current
    estimate, pruned below ``loop_min_score``; a found pose is refined by ICP and gated: at least
-   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance and an RMS
-   point-to-line distance at most ``loop_max_rms``. An accepted closure is an edge between
-   the candidate and the current keyframe, and the graph is optimised
+   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance, an RMS
+   point-to-line distance at most ``loop_max_rms``, and a correction of the current estimate
+   within ``loop_max_correction`` of the path driven since the candidate. An accepted
+   closure is an edge between the candidate and the current keyframe, and the graph is
+   optimised
    (:func:`optimize_pose_graph`, dynamic covariance scaling on the loop edges against false
    closures). The scans after the last keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
@@ -71,6 +73,10 @@ class LidarSlam:
     prior_std : tuple of float
         Standard deviations of the prediction as a prior of the match (translation [m],
         rotation [rad]).
+    odometry_window, odometry_prior_std : tuple of float
+        The search window's half-widths and the prior when the prediction is odometry
+        (translation [m], rotation [rad]): odometry is good over one scan, and a narrow
+        window cannot pick a corridor's twin.
     keyframe_distance, keyframe_angle : float
         Motion that makes a keyframe [m], [rad].
     submap_keyframes : int
@@ -99,6 +105,10 @@ class LidarSlam:
         Keyframes on each side of a candidate in its submap.
     loop_std : tuple of float
         Standard deviations of a loop edge (x [m], y [m], θ [rad]).
+    loop_max_correction : tuple of float
+        A closure may move the current keyframe by at most a + b·(path length between the
+        candidate and it) [m, m/m]: drift grows with the distance driven, and a repetitive
+        building (a maze's corridors) offers twins farther than that.
     robust_scale : float
         Φ of dynamic covariance scaling on the loop edges.
     optimize_every : int
@@ -113,6 +123,8 @@ class LidarSlam:
     max_range: float = 30.0
     min_score: float = 0.2
     prior_std: tuple[float, float] = (0.2, math.radians(15.0))
+    odometry_window: tuple[float, float] = (0.3, math.radians(10.0))
+    odometry_prior_std: tuple[float, float] = (0.05, math.radians(3.0))
     keyframe_distance: float = 0.2
     keyframe_angle: float = math.radians(10.0)
     submap_keyframes: int = 12
@@ -129,6 +141,7 @@ class LidarSlam:
     loop_max_rms: float = 0.05
     loop_submap: int = 6
     loop_std: tuple[float, float, float] = (0.05, 0.05, math.radians(1.0))
+    loop_max_correction: tuple[float, float] = (0.5, 0.1)
     robust_scale: float = 1.0
     optimize_every: int = 1
     mapper: OccupancyMapper = field(default_factory=OccupancyMapper)
@@ -229,8 +242,15 @@ class LidarSlam:
                 table, reference = rebuild_submap()
                 cov = None
             else:
-                result = self.matcher.match(table, reference, points[k], guess,
-                                            prior_std=self.prior_std)  # fmt: skip
+                if odometry is not None:
+                    result = self.matcher.match(
+                        table, reference, points[k], guess, prior_std=self.odometry_prior_std,
+                        linear_window=self.odometry_window[0],
+                        angular_window=self.odometry_window[1],
+                    )  # fmt: skip
+                else:
+                    result = self.matcher.match(table, reference, points[k], guess,
+                                                prior_std=self.prior_std)  # fmt: skip
                 if result is None or result.score < self.min_score:
                     stats["failed_matches"] += 1
                     pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
