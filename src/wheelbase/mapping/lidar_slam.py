@@ -73,10 +73,6 @@ class LidarSlam:
     prior_std : tuple of float
         Standard deviations of the prediction as a prior of the match (translation [m],
         rotation [rad]).
-    odometry_window, odometry_prior_std : tuple of float
-        The search window's half-widths and the prior when the prediction is odometry
-        (translation [m], rotation [rad]): odometry is good over one scan, and a narrow
-        window cannot pick a corridor's twin.
     keyframe_distance, keyframe_angle : float
         Motion that makes a keyframe [m], [rad].
     submap_keyframes : int
@@ -123,8 +119,6 @@ class LidarSlam:
     max_range: float = 30.0
     min_score: float = 0.2
     prior_std: tuple[float, float] = (0.2, math.radians(15.0))
-    odometry_window: tuple[float, float] = (0.3, math.radians(10.0))
-    odometry_prior_std: tuple[float, float] = (0.05, math.radians(3.0))
     keyframe_distance: float = 0.2
     keyframe_angle: float = math.radians(10.0)
     submap_keyframes: int = 12
@@ -211,10 +205,9 @@ class LidarSlam:
 
         def rebuild_submap():
             first_kf = max(0, len(kf_scan) - self.submap_keyframes)
-            world = np.vstack([_transform(kf_pose[k], points[kf_scan[k]])
-                               for k in range(first_kf, len(kf_scan))])  # fmt: skip
-            return (LikelihoodTable.build(world, self.matcher.resolution, self.matcher.sigma),
-                    PointReference.build(world))  # fmt: skip
+            keys = range(first_kf, len(kf_scan))
+            world = np.vstack([_transform(kf_pose[k], points[kf_scan[k]]) for k in keys])
+            return self._tables(world)
 
         def add_keyframe(scan: int, p: np.ndarray, cov: np.ndarray | None) -> None:
             kf_scan.append(scan)
@@ -242,15 +235,10 @@ class LidarSlam:
                 table, reference = rebuild_submap()
                 cov = None
             else:
-                if odometry is not None:
-                    result = self.matcher.match(
-                        table, reference, points[k], guess, prior_std=self.odometry_prior_std,
-                        linear_window=self.odometry_window[0],
-                        angular_window=self.odometry_window[1],
-                    )  # fmt: skip
-                else:
-                    result = self.matcher.match(table, reference, points[k], guess,
-                                                prior_std=self.prior_std)  # fmt: skip
+                # the same window with odometry: a narrower one (±0.3 m, ±10°, prior 5 cm)
+                # was measured worse on the maze (ATE 0.095 m against 0.016 m)
+                result = self.matcher.match(table, reference, points[k], guess,
+                                            prior_std=self.prior_std)  # fmt: skip
                 if result is None or result.score < self.min_score:
                     stats["failed_matches"] += 1
                     pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
@@ -336,6 +324,13 @@ class LidarSlam:
         return self.mapper.build(poses, log.ranges, log.angles, mount=log.mount,
                                  sensor_max_range=log.max_range, **kwargs)  # fmt: skip
 
+    def _tables(self, world):
+        """The matcher's tables of a submap's points. (Penalising the points that land in
+        the free space the submap's scans saw was measured worse on Intel: local relations
+        0.061 m against 0.056 m, loop relations 2.9 m against 1.7 m.)"""
+        table = LikelihoodTable.build(world, self.matcher.resolution, self.matcher.sigma)
+        return table, PointReference.build(world)
+
     def _edge_information(self, cov: np.ndarray, theta: float) -> np.ndarray:
         """Ω of an edge from a world-frame covariance of the new pose: rotated into the pose's
         frame (that of the residual Log(Z⁻¹X_i⁻¹X_j)), floored at ``min_std``."""
@@ -369,10 +364,9 @@ class LidarSlam:
             stats["loop_candidates"] += 1
             lo, hi = max(0, c - self.loop_submap), min(j - self.loop_min_separation,
                                                        c + self.loop_submap)  # fmt: skip
-            world = np.vstack([_transform(kf_pose[i], points[kf_scan[i]])
-                               for i in range(lo, hi + 1)])  # fmt: skip
-            table = LikelihoodTable.build(world, matcher.resolution, matcher.sigma)
-            reference = PointReference.build(world)
+            keys = range(lo, hi + 1)
+            world = np.vstack([_transform(kf_pose[i], points[kf_scan[i]]) for i in keys])
+            table, reference = self._tables(world)
             found = matcher.match(table, reference, points[kf_scan[j]], current,
                                   linear_window=self.loop_linear_window,
                                   angular_window=self.loop_angular_window,
