@@ -321,6 +321,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
     from wheelbase.scenario_terrain import (
         ContactsSpec,
         PayloadSpec,
+        RasterSpec,
         RegionSpec,
         SoilSpec,
         SurfaceSpec,
@@ -337,6 +338,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
         *keys(SurfaceSpec, ("terrain", "surface")),
         *keys(SoilSpec, ("terrain", "surface", "soil")),
         *keys(RegionSpec, region),
+        *keys(RasterSpec, ("terrain", "raster")),
         *keys(SurfaceSpec, (*region, "surface")),
         *keys(PayloadSpec, ("robot", "payload")),
         *keys(ContactsSpec, ("robot", "contacts")),
