@@ -73,6 +73,9 @@ class LidarSlam:
     prior_std : tuple of float
         Standard deviations of the prediction as a prior of the match (translation [m],
         rotation [rad]).
+    odometry_gate : tuple of float
+        With odometry, a match farther than this from the odometry's prediction (translation
+        [m], rotation [rad]) is not believed: the prediction is kept (``failed_matches``).
     keyframe_distance, keyframe_angle : float
         Motion that makes a keyframe [m], [rad].
     submap_keyframes : int
@@ -119,6 +122,7 @@ class LidarSlam:
     max_range: float = 30.0
     min_score: float = 0.2
     prior_std: tuple[float, float] = (0.2, math.radians(15.0))
+    odometry_gate: tuple[float, float] = (0.05, math.radians(2.0))
     keyframe_distance: float = 0.2
     keyframe_angle: float = math.radians(10.0)
     submap_keyframes: int = 12
@@ -239,6 +243,11 @@ class LidarSlam:
                 # was measured worse on the maze (ATE 0.095 m against 0.016 m)
                 result = self.matcher.match(table, reference, points[k], guess,
                                             prior_std=self.prior_std)  # fmt: skip
+                if result is not None and odometry is not None:
+                    jump = relative_pose(guess, result.pose)
+                    if (np.hypot(jump[0], jump[1]) > self.odometry_gate[0]
+                            or abs(jump[2]) > self.odometry_gate[1]):  # fmt: skip
+                        result = None  # farther from the odometry than it drifts in a scan
                 if result is None or result.score < self.min_score:
                     stats["failed_matches"] += 1
                     pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
