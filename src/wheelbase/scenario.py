@@ -26,7 +26,13 @@ from wheelbase.scenario_terrain import (
     TerrainSpec,
     TractionSpec,
 )
-from wheelbase.scenario_world import FleetRobotSpec, RecoverySpec, ReplanningSpec, WorldSpec
+from wheelbase.scenario_world import (
+    FleetRobotSpec,
+    RecoverySpec,
+    ReplanningSpec,
+    WorldSpec,
+    goal_alias,
+)
 
 __all__ = [
     "EMPTY_MAP_MARGIN",
@@ -508,11 +514,7 @@ class Scenario(_Strict):
     @model_validator(mode="before")
     @classmethod
     def _goal_alias(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "goal" in data:
-            if "goals" in data:
-                raise ValueError("give either goal or goals, not both")
-            data = dict(data)
-            data["goals"] = [data.pop("goal")]
+        data = goal_alias(data)
         if isinstance(data, dict) and data.get("fleet"):
             fleet = data["fleet"]
             if "start" in data or "goals" in data:
