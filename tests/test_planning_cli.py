@@ -189,9 +189,9 @@ def test_plan_on_a_geojson_world_measures_clearance_on_the_polygons(tmp_path):
 
 
 def test_plan_takes_a_bundled_case_and_the_search_settings(tmp_path):
-    # A slot 1.15 car lengths long needs moves of centimetres: with the planner's default bins
-    # the search is exhausted at once; with the case's settings, from --case or as flags, the
-    # car parks in 13 moves, the same path both ways, ending on the case's goal.
+    # A slot 1.15 car lengths long needs moves of centimetres: with the case's settings, from
+    # --case or as flags, the car parks in 13 moves, the same path both ways, ending on the
+    # case's goal; with the planner's default (coarser) bins, by moves to contact too.
     from wheelbase.planning.maps import bundled_scenarios
 
     case = next(sc for sc in bundled_scenarios() if sc.name == "parallel_115_in")
@@ -210,7 +210,7 @@ def test_plan_takes_a_bundled_case_and_the_search_settings(tmp_path):
         result = runner.invoke(app, ["plan", *args, "--out", str(tmp_path / name)])
         assert result.exit_code == 0, result.output
         metrics[name] = json.loads((tmp_path / name / "metrics.json").read_text())
-    assert metrics["defaults"]["success"] is False
+    assert metrics["defaults"]["success"] and metrics["defaults"]["cusps"] >= 5
     assert metrics["case"]["success"] and metrics["case"]["cusps"] >= 5
     assert metrics["flags"]["length_m"] == pytest.approx(metrics["case"]["length_m"], abs=1e-9)
     with (tmp_path / "case" / "path.csv").open() as handle:
