@@ -26,7 +26,17 @@ from scipy.ndimage import distance_transform_edt
 
 from wheelbase.polyline import distance_to_polyline
 
-__all__ = ["Encounter", "encounter", "footprint_gap", "inflated_costmap", "local_view"]
+__all__ = [
+    "CASES",
+    "Encounter",
+    "busy_view",
+    "crowd_case",
+    "crowd_suite",
+    "encounter",
+    "footprint_gap",
+    "inflated_costmap",
+    "local_view",
+]
 
 
 @dataclass(frozen=True)
@@ -260,3 +270,127 @@ def _densify(polygon: np.ndarray, step: float = 0.01) -> np.ndarray:
         n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
         points.append(a + np.arange(n)[:, None] / n * (b - a))
     return np.concatenate(points)
+
+
+def busy_view(pose: np.ndarray):
+    """A perception view around ``pose``: a 3 × 3 m costmap (0.05 m cells) with a box 1 m
+    ahead, and 20 tracks within 3 m walking at 0.5 m/s."""
+    x, y = float(pose[0]), float(pose[1])
+    costmap = inflated_costmap([(x + 1.0, y - 0.2, x + 1.3, y + 0.1)],
+                               (x - 1.5, y - 1.5, x + 1.5, y + 1.5))  # fmt: skip
+    rng = np.random.default_rng(5)
+    angle = rng.uniform(-np.pi, np.pi, 20)
+    where = pose[:2] + rng.uniform(1.0, 3.0, (20, 1)) * np.column_stack(
+        [np.cos(angle), np.sin(angle)]
+    )
+    heading = rng.uniform(-np.pi, np.pi, 20)
+    velocity = 0.5 * np.column_stack([np.cos(heading), np.sin(heading)])
+    return local_view(where, velocity, np.full(20, 0.3), 0.0, costmap=costmap)
+
+
+CASES = ("head_on", "crossing", "overtake", "group", "box")
+"""The encounters of :func:`crowd_case`."""
+
+
+def crowd_case(name: str, seed: int) -> dict[str, Any]:
+    """One encounter on the 8 m straight path from (0, 0) to (8, 0), drawn from ``seed``.
+
+    - ``head_on``: a disc (r 0.25–0.35 m) coming down the path at 0.4–0.8 m/s, up to 0.2 m off
+      it;
+    - ``crossing``: a disc crossing the path at 0.5–1.0 m/s from either side, timed to reach it
+      where the robot would be at 0.5 m/s (± 1 s);
+    - ``overtake``: a slow disc (0.1–0.2 m/s) ahead on the path, going the same way;
+    - ``group``: three discs coming from ahead at 0.3–0.6 m/s, spread over ±1 m;
+    - ``box``: a 0.4–0.8 m box on the path 2.5–4 m ahead, in the costmap.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`CASES`.
+    seed : int
+        Seed of the draw.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`encounter` (``discs``, ``costmap``, ``boxes``).
+    """
+    rng = np.random.default_rng([seed, CASES.index(name)])
+    if name == "head_on":
+        speed, radius = rng.uniform(0.4, 0.8), rng.uniform(0.25, 0.35)
+        return {"discs": (np.array([[rng.uniform(5.0, 7.0), rng.uniform(-0.2, 0.2)]]),
+                          np.array([[-speed, 0.0]]), np.array([radius]))}  # fmt: skip
+    if name == "crossing":
+        speed, side = rng.uniform(0.5, 1.0), rng.choice([-1.0, 1.0])
+        meet = rng.uniform(2.5, 5.0)  # where it crosses the path [m]
+        arrive = meet / 0.5 + rng.uniform(-1.0, 1.0)  # when [s]
+        return {"discs": (np.array([[meet, -side * speed * arrive]]),
+                          np.array([[0.0, side * speed]]), np.array([0.3]))}  # fmt: skip
+    if name == "overtake":
+        return {"discs": (np.array([[rng.uniform(1.5, 2.5), 0.0]]),
+                          np.array([[rng.uniform(0.1, 0.2), 0.0]]), np.array([0.3]))}  # fmt: skip
+    if name == "group":
+        y = rng.uniform(-1.0, 1.0, 3)
+        x = rng.uniform(5.0, 7.5, 3)
+        speed = rng.uniform(0.3, 0.6, 3)
+        order = np.argsort(y)
+        y = y[order] + np.array([-0.35, 0.0, 0.35])  # keep the discs apart
+        return {"discs": (np.column_stack([x, y]), np.column_stack([-speed, np.zeros(3)]),
+                          np.full(3, 0.3))}  # fmt: skip
+    side = rng.uniform(0.4, 0.8)
+    x = rng.uniform(2.5, 4.0)
+    box = (x, -side / 2, x + side, side / 2)
+    return {"costmap": inflated_costmap([box], (-1.0, -3.0, 9.0, 3.0)), "boxes": [box]}
+
+
+def crowd_suite(
+    make: Any, seeds: int, footprint: Any, duration: float = 30.0, cases: tuple = CASES
+) -> dict[str, Any]:
+    """The ``cases`` (default all of :data:`CASES`) over ``seeds`` seeds with fresh controllers
+    from ``make()``: success (no contact, within 0.2 m of the path's end), the least gap and the
+    time used.
+
+    Parameters
+    ----------
+    make : callable
+        ``make(seed)`` -> a controller.
+    seeds : int
+        Seeds per case.
+    footprint : Footprint
+        The robot outline.
+    duration : float
+        Time limit [s] of each encounter.
+    cases : tuple of str
+        Which encounters.
+
+    Returns
+    -------
+    dict
+        Per case: ``success_rate``, ``collisions``, ``min_gap_m`` (least), ``median_gap_m``,
+        ``stops`` (calls that found no collision-free command), ``wall_s``.
+    """
+    import time
+
+    path_points = np.array([[0.0, 0.0], [8.0, 0.0]])
+    from wheelbase.planning import PlannedPath
+
+    path = PlannedPath.from_points(path_points)
+    out: dict[str, Any] = {}
+    for name in cases:
+        gaps, successes, stops, begin = [], 0, 0, time.perf_counter()
+        for seed in range(seeds):
+            result = encounter(make(seed), path, (0.0, 0.0, 0.0), footprint,
+                               duration=duration, **crowd_case(name, seed))  # fmt: skip
+            gaps.append(result.min_gap)
+            successes += int(result.min_gap > 0.0 and result.distance_to_end <= 0.2)
+            stops += sum(status == "all_collide" for status in result.statuses)
+        out[name] = {
+            "seeds": seeds,
+            "success_rate": successes / seeds,
+            "collisions": int(sum(gap <= 0.0 for gap in gaps)),
+            "min_gap_m": float(np.min(gaps)),
+            "median_gap_m": float(np.median(gaps)),
+            "stops": int(stops),
+            "wall_s": round(time.perf_counter() - begin, 1),
+        }
+    return out

@@ -394,6 +394,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
     from wheelbase.scenario_terrain import (
         ContactsSpec,
         PayloadSpec,
+        RasterSpec,
         RegionSpec,
         SoilSpec,
         SurfaceSpec,
@@ -410,6 +411,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
         *keys(SurfaceSpec, ("terrain", "surface")),
         *keys(SoilSpec, ("terrain", "surface", "soil")),
         *keys(RegionSpec, region),
+        *keys(RasterSpec, ("terrain", "raster")),
         *keys(SurfaceSpec, (*region, "surface")),
         *keys(PayloadSpec, ("robot", "payload")),
         *keys(ContactsSpec, ("robot", "contacts")),

@@ -800,6 +800,13 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
             beside = path.parent / map_name
             if beside.exists():
                 data = {**data, "map": str(beside)}
+        terrain = data.get("terrain")
+        raster = terrain.get("raster") if isinstance(terrain, dict) else None
+        image = raster.get("image") if isinstance(raster, dict) else None
+        if isinstance(image, str) and not Path(image).is_absolute():  # as the map
+            beside = path.parent / image
+            if beside.exists():
+                data = {**data, "terrain": {**terrain, "raster": {**raster, "image": str(beside)}}}
     try:
         return Scenario.model_validate(data)
     except ValidationError as error:

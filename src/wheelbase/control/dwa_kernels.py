@@ -21,10 +21,13 @@ import math
 import numba
 import numpy as np
 
+from wheelbase.control.footprint_field import clearance_at
 from wheelbase.control.obstacle_critics import (
+    HOLD_STEP,
     PerceptionArrays,
     costmap_cost_at,
     costmap_costs,
+    disk_reach,
     track_cost_at,
     track_costs,
 )
@@ -163,10 +166,12 @@ def dwa_kernel(
     the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
     ``disks`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
     Writes ``scores`` (S, 8) and ``collided`` (S,)."""
-    rows, cols = df.shape[0], df.shape[1]
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
+    inv_res = 1.0 / res
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
+    reach = disk_reach(disks)
+    hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(samples.shape[0]):
         v, w = samples[i, 0], samples[i, 1]
         x, y, th = 0.0, 0.0, theta
@@ -181,20 +186,8 @@ def dwa_kernel(
             th = theta + w * tau
             c, s = math.cos(th), math.sin(th)
             if has_map:
-                clearance = 1.0e300
-                for k in range(circles.shape[0]):
-                    px = x + c * circles[k, 0] - s * circles[k, 1]
-                    py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) / res)
-                    row = math.floor((py - y0) / res)
-                    if row < 0 or row >= rows or col < 0 or col >= cols:
-                        hit = True
-                        clearance = 0.0
-                        continue
-                    clear = df[row, col] - circles[k, 2] - margin
-                    if clear <= 0.0:
-                        hit = True
-                    clearance = min(clearance, clear)
+                clearance, bad = clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin)
+                hit = hit or bad
                 if 0.0 < clearance < inflation:
                     gap = inflation - clearance
                     soft_map += gap * gap
@@ -204,16 +197,16 @@ def dwa_kernel(
                 hit = hit or bad
             if has_tracks:
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
                 soft_dyn += soft
                 hit = hit or bad
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps
+                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
-                soft_dyn += soft
+                soft_dyn += hold_weight * soft
                 hit = hit or bad
         # the forward point, never past the section's end (it would pull the end short of it)
         ahead = min(forward, math.hypot(x - end[0], y - end[1]))
@@ -340,7 +333,8 @@ def dwa_scores_numpy(
         scores[:, 4] = np.mean(soft, axis=1)
         collided |= hit.any(axis=1)
     if seen.has_tracks:
-        soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation)
+        soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation,
+                                HOLD_STEP / dt)  # fmt: skip
         scores[:, 6] = np.sum(soft, axis=1) / steps  # the held checks added, as the kernel
         collided |= hit.any(axis=1)
     end = poses[:, -1]

@@ -16,7 +16,7 @@ ICRA 2017; the form of Nav2's MPPI controller):
 6. U ← Savitzky–Golay(Σ w_i V_i) along the horizon, clipped; the command is U[0].
 
 When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
-warm start is cleared and :attr:`MPPI.status` is ``"all_collide"``.
+warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"``.
 
 With a ``perception=`` view (a :class:`wheelbase.perception.LocalView`: costmap, tracks of
 moving obstacles, time) the critics also score the costmap and the tracks predicted over the
@@ -84,9 +84,9 @@ from wheelbase.control.mppi_bounds import (
     command_bounds,
     model_kind,
 )
-from wheelbase.control.mppi_critics import MPPICritics
+from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
-from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel
+from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
 from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
@@ -183,7 +183,7 @@ class MPPI:
         Spacing [m] of the densified path the path critics use.
     goal_tolerance : (float, float)
         (position [m], heading [rad]): within both of the path's end the command is a stop and
-        :attr:`status` is ``"arrived"``.
+        :attr:`MPPIPlan.status` is ``"arrived"``.
     cusp_tolerance : float
         Distance [m] to a cusp at which the next path section becomes active.
     jax_float64 : bool
@@ -373,15 +373,8 @@ class MPPI:
         >>> MPPI.from_gains(Unicycle(), samples=100, obstacle=30.0).critics.obstacle
         30.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, MPPICritics)
         critic_names = {f.name for f in dataclass_fields(MPPICritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = model_kind(model)
@@ -480,7 +473,7 @@ class MPPI:
         noise : array_like, shape (K, T, m), optional
             The perturbations ε to use instead of drawing them (cross-backend checks).
         perception : LocalView, optional
-            Costmap, tracks and time (see :meth:`__call__`).
+            Costmap, tracks and time (see ``MPPI.__call__``).
         t : float, optional
             The time [s] of the call (default: the view's time: no latency).
 
@@ -581,7 +574,8 @@ class MPPI:
         costs = np.empty(self.samples)
         controls = np.empty((self.samples, self.horizon_steps, self.nu))
         local, mean, lo, hi, scale, window, info, last, weights = args
-        mppi_kernel(
+        run_kernel(
+            mppi_kernel, self.samples * self.horizon_steps,
             local, mean, lo, hi, scale, window, info, last, buffer, has_noise, held_from,
             self.noise_std,
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,

@@ -4,33 +4,35 @@ Every critic adds a non-negative cost to each sampled rollout; :class:`~wheelbas
 turns the costs into weights exp(−(S − S_min)/λ). With T the horizon steps, p_t the rollout pose
 after step t, u_t the sampled command and dt the step:
 
-==================  ==============================================================  ============
-critic (weight)     cost of one rollout                                              weight unit
-==================  ==============================================================  ============
-``path``            mean over checked steps of d, d = distance from p_t to the       1/m
-                    nearest point of the local path window (every ``path_stride``)
-``path_align``      mean over the same steps of wrap(θ_t − θ_path)², θ_path the      1/rad²
-                    travel heading of the robot at that nearest window point
-``follow``          path length left in the window past the window point nearest     1/m
-                    p_T (progress along the path, without cutting corners)
-``goal``            mean over t of |p_t − goal| once the section end is near         1/m
-``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
-``obstacle``        mean over t of (r_infl − c)² for 0 < c < r_infl, c the           1/m²
-                    footprint's clearance: the least over its disks of distance
-                    field − disk radius − √2·cell; off within ``near_goal_distance``
-                    of the goal
-(lethal)            ``collision_cost`` once if any c <= 0 or a disk leaves the map,   —
-                    or the costmap or a track is hit (below)
-``costmap``         mean over t of c_t/252, c_t the costmap cost under the robot      —
-                    (Nav2's CostCritic; off within ``near_goal_distance``)
-``dynamic_obstacle`` Σ over t (and the held final pose) of Σ_tracks (r_dyn + κσ_t − d)²     1/m²
-                    / T, d the footprint's distance to the track predicted at step t
-``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
-``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
-``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
-                    command sent
-``twirl``           mean over t of |ω_t|/ω̄ (velocity commands only)                  —
-==================  ==============================================================  ============
+====================  ==============================================================  ===========
+critic (weight)       cost of one rollout                                             weight unit
+====================  ==============================================================  ===========
+``path``              mean over checked steps of d, d = distance from p_t to the      1/m
+                      nearest point of the local path window (every ``path_stride``)
+``path_align``        mean over the same steps of wrap(θ_t − θ_path)², θ_path the     1/rad²
+                      travel heading of the robot at that nearest window point
+``follow``            path length left in the window past the window point nearest    1/m
+                      p_T (progress along the path, without cutting corners)
+``goal``              mean over t of |p_t − goal| once the section end is near        1/m
+``goal_heading``      |wrap(θ_T − θ_goal)| once the section end is near               1/rad
+``obstacle``          mean over t of (r_infl − c)² for 0 < c < r_infl, c the          1/m²
+                      footprint's clearance: the least over its disks of distance
+                      field − disk radius − √2·cell; off within
+                      ``near_goal_distance`` of the goal
+(lethal)              ``collision_cost`` once if any c <= 0 or a disk leaves the      —
+                      map, or the costmap or a track is hit (below)
+``costmap``           mean over t of c_t/252, c_t the costmap cost under the robot    —
+                      (Nav2's CostCritic; off within ``near_goal_distance``)
+``dynamic_obstacle``  Σ over t (and the held final pose) of Σ_tracks (r_dyn + κσ_t −  1/m²
+                      d)² / T, d the footprint's distance to the track predicted at
+                      step t
+``prefer_forward``    Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path         1/m
+                      section
+``effort``            mean over t of Σ_j (u_tj/ū_j)², ū the command limits            —
+``rate``              mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last   —
+                      command sent
+``twirl``             mean over t of |ω_t|/ω̄ (velocity commands only)                 —
+====================  ==============================================================  ===========
 
 While the end of the current path section (the goal, or a cusp) is closer than
 ``goal_distance``, ``follow`` is off and ``goal``/``goal_heading`` on, as Nav2's critics do
@@ -55,6 +57,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +65,7 @@ from wheelbase._validate import finite, nonnegative, positive
 from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME
 from wheelbase.errors import ConfigError
 
-__all__ = ["MPPICritics"]
+__all__ = ["MPPICritics", "critics_from_mapping", "split_critic_gains"]
 
 
 @dataclass(frozen=True)
@@ -152,23 +155,8 @@ class MPPICritics:
         "costmap",
         "dynamic_obstacle",
     )
-    VECTOR = (
-        "path",
-        "path_align",
-        "follow",
-        "goal",
-        "goal_heading",
-        "obstacle",
-        "prefer_forward",
-        "effort",
-        "rate",
-        "twirl",
-        "inflation",
-        "collision_cost",
-        "costmap",
-        "dynamic_obstacle",
-        "dynamic_inflation",
-    )
+    VECTOR = (*WEIGHTS[:10], "inflation", "collision_cost", "costmap", "dynamic_obstacle",
+              "dynamic_inflation")  # fmt: skip
 
     def __post_init__(self) -> None:
         for name in self.WEIGHTS:
@@ -220,19 +208,66 @@ class MPPICritics:
         -------
         MPPICritics
         """
-        if values is None:
-            return cls()
-        if isinstance(values, cls):
-            return values
-        if not isinstance(values, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ConfigError(f"unknown critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
-        return cls(**values)
+        return critics_from_mapping(cls, values, "critic")
 
     def vector(self) -> np.ndarray:
         """The weights and shape parameters the kernels read, in the order of :attr:`VECTOR`,
         float64."""
         return np.array([getattr(self, name) for name in self.VECTOR], dtype=np.float64)
+
+
+def critics_from_mapping(cls: type, values: Any, label: str) -> Any:
+    """Critics of dataclass ``cls`` from a mapping of plain keyword values (a scenario file), as
+    given when already one, the defaults for ``None``.
+
+    Parameters
+    ----------
+    cls : type
+        The critics' dataclass (:class:`MPPICritics`, :class:`~wheelbase.control.DWACritics`).
+    values : dict, cls or None
+        Values by name.
+    label : str
+        What an unknown name is called in the error (``"critic"``, ``"DWA critic"``).
+
+    Returns
+    -------
+    cls
+    """
+    if values is None:
+        return cls()
+    if isinstance(values, cls):
+        return values
+    if not isinstance(values, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(f"unknown {label} {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
+    return cls(**values)
+
+
+def split_critic_gains(gains: dict, cls: type) -> tuple[dict, dict]:
+    """Split a scenario's flat gains into the critics' (by field name of ``cls``, merged over a
+    ``critics={...}`` entry) and the others.
+
+    Parameters
+    ----------
+    gains : dict
+        The gains as given.
+    cls : type
+        The critics' dataclass.
+
+    Returns
+    -------
+    critics, options : dict
+    """
+    options = dict(gains)
+    names = {f.name for f in fields(cls)}
+    critics = options.pop("critics", None) or {}
+    if not isinstance(critics, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
+    critics = dict(critics)
+    for name in list(options):
+        if name in names:
+            critics[name] = options.pop(name)
+    return critics, options

@@ -60,8 +60,10 @@ A horizon of a few seconds is myopic about a walker coming straight at the robot
 that slows down pushes the contact past its end and looks safe, and the robot stops in the
 walker's way (measured: a disc coming head-on at 0.5 m/s then runs into a stopped robot). So the
 rollout's final pose is also *held* (the robot stopped there) for ``hold_time`` seconds more
-(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.1 s) and scored against the
-predictions at those times, with the soft cost only: standing in the predicted way of a track
+(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.25 s: a walker at 0.5 m/s
+moves 0.125 m between checks) and scored against the
+predictions at those times, with the soft cost only (each check weighted as the HOLD_STEP/dt
+rollout steps it stands for): standing in the predicted way of a track
 costs (the idea of the braking inevitable-collision-state test of Fraichard & Asama, "Inevitable
 collision states", Advanced Robotics 18(10), 2004), but is not lethal, since the robot need not
 stay there (a lethal hold stopped DWA in the walker's way: its arcs could not leave the line
@@ -98,6 +100,7 @@ __all__ = [
     "costmap_check",
     "costmap_cost_at",
     "costmap_costs",
+    "disk_reach",
     "path_blocked",
     "predict_tracks",
     "read_costmap",
@@ -115,7 +118,7 @@ ACCELERATION_NOISE = 0.03
 HOLD_TIME = 5.0
 """Default time [s] a rollout's final pose is held against the predicted tracks."""
 
-HOLD_STEP = 0.1
+HOLD_STEP = 0.25
 """Spacing [s] of the checks of the held final pose."""
 
 MAX_VIEW_AGE = 3600.0
@@ -589,14 +592,18 @@ def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
 
 
 @numba.njit(cache=True, inline="always")
-def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held):
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach):
     """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
     predicted tracks (module docstring); a step past the rollout's is a check of the held final
-    pose."""
+    pose. ``reach`` [m] bounds the disks' extent from the pose (:func:`disk_reach`): a track
+    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped."""
     total = 0.0
     hit = False
     for j in range(table.shape[1]):
         mx, my = table[step, j, 0], table[step, j, 1]
+        far = reach + table[step, j, 2] + table[step, j, 3] + inflation
+        if (x - mx) * (x - mx) + (y - my) * (y - my) >= far * far:
+            continue
         least = 1.0e300
         for k in range(disks.shape[0]):
             px = x + c * disks[k, 0] - s * disks[k, 1]
@@ -610,6 +617,15 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held):
             gap = inflation - beyond
             total += gap * gap
     return total, hit
+
+
+@numba.njit(cache=True)
+def disk_reach(disks):
+    """The largest |centre| + radius [m] of the disks ``(D, 3)``."""
+    reach = 0.0
+    for k in range(disks.shape[0]):
+        reach = max(reach, math.hypot(disks[k, 0], disks[k, 1]) + disks[k, 2])
+    return reach
 
 
 @numba.njit(cache=True)
@@ -748,6 +764,7 @@ def track_costs(
     relief: np.ndarray,
     disks: np.ndarray,
     inflation: float,
+    hold_weight: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Soft cost Σ_j gap² [m²] and contact of rollout poses against the predicted tracks
     (vectorised twin of :func:`track_cost_at`).
@@ -765,6 +782,9 @@ def track_costs(
         The footprint's covering disks.
     inflation : float
         r_dyn [m].
+    hold_weight : float
+        Factor of the held checks' soft cost (:data:`HOLD_STEP` / dt: each stands for that
+        many rollout steps).
 
     Returns
     -------
@@ -782,4 +802,6 @@ def track_costs(
     collided[:, steps:] = False  # the held pose is scored, never lethal
     beyond = d - table[None, ..., 3]
     gap = np.where(beyond < inflation, inflation - beyond, 0.0)
-    return np.sum(gap * gap, axis=-1), collided
+    soft = np.sum(gap * gap, axis=-1)
+    soft[:, steps:] *= hold_weight
+    return soft, collided

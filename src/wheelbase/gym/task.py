@@ -377,7 +377,7 @@ class NavigateTask:
         Parameters
         ----------
         action : numpy.ndarray, shape (N, 2)
-            Actions in [−1, 1] (checked by :func:`check_actions`).
+            Actions in [−1, 1] (checked by ``check_actions``).
         rng : numpy.random.Generator
             Randomness of the lidar noise.
 
