@@ -304,9 +304,10 @@ def test_numba_kernel_has_no_infinity_sentinels():
     import inspect
     import re
 
-    from wheelbase.control import mppi_numba
+    from wheelbase.control import dwa_kernels, footprint_field, mppi_numba, obstacle_critics
 
-    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest):
+    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest, footprint_field.clearance_at,
+                   obstacle_critics.track_cost_at, dwa_kernels.dwa_kernel):  # fmt: skip
         source = inspect.getsource(kernel.py_func)
         assert not re.search(r"\b(np|math|numpy)\.inf\b|float\(.-?inf", source)
 
@@ -559,6 +560,9 @@ def test_benchmark_quick_prints_the_promised_json():
         assert key in report
     assert report["gpu"].startswith("none") == (report["gpu_hz_2000x56"] is None)
     assert report["parking"]["seeds"] == 0  # the 4.5 m car runs only in the full benchmark
+    assert report["default_backend"] == "numba"
+    assert rates["numba_with_view"] > 0 and rates["numpy_with_view"] > 0
+    assert report["crowd"]["head_on"]["collisions"] == 0
 
 
 def test_closed_path_is_driven_round_before_arriving():

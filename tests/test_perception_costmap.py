@@ -369,6 +369,16 @@ def test_bad_costmap_inputs_are_clear_errors():
         LayeredCostmap.from_map(CostmapSpec(), grid, 0.6)
     with pytest.raises(ConfigError, match=r"costmap\.resolution = 1e-06 m makes"):
         LayeredCostmap.from_map(CostmapSpec(resolution=1e-6), grid, 0.1)
+    wide = OccupancyGrid(np.zeros((2000, 10), bool), 0.01)
+    with pytest.raises(ConfigError, match=r"costmap\.inflation_radius = 15 m is 1500 cells"):
+        LayeredCostmap.from_map(CostmapSpec(inflation_radius=15.0), wide, 0.1)
+    # beyond the map's diagonal no distance occurs: the radius is capped there, exactly
+    capped = LayeredCostmap.from_map(CostmapSpec(inflation_radius=1e6), grid, 0.1)
+    assert capped.reach == math.ceil(math.hypot(20, 20))
+    with pytest.raises(ConfigError, match=r"costmap\.window = 1e\+06 m is 10000000 cells"):
+        LayeredCostmap.from_map(CostmapSpec(window=1e6), grid, 0.1)
+    with pytest.raises(ConfigError, match=r"costmap\.window must be <= 1e\+10 m"):
+        CostmapSpec(window=1e11)
     layers = LayeredCostmap.from_map(CostmapSpec(), grid, 0.1)
     state = layers.initial_state(2)
     pose = np.array([[1.0, 1.0, 0.0]] * 2)

@@ -46,6 +46,17 @@ def test_a_disc_is_detected_at_its_centre_with_its_radius(distance, radius):
         assert math.dist(found.position[0], centre) <= max(spacing, 0.01)
         assert abs(found.radius[0] - radius) <= max(spacing, 0.01)
         assert found.points[0] == np.sum(ranges < 8.0)
+        assert not found.occluded[0]
+
+
+def test_a_disc_partly_hidden_is_flagged_occluded():
+    front, back = [2.0, 0.0, 0.3], [4.0, 0.45, 0.3]  # the front disc hides back's right side
+    ranges = disc_ranges(None, np.zeros((1, 3)), BEAMS, 8.0, [front, back])[0]
+    found = detect(TrackerSpec(), (0.0, 0.0, 0.0), BEAMS, ranges, 8.0, OPEN)
+    order = np.argsort(found.position[:, 0])
+    assert len(found) == 2 and found.occluded[order].tolist() == [False, True]
+    hidden, seen = found.covariance[order[1]], found.covariance[order[0]]
+    assert np.all(np.linalg.eigvalsh(hidden - seen) > 0.9 * found.radius[order[1]] ** 2 - 0.01)
 
 
 def test_the_bare_map_explains_every_return():

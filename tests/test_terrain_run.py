@@ -190,7 +190,7 @@ def test_traction_control_keeps_the_wheels_below_the_peak_slip_on_ice():
     ice = _with(terrain={"surface": "ice"}, trajectory={"max_speed": 0.5, "max_acceleration": 1.0})
     free = run(ice)
     held = run({**ice, "controller": {**ice["controller"],
-                                      "traction_control": {"friction": 0.1}}})  # fmt: skip
+                                      "traction_control": {"friction": "map"}}})  # fmt: skip
     spin_free = np.abs(free.log.extras["slip_left"]).max()
     spin_held = np.abs(held.log.extras["slip_left"]).max()
     assert spin_free > 0.2
@@ -209,6 +209,40 @@ def test_traction_control_limits_each_wheel_torque():
     out = control(0.0, np.zeros((2, 6)), None)
     limit = 0.8 * RM100.wheel_radius * 0.1 * 0.5 * RM100.body.mass * 9.80665 / 2
     assert out == pytest.approx(np.tile([limit, -limit], (2, 1)))
-    assert math.isclose(control.limits()[0, 0], limit)
+    # turning, the lateral force takes its share of the friction circle
+    turning = np.array([[0.0, 0.0, 0.0, 0.3, 0.0, 0.5]])
+    grip = 0.1 * 0.5 * RM100.body.mass * 9.80665 / 2
+    lateral = 0.5 * RM100.body.mass * 0.15
+    assert math.isclose(
+        control.limits(turning)[0, 0], 0.8 * RM100.wheel_radius * math.sqrt(grip**2 - lateral**2)
+    )
     with pytest.raises(ConfigError, match="wheel torques"):
         TractionControl(lambda t, s, r: 0, RM100)
+
+
+# --------------------------------------------------------------------------- raster
+def test_a_raster_of_surfaces_lies_under_the_regions(tmp_path):
+    from PIL import Image
+
+    from wheelbase.scenario_ground import build_terrain
+
+    pixels = np.full((20, 40), 255, np.uint8)  # 2 m × 4 m at 0.1 m: concrete
+    pixels[:, 20:] = 128  # the right half (x > 2 m) ice
+    pixels[:10, :] = 0  # the top half (y > 1 m, image rows at the top) sand
+    Image.fromarray(pixels).save(tmp_path / "floor.png")
+    raster = {"image": "floor.png", "resolution": 0.1, "origin": [0.0, -1.0],
+              "legend": {255: "dry_concrete", 128: "ice", 0: "dry_sand"}}  # fmt: skip
+    region = {"polygon": [[0.2, -0.8], [0.6, -0.8], [0.6, -0.4], [0.2, -0.4]], "surface": "grass"}
+    data = _with(terrain={"raster": raster, "regions": [region]})
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(data))
+    scenario = load_scenario(tmp_path / "s.yaml")  # the image is found beside the file
+    terrain = build_terrain(scenario, prepare(scenario).grid)
+    names = terrain.names
+    assert names[int(terrain.index([1.0, -0.5]))] == "dry_concrete"
+    assert names[int(terrain.index([3.0, -0.5]))] == "ice"
+    assert names[int(terrain.index([1.0, 0.5]))] == "dry_sand"
+    assert names[int(terrain.index([0.4, -0.6]))] == "grass"  # the region over the raster
+    data["terrain"]["raster"]["legend"] = {255: "dry_concrete"}
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(data))
+    with pytest.raises(ScenarioError, match="grey level 0 of the image has no surface"):
+        run(tmp_path / "s.yaml")

@@ -22,9 +22,10 @@ its costmap and its tracks of moving obstacles), never the world's truth, and:
 
 What the global plan believes: the lethal cells of the costmap (the map's obstacles and the
 lidar's marks), less the cells within a track's radius (+ one cell) of every track moving
-faster than ``moving_speed``: a walker crossing the aisle is the local controller's business,
-not a reason to plan the route around it; a box, a stopped robot or a person standing still is
-planned around. Blocked cells are checked with the robot's own footprint (without the
+faster than ``moving_speed``, plus those of every confirmed track slower than that: a walker
+crossing the aisle is the local controller's business, not a reason to plan the route around
+it; a box, a stopped robot or a person standing still is planned around, from as far as it is
+tracked. Blocked cells are checked with the robot's own footprint (without the
 planner's margin) at the plan's poses.
 
 Decisions where Nav2 leaves a choice: the expansion budget of a replan is counted in states
@@ -123,11 +124,16 @@ class NavigatorOptions:
 def believed_grid(view: Any, moving_speed: float) -> Any:
     """What the global planner believes from a robot's perception: an OccupancyGrid.
 
+    The costmap's lethal cells, less the discs of the tracks faster than ``moving_speed`` (a
+    walker crossing is the local controller's business), plus the discs of the confirmed
+    tracks slower than that: a box or a person standing still is planned around as soon as
+    it is tracked, before it comes within the costmap's marking range.
+
     Parameters
     ----------
     view : LocalView
         The robot's costmap (``cost`` uint8 (rows, cols), ``resolution`` [m], ``origin``) and
-        tracks (``position`` (K, 2), ``velocity`` (K, 2), ``radius`` (K,)).
+        tracks (``position`` (K, 2), ``velocity`` (K, 2), ``radius`` (K,), ``confirmed``).
     moving_speed : float
         Tracks faster than this [m/s] are not obstacles to the plan (module docstring).
 
@@ -144,23 +150,41 @@ def believed_grid(view: Any, moving_speed: float) -> Any:
     if tracks is not None and len(tracks.position):
         speed = np.hypot(tracks.velocity[:, 0], tracks.velocity[:, 1])
         moving = speed > moving_speed
-        if moving.any():
+        confirmed = np.asarray(getattr(tracks, "confirmed", np.ones(len(speed), bool)), bool)
+        standing = ~moving & confirmed
+        if moving.any() or standing.any():
             lethal = lethal.copy()
-            res = costmap.resolution
-            x0, y0 = costmap.origin
-            rows, cols = lethal.shape
-            for (x, y), radius in zip(tracks.position[moving], tracks.radius[moving], strict=True):
-                reach = radius + res
-                c0, c1 = int((x - reach - x0) / res), int((x + reach - x0) / res) + 1
-                r0, r1 = int((y - reach - y0) / res), int((y + reach - y0) / res) + 1
-                c0, r0, c1, r1 = max(c0, 0), max(r0, 0), min(c1, cols), min(r1, rows)
-                if c0 >= c1 or r0 >= r1:
-                    continue
-                cx = x0 + (np.arange(c0, c1) + 0.5) * res
-                cy = y0 + (np.arange(r0, r1) + 0.5) * res
-                near = np.hypot(cx[None, :] - x, cy[:, None] - y) <= reach
-                lethal[r0:r1, c0:c1] &= ~near
+            for which, value in ((moving, False), (standing, True)):
+                for centre, radius in zip(
+                    tracks.position[which], tracks.radius[which], strict=True
+                ):
+                    _paint_disc(lethal, costmap, centre, radius + costmap.resolution, value)
     return OccupancyGrid(lethal, costmap.resolution, costmap.origin)
+
+
+def _select(tracks: Any, keep: np.ndarray) -> Any:
+    """The tracks ``keep`` selects (every array field of the tracks dataclass, row-wise)."""
+    from dataclasses import fields
+
+    return replace(
+        tracks, **{f.name: np.asarray(getattr(tracks, f.name))[keep] for f in fields(tracks)}
+    )
+
+
+def _paint_disc(cells: np.ndarray, costmap: Any, centre: Any, reach: float, value: bool) -> None:
+    """Set the cells whose centres lie within ``reach`` [m] of ``centre`` to ``value``."""
+    res = costmap.resolution
+    x0, y0 = costmap.origin
+    x, y = float(centre[0]), float(centre[1])
+    rows, cols = cells.shape
+    c0, c1 = max(int((x - reach - x0) / res), 0), min(int((x + reach - x0) / res) + 1, cols)
+    r0, r1 = max(int((y - reach - y0) / res), 0), min(int((y + reach - y0) / res) + 1, rows)
+    if c0 >= c1 or r0 >= r1:
+        return
+    cx = x0 + (np.arange(c0, c1) + 0.5) * res
+    cy = y0 + (np.arange(r0, r1) + 0.5) * res
+    near = np.hypot(cx[None, :] - x, cy[:, None] - y) <= reach
+    cells[r0:r1, c0:c1][near] = value
 
 
 @dataclass(frozen=True)
@@ -355,11 +379,23 @@ class Navigator:
         """The local controller's command along ``path``, seeing its rolling window."""
         if not getattr(self.local, "uses_perception", False):
             return self.local(t, measured, path)
-        if perception is not None and self.options.local_window is not None:
+        if perception is None:
+            return self.local(t, measured, path, perception=None)
+        changes: dict[str, Any] = {}
+        if self.options.local_window is not None:
             costmap = perception.costmap
             cells = max(1, round(self.options.local_window / costmap.resolution))
-            perception = replace(perception, costmap=costmap.window(pose, cells))
-        return self.local(t, measured, path, perception=perception)
+            changes["costmap"] = costmap.window(pose, cells)
+        tracks = getattr(perception, "tracks", None)
+        if tracks is not None and len(tracks.position):
+            # what stands still is in the costmap and the plan; the tracks the local controller
+            # predicts are the ones that move
+            moving = (
+                np.hypot(tracks.velocity[:, 0], tracks.velocity[:, 1]) > self.options.moving_speed
+            )
+            if not moving.all():
+                changes["tracks"] = _select(tracks, moving)
+        return self.local(t, measured, path, perception=replace(perception, **changes))
 
     # ------------------------------------------------------------------ pieces
     def _pass_goals(self, pose: np.ndarray) -> None:

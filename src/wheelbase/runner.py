@@ -16,8 +16,12 @@ silent:
 - Multiple goals are planned leg by leg (each from the previous goal) and tracked as one
   trajectory that stops at every goal.
 - The run ends when the true pose is within the goal tolerance after the trajectory has ended
-  and the robot has (nearly) stopped, at a collision, or ``settle_time`` = 15 s after the
-  trajectory has ended (status ``timeout``), whichever comes first, and never after ``duration``.
+  and the robot has (nearly) stopped, at a collision, or at the time limit ``duration``
+  (status ``timeout``), whichever comes first: a robot slower than its reference (a path
+  follower, MPPI, one that waits for someone to pass) has until ``duration``. A scenario's
+  ``settle_time`` ends the run that long after the trajectory's end instead, when that comes
+  before ``duration``. ``arrival_delay_s`` says how much later than the reference's end the
+  robot stopped.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import nonnegative
+from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
@@ -42,6 +46,7 @@ from wheelbase.timing import SpeedLimits, time_parametrize
 
 __all__ = [
     "LAWS",
+    "LOG_COPIES",
     "Prepared",
     "Robot",
     "RunResult",
@@ -50,9 +55,9 @@ __all__ = [
     "run",
     "run_metrics",
     "run_seeds",
+    "seeds_per_chunk",
 ]
 
-SETTLE_TIME = 15.0  # s after the end of the trajectory
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
 TURNING_MARGIN = 1.2
 
@@ -122,6 +127,9 @@ def build_robot(spec) -> Robot:
             "footprint": (0.66, 0.455),
         }
         values.update({k: v for k, v in preset.items() if values.get(k) is None})
+        wheels = {"wheel_radius": values["wheel_radius"], "half_track": values["half_track"]}
+        if tuple(wheels.values()) != (RM100.wheel_radius, RM100.half_track):
+            dynamics = replace(RM100, **wheels)  # its own wheels on the RM100's body
     model_name = spec.model
     if model_name in ("diffdrive", "unicycle"):
         radius = values["wheel_radius"] or 0.05
@@ -323,7 +331,7 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
-ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread")
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread", "force_drift")
 """Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
 
 
@@ -431,6 +439,8 @@ class RunResult:
         The sensors the robot read (a lidar, landmarks), for drawing.
     terrain : TerrainMap or None
         The ground it drove on (a scenario with terrain or a payload), for drawing.
+    world : World or None
+        The world beyond the map it drove in (the truth, for drawing and evaluation).
     """
 
     scenario: Scenario
@@ -442,6 +452,7 @@ class RunResult:
     metrics: dict[str, Any]
     sensors: Any = None
     terrain: Any = None
+    world: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -461,8 +472,9 @@ class RunResult:
             raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
         plan = None if self.plan is None else self.plan.poses
         return figure_map(
-            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
-        )
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name,
+            terrain=self.terrain,
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- run
@@ -497,6 +509,9 @@ class Prepared:
     plans, references : tuple
         Every robot's plan and its time-parametrised reference (``plan`` and ``reference``
         are robot 0's).
+    follows_path : bool
+        The controller follows the path (its tracking error is the distance to the path),
+        not the timed trajectory.
     """
 
     scenario: Scenario
@@ -512,6 +527,7 @@ class Prepared:
     starts: np.ndarray | None = None
     plans: tuple = ()
     references: tuple = ()
+    follows_path: bool = False
 
 
 def prepare(
@@ -565,6 +581,10 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
+    if scenario.controller.law == "adaptive_computed_torque":
+        from wheelbase.scenario_ground import adaptive_defaults
+
+        gains = {**adaptive_defaults(scenario), **gains}
     if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
@@ -610,6 +630,8 @@ def prepare(
     ):
         raise ScenarioError("controller: a steering law cannot drive a differential drive")
     robots = _fleet(scenario, start, goals)
+    if len(robots) > 1:
+        _check_fleet_apart(robots, _footprint(robot))
     plans, planning = [], {}
     for index, (robot_start, robot_goals) in enumerate(robots):
         if index:
@@ -653,8 +675,8 @@ def prepare(
         from wheelbase import scenario_ground as ground
 
         timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        terrain = ground.build_terrain(scenario, grid)
         if ground.ground_active(scenario):
-            terrain = ground.build_terrain(scenario, grid)
             plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
@@ -683,7 +705,7 @@ def prepare(
             for timed, leg in zip(references, plans, strict=True)
         )
     if dynamic:  # the payload changes the controller knows of, traction control
-        controller = ground.wrap_controller(scenario, controller, robot, timeline)
+        controller = ground.wrap_controller(scenario, controller, robot, timeline, terrain)
     control_every = 1
     if scenario.control_rate_hz is not None:
         control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))
@@ -699,7 +721,7 @@ def prepare(
             np.array([robot_goals[-1] for _, robot_goals in robots]),
             (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
             end_time=end_time,
-            settle_time=SETTLE_TIME,
+            settle_time=math.inf if scenario.settle_time is None else scenario.settle_time,
         ),
         collides=lambda poses: grid.in_collision(footprint, poses),
         reference_pose=reference_pose,
@@ -715,6 +737,7 @@ def prepare(
     return Prepared(
         scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,
         np.array([robot_start for robot_start, _ in robots]), tuple(plans), tuple(references),
+        reference_kind == "path",
     )  # fmt: skip
 
 
@@ -729,6 +752,29 @@ def _fleet(scenario: Scenario, start: np.ndarray, goals: list[np.ndarray]) -> li
     if scenario.fleet is None:
         return [(start, goals)]
     return [(_pose(robot.start), [_pose(goal) for goal in robot.goals]) for robot in scenario.fleet]
+
+
+def _check_fleet_apart(robots: list, footprint) -> None:
+    """Two robots of a fleet may not start (or end) where their footprints overlap."""
+    import shapely
+
+    def outline(pose):
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        body = footprint.polygon
+        return shapely.Polygon(
+            np.column_stack([pose[0] + c * body[:, 0] - s * body[:, 1],
+                             pose[1] + s * body[:, 0] + c * body[:, 1]])
+        )  # fmt: skip
+
+    for what, pick in (("start", lambda r: r[0]), ("goal", lambda r: r[1][-1])):
+        shapes = [outline(pick(r)) for r in robots]
+        for i in range(len(shapes)):
+            for j in range(i):
+                if shapes[i].intersects(shapes[j]):
+                    raise ScenarioError(
+                        f"fleet[{i}].{what} overlaps fleet[{j}].{what}: the robots' footprints "
+                        "touch there; place them apart"
+                    )
 
 
 def _sum_planning(total: dict[str, Any], stats: dict[str, Any]) -> dict[str, Any]:
@@ -841,8 +887,8 @@ def run(
     The run ends as the engine's one arrival rule says (:class:`wheelbase.sim.Arrival`): the
     robot stops when its *estimate* is within the goal tolerance, at rest, after the
     trajectory has ended; the *true* pose then decides ``arrived`` or ``missed_goal``. A
-    collision, ``settle_time`` = 15 s after the trajectory's end, or ``duration`` end it
-    earlier (``collision``, ``timeout``).
+    collision or ``duration`` (or the scenario's ``settle_time`` after the trajectory's end,
+    when given and earlier) end it earlier (``collision``, ``timeout``).
 
     Parameters
     ----------
@@ -875,11 +921,7 @@ def run(
         )
     starts = prepared.starts if prepared.starts is not None else prepared.start[None]
     log = prepared.engine.run(starts, seeds=np.full(len(starts), prepared.scenario.seed))
-    metrics = run_metrics(prepared, log, 0)
-    if len(starts) > 1:  # a fleet: every robot's figures, and the fleet's status
-        robots = [run_metrics(prepared, log, i) for i in range(len(starts))]
-        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
-        metrics = {**metrics, "status": worst, "robots": robots}
+    metrics = _world_metrics(prepared, log, 0)
     return RunResult(
         prepared.scenario,
         prepared.robot,
@@ -890,14 +932,27 @@ def run(
         metrics,
         prepared.engine.sensors,
         getattr(getattr(prepared.engine.plant, "model", None), "terrain", None),
+        None if prepared.engine.surroundings is None else prepared.engine.surroundings.world,
     )
 
 
-def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> list[dict[str, Any]]:
-    """Run one scenario over many noise seeds as one vectorised batch; metrics per seed.
+LOG_COPIES = 3
+"""A run's record is held about three times while it is made: the rows of every step, the
+stacked arrays of the log, and the per-robot copies its metrics are taken from."""
+
+
+def run_seeds(
+    scenario: Scenario | str | Path | dict[str, Any],
+    seeds: Any,
+    *,
+    memory_budget: float | None = None,
+) -> list[dict[str, Any]]:
+    """Run one scenario over many noise seeds in vectorised chunks; metrics per seed.
 
     The plan is made once (it does not depend on the seed); the engine then steps one robot
-    per seed in lockstep. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
+    per seed in lockstep, as many seeds at a time as :func:`seeds_per_chunk` lets into
+    ``memory_budget``, and keeps only each finished chunk's metrics: memory stays flat however
+    many seeds there are. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
 
     Parameters
     ----------
@@ -905,20 +960,104 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
         The scenario (its own ``seed`` is ignored).
     seeds : sequence of int
         Noise seeds, one run each.
+    memory_budget : float, optional
+        Bytes the logs of one chunk may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB), > 0.
 
     Returns
     -------
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
-    prepared = prepare(scenario)
+    from wheelbase.limits import BATCH_MEMORY
+
+    budget = BATCH_MEMORY if memory_budget is None else memory_budget
+    budget = positive("memory_budget", budget, "bytes")
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
+    if scenario.world is not None and scenario.world.path_boxes is not None:
+        # each seed drops its own boxes: its own world, run alone
+        return [
+            row
+            for seed in seeds
+            for row in _run_batch(prepare(scenario, seed=seed), [seed], budget)
+        ]
+    return _run_batch(prepare(scenario), seeds, budget)
+
+
+def _run_batch(prepared: Prepared, seeds: list[int], budget: float) -> list[dict[str, Any]]:
+    """Engine runs of a prepared scenario for ``seeds`` (a world of R robots per seed), as many
+    worlds at a time as fit ``budget`` bytes (:func:`seeds_per_chunk`)."""
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
-    starts = np.tile(prepared.start, (len(seeds), 1))
+    fleet = len(prepared.starts)
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    log = engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
-    return [run_metrics(prepared, log, i) for i in range(len(seeds))]
+    size = seeds_per_chunk(engine, prepared.starts, budget) if seeds else 1
+    rows: list[dict[str, Any]] = []
+    for first in range(0, len(seeds), size):
+        chunk = seeds[first : first + size]
+        starts = np.tile(prepared.starts, (len(chunk), 1))
+        log = engine.run(starts, seeds=np.repeat(np.array(chunk, dtype=np.int64), fleet))
+        rows.extend(_world_metrics(prepared, log, k) for k in range(len(chunk)))
+        del log  # only the rows outlive the chunk
+    return rows
+
+
+def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
+    """The metrics of world ``world`` of a run: its robot's, or a fleet's first robot's with
+    ``robots`` (each robot's) and the fleet's status (the first that is not ``arrived``)."""
+    fleet = len(prepared.starts) if prepared.starts is not None else 1
+    metrics = run_metrics(prepared, log, world * fleet)
+    if fleet > 1:
+        robots = [run_metrics(prepared, log, world * fleet + i) for i in range(fleet)]
+        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
+        metrics = {**metrics, "status": worst, "robots": robots}
+    return metrics
+
+
+def seeds_per_chunk(engine: Engine, starts: np.ndarray, budget: float) -> int:
+    """How many worlds (seeds) of ``engine`` one vectorised run can hold within ``budget``
+    bytes, a world being the robots of ``starts`` (one, or a fleet).
+
+    One step of one world is recorded (its rows' arrays: poses, command, wheel rates, ticks,
+    the estimator's and plant's signals) and counted :data:`LOG_COPIES` times for each of the
+    engine's ``steps`` (the longest a run can last).
+
+    Parameters
+    ----------
+    engine : Engine
+        The closed loop.
+    starts : numpy.ndarray, shape (3,) or (R, 3)
+        The start pose(s) of one world.
+    budget : float
+        Bytes.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    seeds = np.zeros(len(starts), dtype=np.int64)
+    _, row = engine.step(engine.reset(starts, seeds=seeds))
+    per_step = _nbytes(row) + 64  # and the row's own bookkeeping
+    return max(1, int(budget // (per_step * engine.steps * LOG_COPIES)))
+
+
+def _nbytes(value: Any) -> int:
+    """Bytes of the arrays in a value (a dataclass, dict, list or array), recursively."""
+    import dataclasses
+
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return sum(_nbytes(getattr(value, f.name)) for f in dataclasses.fields(value))
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value) + 8 * len(value)
+    return 0
 
 
 def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
@@ -946,6 +1085,8 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     metrics = {**_base_metrics(prepared, seed), **one.metrics()[0]}
     metrics.pop("controller_statuses", None)
     metrics["trajectory_duration_s"] = float(reference.t[-1])
+    if metrics["status"] in ("arrived", "missed_goal"):  # it stopped: how late
+        metrics["arrival_delay_s"] = metrics["duration_s"] - metrics["trajectory_duration_s"]
     counts = one.controller_status_counts(0)
     if counts:
         metrics["controller_statuses"] = counts
@@ -953,16 +1094,28 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     deviation = distance_to_polyline(true_pose[:, :2], plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))
+    if prepared.follows_path:
+        # a path law is scored by its distance to the path; the error against the timed
+        # reference (where the trajectory would be at that time) keeps its own name
+        for name in ("rms_position_error_m", "max_position_error_m", "rms_heading_error_deg"):
+            metrics[f"timed_{name}"] = metrics.pop(f"tracking_{name}")
+        metrics["tracking_rms_position_error_m"] = metrics["path_deviation_rms_m"]
+        metrics["tracking_max_position_error_m"] = metrics["path_deviation_max_m"]
+    metrics["tracking_error_of"] = "path" if prepared.follows_path else "trajectory"
     if one.torques is not None:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
-    every = max(1, len(one.t) // 400)
-    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
+    from wheelbase.scenario_ground import terrain_metrics
+
+    metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
+    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose)  # every pose
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end
-        if key.startswith("loc_") and key != "loc_particles":
+        if key == "loc_converged":  # a global localisation's belief is one cluster at the end
+            metrics["localization_converged"] = bool(value[0, -1])
+        elif key.startswith("loc_") and key != "loc_particles":
             metrics[f"localization_{key[4:]}"] = int(value[0, -1])
     summary = log.summaries[index] if log.summaries else {}
     if summary or (prepared.engine is not None and prepared.engine.surroundings is not None):
@@ -978,7 +1131,8 @@ def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, An
     extras = {key: value[0] for key, value in one.extras.items() if key.startswith("world_")}
     if extras:
         speed = float(np.hypot(*one.twist[0, -1, :2]))
-        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed))
+        dt = np.append(np.diff(one.t), 0.0)
+        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed, dt))
     if "track_matches" in one.extras:
         matches = float(one.extras["track_matches"][0, -1])
         for name, key in (("position", "track_position_rmse_m"),

@@ -14,7 +14,9 @@ rest at the goal that carries the change (the robot is there, within its trackin
 terrain raster has the map's cells (a ``map: empty`` field's 5 cm) unless
 ``terrain.resolution`` says otherwise; without a ``terrain`` section a robot with a payload
 rolls without slipping on a floor without rolling resistance, which is the existing dynamic
-model with the payload's body.
+model with the payload's body; the adaptive computed torque lets its force F_0 drift at 1 N/√s
+on graded terrain (the pull of a slope changes with the grade and the heading) and keeps it
+constant on level ground (:func:`adaptive_defaults`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from wheelbase.inertial import Payload, with_payload
 from wheelbase.scenario import Scenario
 
 __all__ = [
+    "adaptive_defaults",
     "build_contacts",
     "build_plant",
     "build_stuck",
@@ -38,6 +41,7 @@ __all__ = [
     "ground_active",
     "payload_timeline",
     "surface_of",
+    "terrain_metrics",
     "wrap_controller",
 ]
 
@@ -51,6 +55,19 @@ def ground_active(scenario: Scenario) -> bool:
         or scenario.robot.payload is not None
         or scenario.goal_payloads is not None
     )
+
+
+def adaptive_defaults(scenario: Scenario) -> dict[str, float]:
+    """Gains of ``adaptive_computed_torque`` that depend on the ground (module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+    """
+    terrain = scenario.terrain
+    graded = terrain is not None and any(region.grade_percent > 0 for region in terrain.regions)
+    return {"force_drift": 1.0} if graded else {}
 
 
 def _payload(spec: Any) -> Payload | None:
@@ -237,13 +254,46 @@ def build_terrain(scenario: Scenario, grid: Any) -> Any:
     rows, cols = cells.occupied.shape
     resolution = spec.resolution or cells.resolution
     bounds = (x0, y0, x0 + cols * cells.resolution, y0 + rows * cells.resolution)
+    base = None
+    if spec.raster is not None:
+        base = _raster(spec.raster, cells, scenario.resources.max_map_cells)
     try:
         return TerrainMap.from_regions(
             default, regions, bounds=bounds, resolution=resolution,
-            max_cells=scenario.resources.max_map_cells,
+            max_cells=scenario.resources.max_map_cells, base=base,
         )  # fmt: skip
     except ConfigError as error:
         raise ScenarioError(f"terrain: {error}") from None
+
+
+def _raster(spec: Any, cells: Any, max_cells: int) -> Any:
+    """The ``terrain.raster`` image as a :class:`~wheelbase.terrain.TerrainMap` (flat)."""
+    from wheelbase.errors import DataError, MapError
+    from wheelbase.planning.map_io import _read_gray
+    from wheelbase.terrain.map import TerrainMap
+
+    try:
+        gray = _read_gray(spec.image, max_cells)
+    except (DataError, MapError) as error:
+        raise ScenarioError(f"terrain.raster.image: {error}") from None
+    levels = np.unique(gray.astype(np.int64))
+    missing = [int(level) for level in levels if int(level) not in spec.legend]
+    if missing:
+        raise ScenarioError(
+            f"terrain.raster.legend: grey level {missing[0]} of the image has no surface "
+            f"(levels in the image: {', '.join(map(str, levels[:12]))})"
+        )
+    keys = sorted(spec.legend)
+    surfaces = [surface_of(spec.legend[k], f"terrain.raster.legend.{k}") for k in keys]
+    lookup = np.zeros(256, np.int32)
+    lookup[keys] = np.arange(len(keys))
+    codes = lookup[np.flipud(gray).astype(np.int64)]  # image row 0 is the top
+    origin = spec.origin if spec.origin is not None else cells.origin
+    try:
+        return TerrainMap(tuple(surfaces), codes, np.zeros((*codes.shape, 2)),
+                          spec.resolution or cells.resolution, origin)  # fmt: skip
+    except ConfigError as error:
+        raise ScenarioError(f"terrain.raster: {error}") from None
 
 
 def build_plant(
@@ -298,6 +348,7 @@ def wrap_controller(
     controller: Any,
     robot: Any,
     timeline: list[tuple[float, Payload | None]],
+    terrain: Any = None,
 ) -> Any:
     """The controller with the payload changes it knows of and traction control.
 
@@ -311,6 +362,8 @@ def wrap_controller(
         The resolved robot (``robot.dynamics`` without payload).
     timeline : list of (float, Payload or None)
         :func:`payload_timeline`.
+    terrain : TerrainMap, optional
+        The floor the robot knows (traction control's ``friction: map``).
     """
     from wheelbase.control.schedule import ModelSchedule
     from wheelbase.control.traction import TractionControl
@@ -329,8 +382,7 @@ def wrap_controller(
         try:
             controller = TractionControl(
                 controller, model, friction=spec.friction, margin=spec.margin,
-                drive_load_share=contacts.drive_load_share,
-                wheel_inertia=contacts.wheel_inertia,
+                drive_load_share=contacts.drive_load_share, terrain=terrain,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None
@@ -350,3 +402,36 @@ def build_stuck(scenario: Scenario) -> Any:
     from wheelbase.sim.stuck import Stuck
 
     return Stuck(time=scenario.terrain.stuck_time, distance=max(0.1, scenario.goal_tolerance[0]))
+
+
+def terrain_metrics(log: Any) -> dict[str, float]:
+    """What the ground did to a robot's run (robot 0 of ``log``): largest slip ratio and
+    sinkage, and the energy budget [J] — the work of the wheel torques, what slip, rolling
+    resistance and soil dissipated, the work done against gravity. Empty for a run without a
+    terrain plant.
+
+    Parameters
+    ----------
+    log : Log
+        One robot's record.
+    """
+    extras = log.extras
+    if "slip_left" not in extras:
+        return {}
+    n = int(log.length[0])
+
+    def spent(name: str) -> float:
+        values = extras[name][0, :n]
+        return float(values[-1] - values[0])
+
+    slip = np.abs(np.concatenate([extras["slip_left"][0, :n], extras["slip_right"][0, :n]]))
+    sink = np.concatenate([extras["sinkage_left"][0, :n], extras["sinkage_right"][0, :n]])
+    return {
+        "max_slip": float(slip.max()),
+        "max_sinkage_m": float(sink.max()),
+        "energy_wheels_j": spent("energy_work_wheels"),
+        "energy_slip_j": spent("energy_dissipated_slip"),
+        "energy_rolling_j": spent("energy_dissipated_rolling"),
+        "energy_soil_j": spent("energy_dissipated_soil"),
+        "energy_gravity_j": -spent("energy_work_gravity"),
+    }

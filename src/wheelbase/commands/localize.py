@@ -67,6 +67,7 @@ def register(app: typer.Typer) -> None:
             f"{filter.upper()} robot {robot}: position RMSE {metrics['position_rmse_m']:.3f} m, "
             f"max {metrics['position_max_m']:.3f} m, heading RMSE "
             f"{metrics['heading_rmse_deg']:.2f} deg (dead reckoning "
-            f"{metrics['dead_reckoning_rmse_m']:.2f} m)"
+            f"{metrics['dead_reckoning_rmse_m']:.2f} m), position NEES "
+            f"{metrics['position_nees_mean']:.2f} (2 when consistent)"
         )
         typer.echo(f"wrote {', '.join(map(str, paths.values()))}")

@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         velocity_to_steering,
         velocity_to_wheel_speeds,
     )
+    from wheelbase.control.dwa import DWA, DWA_BACKENDS, DWACritics, DWAPlan
     from wheelbase.control.goal import (
         FIGURE8_GOALS,
         DriveTrain,
@@ -72,6 +73,10 @@ _EXPORTS = {
     "steering_to_velocity": "wheelbase.control.base",
     "velocity_to_steering": "wheelbase.control.base",
     "velocity_to_wheel_speeds": "wheelbase.control.base",
+    "DWA": "wheelbase.control.dwa",
+    "DWA_BACKENDS": "wheelbase.control.dwa",
+    "DWACritics": "wheelbase.control.dwa",
+    "DWAPlan": "wheelbase.control.dwa",
     "FIGURE8_GOALS": "wheelbase.control.goal",
     "DriveTrain": "wheelbase.control.goal",
     "GoToGoal": "wheelbase.control.goal",
@@ -106,6 +111,8 @@ __getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 __all__: list[str] = [
     "ANTI_WINDUP",
+    "DWA",
+    "DWA_BACKENDS",
     "FIGURE8_GOALS",
     "MPPI",
     "MPPI_BACKENDS",
@@ -117,6 +124,8 @@ __all__: list[str] = [
     "Aicardi",
     "ComputedTorquePID",
     "Controller",
+    "DWACritics",
+    "DWAPlan",
     "DriveTrain",
     "GoToGoal",
     "GoToPoint",

@@ -1,16 +1,23 @@
 """Adaptive computed torque: the PID of document 000 §5.3 on a model that learns its payload.
 
-The no-slip dynamics are linear in θ = (m, m·x_c, m·y_c, I_B, F_r) — mass, CG moments, yaw
-inertia about the axle centre (:mod:`wheelbase.inertial`) and a resisting force F_r (rolling
-resistance, a slope) acting against the direction of travel:
+The no-slip dynamics are linear in θ = (m, m·x_c, m·y_c, I_B, F_0) — mass, CG moments, yaw
+inertia about the axle centre (:mod:`wheelbase.inertial`) and a longitudinal force F_0 the
+ground and gravity take (rolling resistance while the robot drives one way, a slope's pull while
+its heading holds):
 
-    F_x = m·u̇ − (m x_c)·r² − (m y_c)·ṙ + F_r·tanh(u / 1 mm/s)
+    F_x = m·u̇ − (m x_c)·r² − (m y_c)·ṙ + F_0
     M_z = (m x_c)·r·u − (m y_c)·u̇ + I_B·ṙ                  i.e.  τ = Y(ν, ν̇)·θ.
+
+(A rolling resistance F_r·sign(u) beside F_0 would be the same column while the robot drives
+forward: the two could not be told apart.) What the model leaves out biases it: on a floor with
+rolling resistance the casters resist a turn on the spot with a moment no column explains, which
+the estimates of I_B and m·x_c take up — the projection below keeps them to what a load on the
+robot could be.
 
 The controller estimates θ by recursive least squares on the *filtered* regressor. Over one
 control step of length h the held torque changes the velocity by M·Δν = τ·h − ∫(nonlinear
-terms)dt, so with the step's mean acceleration Δν/h and its mean r², r·u, tanh(u/1 mm/s) (the
-trapezoid of the step's ends) the step's own regressor row satisfies τ ≈ Y_k·θ to O(h²).
+terms)dt, so with the step's mean acceleration Δν/h and its mean r² and r·u (the trapezoid of
+the step's ends) the step's own regressor row satisfies τ ≈ Y_k·θ to O(h²).
 Measured velocities are quantised (encoder ticks), so the rows are smoothed before they are
 used: both sides through the same second-order low-pass filter H²(z), H the discrete
 first-order filter of time constant T. A filter applied to both sides keeps the identity
@@ -19,10 +26,14 @@ first-order filter of time constant T. A filter applied to both sides keeps the 
 
     K = P·Y_fᵀ·(λ·I + Y_f·P·Y_fᵀ)⁻¹,   θ̂ ← θ̂ + K·(τ_f − Y_f·θ̂),   P ← (P − K·Y_f·P)/λ,
 
-with the forgetting factor λ (1: none; below 1 it follows a payload that changes). The
+with the forgetting factor λ (1: none; below 1 it follows a payload that changes), and then
+P ← P + Q·h: F_0 drifts (a random walk of ``force_drift`` N/√s: the ground, the slope and the
+direction of travel change along the route) while the inertial parameters keep their whole
+history. The
 estimates are kept physical (mass and I_B at least a fifth of the model's, |c| ≤ 1 m) and the
 certainty-equivalence computed torque of :class:`~wheelbase.control.ComputedTorquePID` runs on
-the model they give: τ = M̂(a_ref + PID(e)) + Ĉ(ν)·ν + F̂_r (same gains, same anti-windup).
+the model they give: τ = M̂(a_ref + PID(e)) + Ĉ(ν)·ν + F̂_0 (same gains, same
+anti-windup; F̂_0 enters as the body acceleration M̂⁻¹(F̂_0, 0) added to the reference's).
 
 The body force applied over a step is known from the wheel torques the controller itself sent
 (F_x = (τ_L + τ_R)/a, M_z = d(τ_R − τ_L)/a): the wheel geometry is the one thing it must know.
@@ -45,10 +56,9 @@ from wheelbase.models.path import PoseTrajectory
 
 __all__ = ["ESTIMATE_NAMES", "AdaptiveComputedTorque", "step_regressor"]
 
-ESTIMATE_NAMES: tuple[str, ...] = ("mass", "moment_x", "moment_y", "inertia_b", "resistance")
-"""θ̂ = (m [kg], m·x_c [kg·m], m·y_c [kg·m], I_B [kg·m²], F_r [N])."""
-
-_SMOOTH = 1e-3  # m/s: the sign of u, smoothed as the dynamics' rolling resistance
+ESTIMATE_NAMES: tuple[str, ...] = ("mass", "moment_x", "moment_y", "inertia_b", "force")
+"""θ̂ = (m [kg], m·x_c [kg·m], m·y_c [kg·m], I_B [kg·m²], F_0 [N])."""
+_P = len(ESTIMATE_NAMES)
 
 
 def step_regressor(velocity: ArrayLike, previous: ArrayLike, dt: float) -> np.ndarray:
@@ -68,9 +78,9 @@ def step_regressor(velocity: ArrayLike, previous: ArrayLike, dt: float) -> np.nd
     acc = (nu - before) / positive("dt", dt, "s")
     mid = 0.5 * (nu + before)
     u, r = mid[..., 0], mid[..., 1]
-    out = np.zeros((*u.shape, 2, 5))
+    out = np.zeros((*u.shape, 2, _P))
     out[..., 0, 0], out[..., 0, 1], out[..., 0, 2] = acc[..., 0], -r * r, -acc[..., 1]
-    out[..., 0, 4] = np.tanh(u / _SMOOTH)
+    out[..., 0, 4] = 1.0
     out[..., 1, 1], out[..., 1, 2], out[..., 1, 3] = r * u, -acc[..., 0], acc[..., 1]
     return out
 
@@ -103,6 +113,14 @@ class AdaptiveComputedTorque:
         RLS forgetting factor λ per call, in (0.9, 1].
     filter_time : float
         T of the regressor filter [s], > 0.
+    force_drift : float
+        How fast F_0 may drift [N/√s], ≥ 0 (0: a constant, the default: on a level floor a
+        drifting F_0 takes up part of the weakly excited m·u̇ — on document 000's route 1 N/√s
+        leaves the mass 10 % low; on slopes it must drift, as the pull changes with the grade
+        and the heading: ``wheelbase.run`` gives 1 N/√s to a scenario with graded terrain).
+    reach : float
+        Farthest a load's mass can lie from the axle centre [m], > 0 (the footprint's
+        half-diagonal): bounds the CG offset and the inertia a payload can add.
     initial_spread : float
         Initial standard deviation of the estimates in units of the model's values (mass,
         inertia; 0.1 m of CG offset; 5 % of the weight for F_r), > 0. Large: the initial
@@ -131,6 +149,8 @@ class AdaptiveComputedTorque:
         forgetting: float = 1.0,
         filter_time: float = 0.3,
         initial_spread: float = 30.0,
+        force_drift: float = 0.0,
+        reach: float = 0.5,
         feedforward: bool = True,
         anti_windup: bool = True,
     ) -> None:
@@ -146,6 +166,11 @@ class AdaptiveComputedTorque:
         self.forgetting = forgetting
         self.filter_time = positive("filter_time", filter_time, "s")
         self.initial_spread = positive("initial_spread", initial_spread)
+        drift = finite("force_drift", force_drift, "N/√s")
+        if drift < 0:
+            raise ConfigError(f"force_drift must be >= 0 N/√s (got {drift:g})")
+        self.force_drift = drift
+        self.reach = positive("reach", reach, "m")
         body = model.body
         xc, yc = body.cg_offset
         self._theta0 = np.array(
@@ -153,9 +178,10 @@ class AdaptiveComputedTorque:
         )
         scale = np.array(
             [body.mass, 0.1 * body.mass, 0.1 * body.mass, body.inertia_centroid,
-             0.05 * body.mass * GRAVITY]
+             0.1 * body.mass * GRAVITY]
         )  # fmt: skip
         self._p0 = np.diag((self.initial_spread * scale) ** 2)
+        self._q = np.diag([0.0, 0.0, 0.0, 0.0, drift**2])
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -170,8 +196,8 @@ class AdaptiveComputedTorque:
         self._n = n
         self._theta = np.tile(self._theta0, (n, 1))
         self._p = np.tile(self._p0, (n, 1, 1))
-        self._once = np.zeros((n, 12))  # H·(Y_k (10 entries), F_x, M_z)
-        self._twice = np.zeros((n, 12))  # H² of the same
+        self._once = np.zeros((n, 2 * _P + 2))  # H·(Y_k (2 × 6 entries), F_x, M_z)
+        self._twice = np.zeros((n, 2 * _P + 2))  # H² of the same
         self._nu = np.zeros((n, 2))
         self._force = np.zeros((n, 2))
         self._cst = np.zeros((n, 7))
@@ -191,18 +217,24 @@ class AdaptiveComputedTorque:
         rows[:, 1] = theta[:, 1] / theta[:, 0]
         rows[:, 2] = theta[:, 2] / theta[:, 0]
         rows[:, 3] = theta[:, 3]
-        rows[:, 8] = theta[:, 4]
         return np.ascontiguousarray(rows)
+
+    def _force_acceleration(self) -> np.ndarray:
+        """(δu̇, δṙ) ``(N, 2)`` = M̂_r⁻¹·(F̂_0, 0): F̂_0 as a change of the reference's
+        acceleration, so that the PID kernel's M̂·a adds exactly F̂_0 (and nothing to M_z)."""
+        m, _mx, my, ib, f0 = self._theta.T
+        det = m * ib - my * my  # of [[m, −m y_c], [−m y_c, I_B]]
+        return np.column_stack([ib * f0 / det, my * f0 / det])
 
     # ------------------------------------------------------------------ estimation
     def _learn(self, nu: np.ndarray, dt: float) -> None:
         """One RLS step with the force applied over the last ``dt`` and the velocity now."""
         alpha = -math.expm1(-dt / self.filter_time)
-        rows = step_regressor(nu, self._nu, dt).reshape(-1, 10)
+        rows = step_regressor(nu, self._nu, dt).reshape(-1, 2 * _P)
         self._once += alpha * (np.column_stack([rows, self._force]) - self._once)
         self._twice += alpha * (self._once - self._twice)
-        y = self._twice[:, :10].reshape(-1, 2, 5)
-        force = self._twice[:, 10:]
+        y = self._twice[:, : 2 * _P].reshape(-1, 2, _P)
+        force = self._twice[:, 2 * _P :]
         lam = self.forgetting
         p = self._p
         py = p @ np.swapaxes(y, 1, 2)  # (N, 5, 2)
@@ -210,18 +242,22 @@ class AdaptiveComputedTorque:
         gain = np.swapaxes(np.linalg.solve(s, np.swapaxes(py, 1, 2)), 1, 2)  # P Yᵀ S⁻¹
         error = force - np.einsum("nij,nj->ni", y, self._theta)
         self._theta = self._theta + np.einsum("nij,nj->ni", gain, error)
-        self._p = (p - gain @ y @ p) / lam
+        self._p = (p - gain @ y @ p) / lam + self._q * dt
         self._p = 0.5 * (self._p + np.swapaxes(self._p, 1, 2))
         self._project()
 
     def _project(self) -> None:
-        """Keep the estimates physical: m and I_B at least a fifth of the model's, |c| ≤ 1 m
-        (F_r is free: downhill it is negative)."""
-        theta = self._theta
-        theta[:, 0] = np.maximum(theta[:, 0], 0.2 * self._theta0[0])
-        theta[:, 1:3] = np.clip(theta[:, 1:3], -theta[:, 0:1], theta[:, 0:1])
-        floor = theta[:, 0] * (theta[:, 1] ** 2 + theta[:, 2] ** 2) / theta[:, 0] ** 2
-        theta[:, 3] = np.maximum(theta[:, 3], np.maximum(0.2 * self._theta0[3], 1.01 * floor))
+        """Keep the estimates physical: mass at least a fifth of the model's; the CG within
+        ``reach`` of B; I_B between a fifth of the model's and what the added mass can add
+        within ``reach`` (its spin and its offset: 2·Δm·reach²), and above m·|c|²."""
+        theta, first = self._theta, self._theta0
+        theta[:, 0] = np.maximum(theta[:, 0], 0.2 * first[0])
+        bound = theta[:, 0:1] * self.reach
+        theta[:, 1:3] = np.clip(theta[:, 1:3], -bound, bound)
+        floor = (theta[:, 1] ** 2 + theta[:, 2] ** 2) / theta[:, 0]
+        added = np.maximum(theta[:, 0] - first[0], 0.0)
+        top = first[3] + 2.0 * added * self.reach**2
+        theta[:, 3] = np.clip(theta[:, 3], np.maximum(0.2 * first[3], 1.01 * floor), top)
 
     # ------------------------------------------------------------------ control
     def __call__(
@@ -275,6 +311,7 @@ class AdaptiveComputedTorque:
         if self._started and dt > 0:
             self._learn(nu, dt)
         self._nu = nu.copy()
+        rows[:, [6, 8]] += self._force_acceleration()
         g = self._pid._gain_matrices
         out = np.empty((flat.shape[0], 2))
         args = self._pid._kernel_args()

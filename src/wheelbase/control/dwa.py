@@ -14,32 +14,34 @@ where V_d does) are each held for ``sim_time`` (a circular arc,
 into a trajectory generator and critics (nav2_dwb_controller; weights from Nav2's
 ``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres):
 
-====================  ============================================================  ========
-critic (weight)       score of one trajectory                                       default
-====================  ============================================================  ========
-``path_dist``         distance [m] from its end to the path window (DWB PathDist,   640 /m
-                      32 per cell)
-``goal_dist``         distance [m] from its end to the local goal: the window's     480 /m
+====================  ==========================================================  ==========
+critic (weight)       score of one trajectory                                     default
+====================  ==========================================================  ==========
+``path_dist``         distance [m] from its end to the path window (DWB           640 /m
+                      PathDist, 32 per cell)
+``goal_dist``         distance [m] from its end to the local goal: the window's   480 /m
                       last point, ``lookahead`` ahead (DWB GoalDist, 24 per cell)
-``path_align``        ``path_dist`` of the point ``forward_point_distance`` ahead   640 /m
-                      of its end (DWB PathAlign)
-``goal_align``        ``goal_dist`` of that point (DWB GoalAlign)                   480 /m
-``costmap``           mean over its steps of the costmap cost / 252 (DWB            45
-                      BaseObstacle: 0.02 per cost unit summed over the 9 poses of
-                      its default trajectory)
-``obstacle``          mean over its steps of (r_infl − c)², c the footprint's       320 /m²
+``path_align``        ``path_dist`` of the point ``forward_point_distance``        640 /m
+                      ahead of its end (DWB PathAlign)
+``goal_align``        ``goal_dist`` of that point (DWB GoalAlign)                 480 /m
+``costmap``           mean over its steps of the costmap cost / 252 (DWB           3000
+                      BaseObstacle; see below)
+``obstacle``          mean over its steps of (r_infl − c)², c the footprint's      320 /m²
                       clearance on the static map, as MPPI's (half ``path_dist``,
                       MPPI's balance)
-``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks (r_dyn + κσ   3000 /m²
-                      − d)², / steps, against the tracks predicted at each step
-                      (shared with MPPI:
+``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks            3000 /m²
+                      (r_dyn + κσ − d)², / steps, against the tracks predicted
+                      at each step (shared with MPPI:
                       :mod:`wheelbase.control.obstacle_critics`)
-``rotate_to_goal``    within the goal's position tolerance: |θ_end − θ_goal| [rad]  32 /rad
-                      (+ ``slowing_factor``·v² while still slowing down)
-====================  ============================================================  ========
+``rotate_to_goal``    within the goal's position tolerance: |θ_end − θ_goal|       32 /rad
+                      [rad] (+ ``slowing_factor``·v² while still slowing down)
+====================  ==========================================================  ==========
 
-The dynamic-obstacle default was set on a disc coming head-on at 0.5 m/s (the test case of
-``tests/test_dwa.py``): 1000 let the robot graze it (2.6 cm), 3000 passes it 0.5 m off.
+Two defaults were set on the cases of ``tests/test_dwa.py``, not taken from Nav2: ``costmap``
+(DWB's BaseObstacle scale, 0.02 per cost unit summed over the 9 poses of its default
+trajectory, is 45 here: DWA then grazed a 0.6 m box on the path, 0 m; 1000: 0 m; 3000: 6.5 cm
+off) and ``dynamic_obstacle`` (a disc coming head-on at 0.5 m/s: 1000 passes it 0.26 m off,
+3000 0.74 m; before the held checks were weighted by their duration 1000 grazed it, 2.6 cm).
 Collisions (the static map's footprint disks, the costmap's lethal and inscribed cells,
 contact with a predicted track) make a trajectory inadmissible, as Fox et al.'s admissible
 velocities; ``path_align`` and ``goal_align`` are off within ``forward_point_distance`` of the
@@ -52,7 +54,7 @@ barred until the robot has moved ``oscillation_reset_distance`` or turned
 robot first slows down (|v| below the current |v|), then, once it can stop within a period,
 turns in place (v = 0) to the goal heading. When no legal trajectory is free of collision the
 legality rules are dropped; when none is free of collision at all the command is a stop
-(0, 0) and :attr:`DWAPlan.status` is ``"all_collide"``: it never drives on blindly. Within both
+(0, 0) and :attr:`DWA.status` is ``"all_collide"``: it never drives on blindly. Within both
 goal tolerances the command is a stop and the status ``"arrived"``.
 
 Backends: ``numba`` (the default, one parallel compiled loop over the samples) and ``numpy``
@@ -79,11 +81,24 @@ from wheelbase._validate import (
     positive,
 )
 from wheelbase.control.base import VELOCITY_COMMAND
-from wheelbase.control.dwa_kernels import SCORES, arc_poses, dwa_kernel, dwa_scores_numpy
+from wheelbase.control.dwa_kernels import (
+    SCORES,
+    arc_poses,
+    dwa_kernel,
+    dwa_scores_numpy,
+    goal_distance_field,
+)
 from wheelbase.control.footprint_field import FootprintField, footprint_disks
 from wheelbase.control.local_path import PathWindow
 from wheelbase.control.mppi_bounds import KIND_VELOCITY, model_kind
-from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME, PerceptionInputs
+from wheelbase.control.mppi_critics import critics_from_mapping, split_critic_gains
+from wheelbase.control.mppi_numba import run_kernel
+from wheelbase.control.obstacle_critics import (
+    ACCELERATION_NOISE,
+    HOLD_TIME,
+    PerceptionInputs,
+    path_blocked,
+)
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_SAMPLE_STEPS
@@ -133,7 +148,7 @@ class DWACritics:
     goal_dist: float = 480.0
     path_align: float = 640.0
     goal_align: float = 480.0
-    costmap: float = 45.0
+    costmap: float = 3000.0
     obstacle: float = 320.0
     dynamic_obstacle: float = 3000.0
     rotate_to_goal: float = 32.0
@@ -170,19 +185,7 @@ class DWACritics:
         -------
         DWACritics
         """
-        if values is None:
-            return cls()
-        if isinstance(values, cls):
-            return values
-        if not isinstance(values, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ConfigError(
-                f"unknown DWA critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}"
-            )
-        return cls(**values)
+        return critics_from_mapping(cls, values, "DWA critic")
 
     def vector(self) -> np.ndarray:
         """The weights of :data:`~wheelbase.control.dwa_kernels.SCORES`, in that order."""
@@ -402,15 +405,8 @@ class DWA:
         >>> DWA.from_gains(Unicycle(), sim_time=2.0, costmap=90.0).critics.costmap
         90.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, DWACritics)
         critic_names = {f.name for f in fields(DWACritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         allowed = set(inspect.signature(cls).parameters) - {"model", "critics", "grid",
                                                              "footprint"}  # fmt: skip
         unknown = sorted(set(options) - allowed)
@@ -508,36 +504,41 @@ class DWA:
         local_map[:2] -= pose[:2]
         relief = self._field.relief(pose, local_map)
         seen = self._perception.arrays(perception, pose, t, self._step_times, self.max_speed)
-        goal = window[-1, :3].copy()
-        if near_goal:
-            goal[:] = info[1], info[2], info[3]
+        goal, field, fgeo = self._local_goal(window, info, near_goal, seen)
         c = self.critics
         forward, direction = c.forward_point_distance, float(info[4])
         if self.backend == "numba":
             scores = np.empty((samples.shape[0], len(SCORES)))
             collided = np.empty(samples.shape[0], np.bool_)
-            dwa_kernel(
-                pose[2], samples, self.sim_dt, self.steps, window, goal, forward, direction,
-                self._field.distance_field, local_map, self._field.circles, relief, c.inflation,
-                seen.cost, seen.near, seen.geometry, seen.polygon, seen.table, seen.relief,
-                seen.disks, c.dynamic_inflation, scores, collided,
+            run_kernel(
+                dwa_kernel, samples.shape[0] * self.steps,
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3].copy(), direction, self._field.distance_field, local_map,
+                self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
+                seen.polygon, seen.table, seen.relief, seen.disks, c.dynamic_inflation, scores,
+                collided,
             )  # fmt: skip
         else:
             scores, collided = dwa_scores_numpy(
-                pose[2], samples, self.sim_dt, self.steps, window, goal, forward, direction,
-                self._field, local_map, relief, c.inflation, seen, c.dynamic_inflation,
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3], direction, self._field, local_map, relief, c.inflation, seen,
+                c.dynamic_inflation,
             )  # fmt: skip
         weights = c.vector()
         if info[5] <= forward:
             weights[2] = weights[3] = 0.0  # align critics off at the section's end
+        if path_blocked(window, self._field, local_map, seen):
+            weights[0] = weights[2] = 0.0  # the path collides: do not pull the robot onto it
         rotating = False
         if near_goal:
             # DWB's RotateToGoal: slow down, then turn in place once a stop is within reach
             rotating = abs(self._velocity[0]) <= self.max_deceleration * period
         else:
             weights[7] = 0.0
+        unreachable = scores[:, 1] < 0.0  # DWB: "trajectory hits unreachable area"
+        scores[unreachable, 1] = scores[unreachable, 3] = np.max(scores[:, 1], initial=0.0)
         costs = scores @ weights
-        legal = ~collided
+        legal = ~collided & ~unreachable
         if near_goal:
             v = samples[:, 0]
             if rotating:
@@ -563,6 +564,31 @@ class DWA:
         plan = DWAPlan(command, samples, costs, scores, collided, legal, "ok", pose.copy())
         self.last_plan = plan
         return plan
+
+    def _local_goal(self, window: np.ndarray, info: np.ndarray, near_goal: bool, seen: Any):
+        """The local goal (x, y, heading) relative to the robot and its distance field: the
+        last window point on a passable cell of the costmap (DWB: where the path leaves the
+        local costmap), or the path's end near the goal; without a costmap straight
+        distances."""
+        goal = window[-1, :3].copy()
+        if near_goal:
+            goal[:] = info[1], info[2], info[3]
+        if not seen.has_costmap:
+            return goal, np.full((1, 1), -1.0), np.array([0.0, 0.0, 1.0, 0.0])
+        reach = self.lookahead + self.max_speed * self.sim_time + 0.5
+        if not near_goal:
+            x0, y0, res = seen.geometry[:3]
+            rows, cols = seen.cost.shape
+            col = np.floor((window[:, 0] - x0) / res)
+            row = np.floor((window[:, 1] - y0) / res)
+            inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+            r = np.clip(row, 0, rows - 1).astype(np.int64)
+            q = np.clip(col, 0, cols - 1).astype(np.int64)
+            passable = np.flatnonzero(inside & (seen.cost[r, q] < 253))
+            if passable.size:  # a goal inside an obstacle would make every end unreachable
+                goal = window[passable[-1], :3].copy()
+        field, fgeo = goal_distance_field(seen.cost, seen.geometry, goal[:2], reach)
+        return goal, field, fgeo
 
     def window_samples(self, period: float | None = None) -> np.ndarray:
         """The sampled velocities ``(S, 2)`` (v [m/s], ω [rad/s]) of the dynamic window from

@@ -14,11 +14,18 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numba
 import numpy as np
 
 from wheelbase.errors import ConfigError
 
-__all__ = ["MAX_FOOTPRINT_DISKS", "OUTLINE_SPACING", "FootprintField", "footprint_disks"]
+__all__ = [
+    "MAX_FOOTPRINT_DISKS",
+    "OUTLINE_SPACING",
+    "FootprintField",
+    "clearance_at",
+    "footprint_disks",
+]
 
 OUTLINE_SPACING = 0.2
 """Spacing [m] of the edge disks that stand for a long footprint."""
@@ -190,3 +197,28 @@ class FootprintField:
             inside = bool(self.grid.contains(pose[None, :2])[0])
             return not inside or bool(self.grid.is_occupied(pose[None, :2])[0])
         return bool(np.asarray(self.grid.in_collision(self.footprint, pose[None])).reshape(-1)[0])
+
+
+@numba.njit(cache=True, inline="always")
+def clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin):
+    """The compiled twin of :meth:`FootprintField.clearance` for one pose: the footprint's
+    clearance [m] (the least over its disks of field − radius − ``margin``; 0 where a disk leaves
+    the map) and whether it collides. ``(c, s)`` = (cos θ, sin θ), ``inv_res`` = 1/resolution,
+    positions in the frame of the map origin (x0, y0)."""
+    rows, cols = df.shape[0], df.shape[1]
+    clearance = 1.0e300  # finite: the kernels run with fastmath (no inf)
+    hit = False
+    for k in range(circles.shape[0]):
+        px = x + c * circles[k, 0] - s * circles[k, 1]
+        py = y + s * circles[k, 0] + c * circles[k, 1]
+        col = math.floor((px - x0) * inv_res)
+        row = math.floor((py - y0) * inv_res)
+        if row < 0 or row >= rows or col < 0 or col >= cols:
+            hit = True
+            clearance = 0.0
+            continue
+        clear = df[row, col] - circles[k, 2] - margin
+        if clear <= 0.0:
+            hit = True
+        clearance = min(clearance, clear)
+    return clearance, hit

@@ -84,11 +84,11 @@ from wheelbase.control.mppi_bounds import (
     command_bounds,
     model_kind,
 )
-from wheelbase.control.mppi_critics import MPPICritics
+from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
-from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel
+from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
 from wheelbase.control.mppi_numpy import numpy_costs, rollout
-from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, costmap_check
+from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
@@ -373,15 +373,8 @@ class MPPI:
         >>> MPPI.from_gains(Unicycle(), samples=100, obstacle=30.0).critics.obstacle
         30.0
         """
-        options = dict(gains)
+        critics, options = split_critic_gains(gains, MPPICritics)
         critic_names = {f.name for f in dataclass_fields(MPPICritics)}
-        critics = options.pop("critics", None) or {}
-        if not isinstance(critics, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
-        critics = dict(critics)
-        for name in list(options):
-            if name in critic_names:
-                critics[name] = options.pop(name)
         max_speed = options.pop("max_speed", 0.5)
         max_yaw_rate = options.pop("max_yaw_rate", 1.5)
         kind, _base = model_kind(model)
@@ -515,7 +508,7 @@ class MPPI:
         if last_section and info[5] <= self.critics.near_goal_distance:
             # obstacle and costmap repulsion off near the goal (collisions stay lethal)
             weights[5] = weights[12] = 0.0
-        blocked = self._path_blocked(window, local_map, seen)
+        blocked = path_blocked(window, self._field, local_map, seen)
         info[6] = self._field.relief(pose, local_map)  # see FootprintField.relief
         if blocked:
             weights[:2] = 0.0  # the path itself collides: do not pull the robot onto it
@@ -581,7 +574,8 @@ class MPPI:
         costs = np.empty(self.samples)
         controls = np.empty((self.samples, self.horizon_steps, self.nu))
         local, mean, lo, hi, scale, window, info, last, weights = args
-        mppi_kernel(
+        run_kernel(
+            mppi_kernel, self.samples * self.horizon_steps,
             local, mean, lo, hi, scale, window, info, last, buffer, has_noise, held_from,
             self.noise_std,
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
@@ -590,18 +584,6 @@ class MPPI:
             seen.polygon, seen.table, seen.relief, seen.disks, costs, controls,
         )  # fmt: skip
         return costs, controls
-
-    def _path_blocked(self, window: np.ndarray, mp: np.ndarray, seen: PerceptionArrays) -> bool:
-        """Whether more than 7 % of the window's poses put the footprint in collision with the
-        map or the costmap (Nav2's ``max_path_occupancy_ratio``): the path critics are then
-        switched off for this call."""
-        collided = np.zeros(window.shape[0], bool)
-        if self._field.enabled:
-            collided |= self._field.clearance(window[:, :3], geometry=mp)[1]
-        if seen.has_costmap:
-            collided |= costmap_check(window[:, :3], seen.cost, seen.near, seen.geometry,
-                                      seen.polygon)[1]  # fmt: skip
-        return bool(np.mean(collided) > 0.07)
 
     def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
         self.status = status

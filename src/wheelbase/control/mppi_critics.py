@@ -57,6 +57,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
@@ -64,7 +65,7 @@ from wheelbase._validate import finite, nonnegative, positive
 from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME
 from wheelbase.errors import ConfigError
 
-__all__ = ["MPPICritics"]
+__all__ = ["MPPICritics", "critics_from_mapping", "split_critic_gains"]
 
 
 @dataclass(frozen=True)
@@ -154,23 +155,8 @@ class MPPICritics:
         "costmap",
         "dynamic_obstacle",
     )
-    VECTOR = (
-        "path",
-        "path_align",
-        "follow",
-        "goal",
-        "goal_heading",
-        "obstacle",
-        "prefer_forward",
-        "effort",
-        "rate",
-        "twirl",
-        "inflation",
-        "collision_cost",
-        "costmap",
-        "dynamic_obstacle",
-        "dynamic_inflation",
-    )
+    VECTOR = (*WEIGHTS[:10], "inflation", "collision_cost", "costmap", "dynamic_obstacle",
+              "dynamic_inflation")  # fmt: skip
 
     def __post_init__(self) -> None:
         for name in self.WEIGHTS:
@@ -222,19 +208,66 @@ class MPPICritics:
         -------
         MPPICritics
         """
-        if values is None:
-            return cls()
-        if isinstance(values, cls):
-            return values
-        if not isinstance(values, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ConfigError(f"unknown critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
-        return cls(**values)
+        return critics_from_mapping(cls, values, "critic")
 
     def vector(self) -> np.ndarray:
         """The weights and shape parameters the kernels read, in the order of :attr:`VECTOR`,
         float64."""
         return np.array([getattr(self, name) for name in self.VECTOR], dtype=np.float64)
+
+
+def critics_from_mapping(cls: type, values: Any, label: str) -> Any:
+    """Critics of dataclass ``cls`` from a mapping of plain keyword values (a scenario file), as
+    given when already one, the defaults for ``None``.
+
+    Parameters
+    ----------
+    cls : type
+        The critics' dataclass (:class:`MPPICritics`, :class:`~wheelbase.control.DWACritics`).
+    values : dict, cls or None
+        Values by name.
+    label : str
+        What an unknown name is called in the error (``"critic"``, ``"DWA critic"``).
+
+    Returns
+    -------
+    cls
+    """
+    if values is None:
+        return cls()
+    if isinstance(values, cls):
+        return values
+    if not isinstance(values, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(f"unknown {label} {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
+    return cls(**values)
+
+
+def split_critic_gains(gains: dict, cls: type) -> tuple[dict, dict]:
+    """Split a scenario's flat gains into the critics' (by field name of ``cls``, merged over a
+    ``critics={...}`` entry) and the others.
+
+    Parameters
+    ----------
+    gains : dict
+        The gains as given.
+    cls : type
+        The critics' dataclass.
+
+    Returns
+    -------
+    critics, options : dict
+    """
+    options = dict(gains)
+    names = {f.name for f in fields(cls)}
+    critics = options.pop("critics", None) or {}
+    if not isinstance(critics, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
+    critics = dict(critics)
+    for name in list(options):
+        if name in names:
+            critics[name] = options.pop(name)
+    return critics, options

@@ -26,9 +26,22 @@ fan of rollouts); the others never leave the device."""
 
 
 def jax_costs(mppi: Any, pose, mean, lo, hi, scale, window, info, last, w, noise, mp):
-    """Costs and sampled commands from the JAX backend (the arguments of
-    :func:`wheelbase.control.mppi_numpy.numpy_costs` but the perception); with ``noise=None``
-    the noise is drawn on the device from a key folded from (seed, call)."""
+    """Costs and sampled commands from the JAX backend; with ``noise=None`` the noise is drawn
+    on the device from a key folded from (seed, call).
+
+    Parameters
+    ----------
+    mppi : MPPI
+        The controller (its map on the device is cached on it).
+    pose, mean, lo, hi, scale, window, info, last, w, noise, mp : numpy.ndarray
+        As for :func:`wheelbase.control.mppi_numpy.numpy_costs` (no perception here).
+
+    Returns
+    -------
+    costs : numpy.ndarray, shape (K,)
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        On the device where that is a GPU.
+    """
     jax, jnp = import_jax()
     if noise is None and jax.default_backend() == "cpu":
         # NumPy draws normals about twice as fast as XLA's threefry on a CPU; on a GPU the
@@ -66,7 +79,21 @@ def jax_costs(mppi: Any, pose, mean, lo, hi, scale, window, info, last, w, noise
 
 def weighted_mean(weights: np.ndarray, controls: Any, float64: bool) -> np.ndarray:
     """Σ_i w_i V_i, shape (T, m): on the host for NumPy arrays, on the device for JAX arrays
-    (only K weights go there and T·m numbers come back), in float64 when ``float64``."""
+    (only K weights go there and T·m numbers come back).
+
+    Parameters
+    ----------
+    weights : numpy.ndarray, shape (K,)
+        Softmin weights.
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        Sampled sequences.
+    float64 : bool
+        Reduce in float64 on the device.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
     if isinstance(controls, np.ndarray):
         return np.tensordot(weights, controls, axes=1)
     jax, jnp = import_jax()
@@ -77,7 +104,19 @@ def weighted_mean(weights: np.ndarray, controls: Any, float64: bool) -> np.ndarr
 
 def host_samples(controls: Any, float64: bool) -> np.ndarray:
     """The first :data:`KEPT_DEVICE_SAMPLES` sampled sequences on the host (all of a NumPy
-    array)."""
+    array).
+
+    Parameters
+    ----------
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        Sampled sequences.
+    float64 : bool
+        Copy them in float64.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
     if isinstance(controls, np.ndarray):
         return controls
     jax, _jnp = import_jax()
@@ -88,8 +127,27 @@ def host_samples(controls: Any, float64: bool) -> np.ndarray:
 def jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int | None):
     """The jit-compiled JAX iteration: a ``lax.scan`` rolls the samples out, then the critics
     score all steps at once (on a CPU this beat a per-step fusion of rollout and critics:
-    5.8 against 7.5 ms at 2,000 × 56). ``samples``: draw that many noise sequences inside from a
-    PRNG key; ``None``: take the noise as an argument."""
+    5.8 against 7.5 ms at 2,000 × 56).
+
+    Parameters
+    ----------
+    steps : int
+        Horizon steps T.
+    stride : int
+        The path critics' stride.
+    kind : int
+        The command kind (:mod:`wheelbase.control.mppi_bounds`).
+    float64 : bool
+        Compute in float64.
+    samples : int or None
+        Draw that many noise sequences inside from a PRNG key; ``None``: take the noise as an
+        argument.
+
+    Returns
+    -------
+    callable
+        The jitted function (cached per arguments).
+    """
     key = (steps, stride, kind, float64, samples)
     if key in _JAX_CACHE:
         return _JAX_CACHE[key]

@@ -13,7 +13,12 @@ from typing import Any
 import numpy as np
 
 from wheelbase.control.mppi_bounds import KIND_HOLONOMIC, KIND_VELOCITY, clip_commands
-from wheelbase.control.obstacle_critics import PerceptionArrays, costmap_costs, track_costs
+from wheelbase.control.obstacle_critics import (
+    HOLD_STEP,
+    PerceptionArrays,
+    costmap_costs,
+    track_costs,
+)
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
 
@@ -130,7 +135,8 @@ def numpy_costs(
         cost += w[12] * np.sum(soft, axis=1) / steps
         collided |= np.any(hit, axis=1)
     if seen.has_tracks:
-        soft, hit = track_costs(after, seen.table, seen.relief, seen.disks, w[14])
+        soft, hit = track_costs(after, seen.table, seen.relief, seen.disks, w[14],
+                                HOLD_STEP / mppi.dt)  # fmt: skip
         cost += w[13] * np.sum(soft, axis=1) / steps
         collided |= np.any(hit, axis=1)
     cost += np.where(collided, w[11], 0.0)

@@ -60,8 +60,10 @@ A horizon of a few seconds is myopic about a walker coming straight at the robot
 that slows down pushes the contact past its end and looks safe, and the robot stops in the
 walker's way (measured: a disc coming head-on at 0.5 m/s then runs into a stopped robot). So the
 rollout's final pose is also *held* (the robot stopped there) for ``hold_time`` seconds more
-(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.1 s) and scored against the
-predictions at those times, with the soft cost only: standing in the predicted way of a track
+(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.25 s: a walker at 0.5 m/s
+moves 0.125 m between checks) and scored against the
+predictions at those times, with the soft cost only (each check weighted as the HOLD_STEP/dt
+rollout steps it stands for): standing in the predicted way of a track
 costs (the idea of the braking inevitable-collision-state test of Fraichard & Asama, "Inevitable
 collision states", Advanced Robotics 18(10), 2004), but is not lethal, since the robot need not
 stay there (a lethal hold stopped DWA in the walker's way: its arcs could not leave the line
@@ -82,6 +84,7 @@ import numba
 import numpy as np
 
 from wheelbase.errors import InputError
+from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
     "ACCELERATION_NOISE",
@@ -90,12 +93,15 @@ __all__ = [
     "INSCRIBED",
     "LETHAL",
     "MAX_INFLATED",
+    "MAX_PATH_OCCUPANCY",
     "UNKNOWN",
     "PerceptionArrays",
     "PerceptionInputs",
     "costmap_check",
     "costmap_cost_at",
     "costmap_costs",
+    "disk_reach",
+    "path_blocked",
     "predict_tracks",
     "read_costmap",
     "read_tracks",
@@ -112,8 +118,14 @@ ACCELERATION_NOISE = 0.03
 HOLD_TIME = 5.0
 """Default time [s] a rollout's final pose is held against the predicted tracks."""
 
-HOLD_STEP = 0.1
+HOLD_STEP = 0.25
 """Spacing [s] of the checks of the held final pose."""
+
+MAX_VIEW_AGE = 3600.0
+"""Most seconds a view may be older than the call (the prediction is then meaningless)."""
+
+MAX_TRACK_SPEED = 1000.0
+"""Largest track speed component [m/s] a view may give."""
 
 CONTACT_RELIEF = 0.01
 """How much deeper [m] a rollout must get into what it already touches to count as colliding."""
@@ -153,9 +165,15 @@ def read_costmap(costmap: Any) -> tuple[np.ndarray, float, np.ndarray]:
         res = math.nan
     if not (math.isfinite(res) and res > 0.0):
         raise InputError(f"perception.costmap.resolution must be > 0 m (got {resolution!r})")
-    xy = np.asarray(origin, dtype=np.float64).reshape(-1)
-    if xy.size < 2 or not np.all(np.isfinite(xy[:2])):
-        raise InputError(f"perception.costmap.origin must be finite (x0, y0) [m] (got {origin!r})")
+    try:
+        xy = np.asarray(origin, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        xy = np.zeros(0)
+    if xy.size < 2 or not np.all(np.abs(xy[:2]) <= MAX_COORDINATE):
+        raise InputError(
+            f"perception.costmap.origin must be (x0, y0) [m] within ±{MAX_COORDINATE:g} m (got "
+            f"{origin!r})"
+        )
     return np.ascontiguousarray(array), res, xy[:2].copy()
 
 
@@ -185,7 +203,7 @@ def read_tracks(tracks: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
         ) from None
     position = _finite_array("perception.tracks.position", position, (-1, 2))
     count = position.shape[0]
-    velocity = _finite_array("perception.tracks.velocity", velocity, (count, 2))
+    velocity = _finite_array("perception.tracks.velocity", velocity, (count, 2), MAX_TRACK_SPEED)
     radius = _finite_array("perception.tracks.radius", radius, (count,))
     if np.any(radius < 0.0):
         raise InputError(f"perception.tracks.radius must be >= 0 m (got {radius.min():g})")
@@ -210,7 +228,9 @@ def read_tracks(tracks: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     return position, velocity, covariance, radius
 
 
-def _finite_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
+def _finite_array(
+    name: str, value: Any, shape: tuple[int, ...], limit: float = MAX_COORDINATE
+) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -223,6 +243,8 @@ def _finite_array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
         raise InputError(f"{name} must have shape ({text}) (got {array.shape})")
     if not np.all(np.isfinite(array)):
         raise InputError(f"{name} must be finite (got NaN or inf)")
+    if not np.all(np.abs(array) <= limit):
+        raise InputError(f"{name} must be within ±{limit:g} (got {np.max(np.abs(array)):.3g})")
     return array
 
 
@@ -436,13 +458,17 @@ class PerceptionInputs:
         view_time = getattr(perception, "time", None)
         if t is not None and view_time is not None:
             try:
-                lag = max(float(t) - float(view_time), 0.0)
+                stamp = float(view_time)
             except (TypeError, ValueError):
+                stamp = math.nan
+            if not math.isfinite(stamp):
+                raise InputError(f"perception.time must be a finite time [s] (got {view_time!r})")
+            lag = max(float(t) - stamp, 0.0)
+            if not lag <= MAX_VIEW_AGE:
                 raise InputError(
-                    f"perception.time must be a time [s] (got {view_time!r})"
-                ) from None
-            if not math.isfinite(lag):
-                raise InputError(f"perception.time must be finite [s] (got {view_time!r})")
+                    f"perception.time must be at most {MAX_VIEW_AGE:g} s before the call's t = "
+                    f"{float(t):g} s (got {view_time!r})"
+                )
         times = np.asarray(times, dtype=np.float64)
         held = times[-1] + HOLD_STEP * np.arange(1, self.hold_checks + 1)
         ahead = np.concatenate([[0.0], times, held])
@@ -466,6 +492,42 @@ class PerceptionInputs:
         distance = _track_distances(here, now, self.disks)[0, 0]  # (J,)
         relief = np.where(distance <= 0.0, distance - CONTACT_RELIEF, 0.0)
         return np.ascontiguousarray(table), relief
+
+
+MAX_PATH_OCCUPANCY = 0.07
+"""Share of the path window's poses that may collide before the path critics are switched off
+for a call (Nav2 MPPI's ``max_path_occupancy_ratio``)."""
+
+
+def path_blocked(
+    window: np.ndarray, field: Any, geometry: np.ndarray, seen: PerceptionArrays
+) -> bool:
+    """Whether more than :data:`MAX_PATH_OCCUPANCY` of the path window's poses put the footprint
+    in collision with the static map or the costmap: a path that cuts through obstacles must
+    not pull the robot onto them (the controllers then switch their path critics off).
+
+    Parameters
+    ----------
+    window : numpy.ndarray, shape (M, 4)
+        The path window (x, y, heading, arc), relative to the robot.
+    field : FootprintField
+        The static map and footprint disks.
+    geometry : numpy.ndarray, shape (4,)
+        The map's geometry, origin relative to the robot.
+    seen : PerceptionArrays
+        The costmap.
+
+    Returns
+    -------
+    bool
+    """
+    collided = np.zeros(window.shape[0], bool)
+    if field.enabled:
+        collided |= field.clearance(window[:, :3], geometry=geometry)[1]
+    if seen.has_costmap:
+        collided |= costmap_check(window[:, :3], seen.cost, seen.near, seen.geometry,
+                                  seen.polygon)[1]  # fmt: skip
+    return bool(np.mean(collided) > MAX_PATH_OCCUPANCY)
 
 
 # --------------------------------------------------------------------------- Numba twins
@@ -530,14 +592,18 @@ def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
 
 
 @numba.njit(cache=True, inline="always")
-def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held):
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach):
     """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
     predicted tracks (module docstring); a step past the rollout's is a check of the held final
-    pose."""
+    pose. ``reach`` [m] bounds the disks' extent from the pose (:func:`disk_reach`): a track
+    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped."""
     total = 0.0
     hit = False
     for j in range(table.shape[1]):
         mx, my = table[step, j, 0], table[step, j, 1]
+        far = reach + table[step, j, 2] + table[step, j, 3] + inflation
+        if (x - mx) * (x - mx) + (y - my) * (y - my) >= far * far:
+            continue
         least = 1.0e300
         for k in range(disks.shape[0]):
             px = x + c * disks[k, 0] - s * disks[k, 1]
@@ -551,6 +617,15 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held):
             gap = inflation - beyond
             total += gap * gap
     return total, hit
+
+
+@numba.njit(cache=True)
+def disk_reach(disks):
+    """The largest |centre| + radius [m] of the disks ``(D, 3)``."""
+    reach = 0.0
+    for k in range(disks.shape[0]):
+        reach = max(reach, math.hypot(disks[k, 0], disks[k, 1]) + disks[k, 2])
+    return reach
 
 
 @numba.njit(cache=True)
@@ -689,6 +764,7 @@ def track_costs(
     relief: np.ndarray,
     disks: np.ndarray,
     inflation: float,
+    hold_weight: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Soft cost Σ_j gap² [m²] and contact of rollout poses against the predicted tracks
     (vectorised twin of :func:`track_cost_at`).
@@ -706,6 +782,9 @@ def track_costs(
         The footprint's covering disks.
     inflation : float
         r_dyn [m].
+    hold_weight : float
+        Factor of the held checks' soft cost (:data:`HOLD_STEP` / dt: each stands for that
+        many rollout steps).
 
     Returns
     -------
@@ -723,4 +802,6 @@ def track_costs(
     collided[:, steps:] = False  # the held pose is scored, never lethal
     beyond = d - table[None, ..., 3]
     gap = np.where(beyond < inflation, inflation - beyond, 0.0)
-    return np.sum(gap * gap, axis=-1), collided
+    soft = np.sum(gap * gap, axis=-1)
+    soft[:, steps:] *= hold_weight
+    return soft, collided

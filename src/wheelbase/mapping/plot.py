@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_error", "plot_map", "plot_pose_graph"]
+__all__ = ["animate_map", "plot_error", "plot_landmarks", "plot_map", "plot_pose_graph"]
 
 
 def _pyplot() -> Any:
@@ -158,6 +158,102 @@ def plot_error(
     ax.set_xlabel("time [s]")
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize=8)
+    return _save(plt, fig, path)
+
+
+def _image(grid: Any) -> np.ndarray:
+    image = np.where(grid.occupied, 0.0, 1.0)
+    if grid.unknown is not None:
+        image = np.where(grid.unknown, 0.75, image)
+    return image
+
+
+def animate_map(frames: list[tuple[Any, np.ndarray]], path: str | Path, title: str = "",
+                fps: int = 5) -> Path:  # fmt: skip
+    """A GIF of a map growing: one frame per ``(grid, trajectory so far)``.
+
+    The frames' grids may differ in extent; all are drawn in the last one's.
+
+    Parameters
+    ----------
+    frames : list of tuple
+        ``(OccupancyGrid, poses (T, 3))`` in order.
+    path : str or Path
+        GIF file to write.
+    title : str
+        Figure title.
+    fps : int
+        Frames per second.
+
+    Returns
+    -------
+    Path
+    """
+    plt = _pyplot()
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    last = frames[-1][0]
+    x0, x1, y0, y1 = last.extent
+    fig, ax = plt.subplots(figsize=(6, 6 * (y1 - y0) / max(x1 - x0, 1e-9) + 0.4))
+    shown = ax.imshow(_image(frames[0][0]), cmap="gray", vmin=0, vmax=1, origin="lower",
+                      extent=frames[0][0].extent, interpolation="nearest")  # fmt: skip
+    (line,) = ax.plot([], [], color="tab:blue", lw=0.8)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+    def draw(k: int) -> tuple:
+        grid, poses = frames[k]
+        shown.set_data(_image(grid))
+        shown.set_extent(grid.extent)
+        line.set_data(poses[:, 0], poses[:, 1])
+        ax.set_title(f"{title} ({k + 1}/{len(frames)})")
+        return shown, line
+
+    anim = FuncAnimation(fig, draw, frames=len(frames), blit=False)
+    path = Path(path)
+    anim.save(path, writer=PillowWriter(fps=fps))
+    plt.close(fig)
+    return path
+
+
+def plot_landmarks(result: Any, path: str | Path, title: str = "") -> Path:
+    """A landmark SLAM result: estimated landmarks with 3σ ellipses beside the surveyed ones,
+    the estimated and the true trajectory.
+
+    Parameters
+    ----------
+    result : LandmarkSlamResult
+        The run.
+    path : str or Path
+        PNG file to write.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Path
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    ax.plot(*result.truth[:, :2].T, color="k", lw=1.0, label="ground truth (Vicon)")
+    ax.plot(*result.estimate[:, :2].T, color="tab:blue", lw=0.8, label=result.method)
+    ax.plot(*result.true_landmarks.T, "*", color="tab:green", ms=12, label="surveyed landmarks")
+    ax.plot(*result.landmarks.T, "+", color="tab:red", ms=10, mew=2, label="estimated")
+    angle = np.linspace(0, 2 * np.pi, 60)
+    circle = np.stack([np.cos(angle), np.sin(angle)])
+    for xy, cov in zip(result.landmarks, result.landmark_cov, strict=True):
+        if np.all(np.isfinite(cov)):
+            vals, vecs = np.linalg.eigh(cov)
+            ellipse = vecs @ (3.0 * np.sqrt(np.maximum(vals, 0.0))[:, None] * circle)
+            ax.plot(xy[0] + ellipse[0], xy[1] + ellipse[1], color="tab:red", lw=0.6)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
     return _save(plt, fig, path)

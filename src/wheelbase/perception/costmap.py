@@ -58,12 +58,13 @@ from wheelbase._validate import as_float_array, integer, positive
 from wheelbase.errors import ConfigError, InputError, MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.perception.costs import FREE, LETHAL, UNKNOWN, inflation_table
-from wheelbase.perception.specs import CostmapSpec
+from wheelbase.perception.specs import CostmapSpec, check_scan_geometry
 from wheelbase.planning import Footprint, OccupancyGrid
 
 __all__ = ["Costmap", "CostmapState", "LayeredCostmap", "update_costmap"]
 
 _ROUNDING = 1e-9  # cells
+_MAX_REACH = 1000  # cells of inflation around a lethal cell (see LayeredCostmap)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -330,9 +331,26 @@ class LayeredCostmap:
                 "obstacle would not be marked inscribed; set it to at least that"
             )
         object.__setattr__(self, "inscribed_radius", radius)
+        rows, cols = static.shape
+        diagonal = math.ceil(math.hypot(rows, cols))  # no two cells are farther apart
+        reach = min(math.floor(self.spec.inflation_radius / self.resolution + _ROUNDING), diagonal)
+        if reach > _MAX_REACH:
+            raise ConfigError(
+                f"costmap.inflation_radius = {self.spec.inflation_radius:g} m is {reach} cells "
+                f"at {self.resolution:g} m: more than {_MAX_REACH} (every change would inflate "
+                "that far around it); use a smaller radius or a coarser costmap.resolution"
+            )
+        window = max(1, math.floor(min(self.spec.window / self.resolution, 1e18) + _ROUNDING))
+        if window * window > MAX_MAP_CELLS:
+            raise ConfigError(
+                f"costmap.window = {self.spec.window:g} m is {window} cells a side at "
+                f"{self.resolution:g} m: more than {MAX_MAP_CELLS:.0e} cells "
+                "(wheelbase.limits.MAX_MAP_CELLS)"
+            )
         table = inflation_table(
-            self.resolution, radius, self.spec.cost_scaling_factor, self.spec.inflation_radius
-        )
+            self.resolution, radius, self.spec.cost_scaling_factor, self.spec.inflation_radius,
+            diagonal,
+        )  # fmt: skip
         object.__setattr__(self, "table", _read_only(table))
 
     @classmethod
@@ -379,7 +397,7 @@ class LayeredCostmap:
     @property
     def window_cells(self) -> int:
         """Side of the rolling window in cells, ⌊window / resolution⌋ (at least 1)."""
-        return max(1, math.floor(self.spec.window / self.resolution + _ROUNDING))
+        return max(1, math.floor(min(self.spec.window / self.resolution, 1e18) + _ROUNDING))
 
     @cached_property
     def initial_cost(self) -> np.ndarray:
@@ -525,16 +543,16 @@ def update_costmap(
     poses = as_float_array("sensor_poses", sensor_poses, 3, min_ndim=2, max_ndim=2)
     angles = as_float_array("beam_angles", beam_angles, min_ndim=1, max_ndim=1)
     scans = _readings(ranges, (poses.shape[0], angles.shape[0]))
-    max_range = positive("max_range", max_range, "m")
+    max_range = check_scan_geometry(poses[:, :2], max_range)
     rows = _rows(index, poses.shape[0], state.robots)
-    spec, inv = costmap.spec, 1.0 / costmap.resolution
-    cells = np.column_stack([(poses[:, 0] - costmap.origin[0]) * inv,
-                             (poses[:, 1] - costmap.origin[1]) * inv, poses[:, 2]])  # fmt: skip
-    limits = inv * np.array([max_range, spec.obstacle_min_range, spec.obstacle_max_range,
-                             spec.raytrace_min_range, spec.raytrace_max_range])  # fmt: skip
+    spec = costmap.spec
+    params = np.array([max_range, spec.obstacle_min_range, spec.obstacle_max_range,
+                       spec.raytrace_min_range, spec.raytrace_max_range, *costmap.origin,
+                       1.0 / costmap.resolution])  # fmt: skip
     obstacle, cost = state.obstacle.copy(), state.cost.copy()
-    batch_update(costmap.static, state.obstacle, obstacle, cost, rows, cells, angles,
-                 scans * inv, limits, costmap.table, costmap.reach)  # fmt: skip
+    batch_update(costmap.static, state.obstacle, obstacle, cost, rows,
+                 np.ascontiguousarray(poses), np.ascontiguousarray(angles), scans, params,
+                 costmap.table, costmap.reach)  # fmt: skip
     return CostmapState(_read_only(obstacle), _read_only(cost))
 
 

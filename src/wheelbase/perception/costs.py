@@ -71,14 +71,19 @@ def inflation_cost(
     """
     d = np.asarray(distance, dtype=np.float64)
     tol = _ROUNDING * resolution
-    decay = np.floor((INSCRIBED - 1) * np.exp(-cost_scaling_factor * (d - inscribed_radius)))
+    beyond = np.maximum(d - inscribed_radius, 0.0)  # inside, the cost is 253 anyway
+    decay = np.floor((INSCRIBED - 1) * np.exp(-cost_scaling_factor * beyond))
     cost = np.where(d <= inflation_radius + tol, np.minimum(decay, INSCRIBED - 1), FREE)
     cost = np.where(d <= inscribed_radius + tol, INSCRIBED, cost)
     return np.where(d <= tol, LETHAL, cost).astype(np.uint8)
 
 
 def inflation_table(
-    resolution: float, inscribed_radius: float, cost_scaling_factor: float, inflation_radius: float
+    resolution: float,
+    inscribed_radius: float,
+    cost_scaling_factor: float,
+    inflation_radius: float,
+    max_reach: int | None = None,
 ) -> np.ndarray:
     """Costs by squared distance in cells: entry ``s`` is :func:`inflation_cost` at
     ``sqrt(s) · resolution``, for ``s`` up to the first squared distance beyond the radius.
@@ -93,6 +98,8 @@ def inflation_table(
         Decay rate k [1/m].
     inflation_radius : float
         Largest distance [m] that gets a cost.
+    max_reach : int or None
+        Cells beyond which no distance occurs (e.g. the map's diagonal): R is capped there.
 
     Returns
     -------
@@ -100,7 +107,9 @@ def inflation_table(
         uint8, length ``(R + 1)²`` with ``R = ⌊inflation_radius / resolution⌋`` cells, so that
         every squared distance at or beyond the table's length costs 0.
     """
-    reach = math.floor(inflation_radius / resolution + _ROUNDING)
+    reach = math.floor(min(inflation_radius / resolution + _ROUNDING, 1e18))
+    if max_reach is not None:
+        reach = min(reach, max_reach)
     squares = np.arange((reach + 1) ** 2, dtype=np.float64)
     return inflation_cost(
         np.sqrt(squares) * resolution, inscribed_radius, cost_scaling_factor, inflation_radius,

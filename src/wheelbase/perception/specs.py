@@ -14,11 +14,47 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from wheelbase._validate import flag, integer, nonnegative, positive
-from wheelbase.errors import ConfigError
-from wheelbase.limits import MAX_TRACKS
+import numpy as np
 
-__all__ = ["CostmapSpec", "TrackerSpec"]
+from wheelbase._validate import flag, integer, nonnegative, positive
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.limits import MAX_COORDINATE, MAX_TRACKS
+
+__all__ = ["CostmapSpec", "TrackerSpec", "check_scan_geometry"]
+
+
+def check_scan_geometry(sensor_xy: np.ndarray, max_range: float) -> float:
+    """Check a scan's sensor positions and range against ``wheelbase.limits.MAX_COORDINATE``
+    (1e10 m: farther, cell indices no longer fit an integer) and return ``max_range``.
+
+    Parameters
+    ----------
+    sensor_xy : numpy.ndarray
+        Sensor positions ``(..., 2)`` [m], finite.
+    max_range : float
+        The lidar's largest range [m].
+
+    Returns
+    -------
+    float
+        ``max_range``, checked: > 0 and <= ``MAX_COORDINATE``.
+    """
+    reach = float(np.max(np.abs(sensor_xy), initial=0.0))
+    if reach > MAX_COORDINATE:
+        raise InputError(
+            f"sensor positions must be within ±{MAX_COORDINATE:g} m (got one {reach:.3g} m away)"
+        )
+    max_range = positive("max_range", max_range, "m")
+    if max_range > MAX_COORDINATE:
+        raise InputError(f"max_range must be <= {MAX_COORDINATE:g} m (got {max_range:.3g} m)")
+    return max_range
+
+
+def _at_most(name: str, value: float, unit: str) -> float:
+    """``value`` if it is at most ``MAX_COORDINATE`` (1e10), else ConfigError naming it."""
+    if value > MAX_COORDINATE:
+        raise ConfigError(f"{name} must be <= {MAX_COORDINATE:g} {unit} (got {value:.3g} {unit})")
+    return value
 
 
 def _checked_mapping(cls: type, section: str, values: object) -> dict[str, Any]:
@@ -42,7 +78,8 @@ class CostmapSpec:
     ----------
     inflation_radius : float
         Distance [m] from an obstacle out to which cells get an inflation cost, > 0 and at
-        least the robot's inscribed radius (Nav2 default 0.55 m).
+        least the robot's inscribed radius (Nav2 default 0.55 m); at most 1000 cells (the
+        map's diagonal counts, when shorter).
     cost_scaling_factor : float
         Decay rate k [1/m] of the inflation cost 252·exp(−k (d − r_inscribed)), >= 0 (Nav2
         default 10).
@@ -58,7 +95,8 @@ class CostmapSpec:
         ``raytrace_max_range`` (Nav2 default 0).
     window : float
         Side [m] of the square rolling window around the robot given to local controllers,
-        > 0 (Nav2's local costmap: 3 m × 3 m).
+        > 0, at most ``wheelbase.limits.MAX_MAP_CELLS`` cells (Nav2's local costmap: 3 m ×
+        3 m).
     resolution : float or None
         Cell side [m] of the costmap, > 0; None (default) takes the map's.
     track_unknown : bool
@@ -108,6 +146,8 @@ class CostmapSpec:
                     f"costmap.{low} must be < costmap.{high} = {checked[high]:g} m "
                     f"(got {checked[low]:g} m)"
                 )
+        for name in ("inflation_radius", "obstacle_max_range", "raytrace_max_range", "window"):
+            _at_most(f"costmap.{name}", checked[name], "m")
         for name, value in checked.items():
             object.__setattr__(self, name, value)
 
@@ -207,6 +247,16 @@ class TrackerSpec:
             raise ConfigError(
                 f"tracker.gate_probability must be in (0, 1) (got {checked['gate_probability']:g})"
             )
+        units = {
+            "map_tolerance": "m",
+            "cluster_distance": "m",
+            "max_radius": "m",
+            "measurement_std": "m",
+            "process_noise": "m²/s³",
+            "initial_speed_std": "m/s",
+        }
+        for name, unit in units.items():  # fmt: skip
+            _at_most(f"tracker.{name}", checked[name], unit)
         for name, value in checked.items():
             object.__setattr__(self, name, value)
 

@@ -17,13 +17,14 @@ Association
     assignment inside it, and are dropped after).
 Update
     Kalman gain K = P Hᵀ S⁻¹, x̂ += K ν, P = (I − K H) P (I − K H)ᵀ + K R Kᵀ (Joseph form). The
-    radius is a running mean of the detections' radii (over the last 10 at most).
+    radius is a running mean of the radii of the detections not occluded (over the last 10 at
+    most).
 Management
     A detection no track takes starts a tentative track at z with velocity 0 and covariance
-    blockdiag(R, ``initial_speed_std``² I), unless ``max_tracks`` are alive. A tentative
-    track is confirmed at ``hits_to_confirm`` hits in a row since its birth and deleted at
-    its first miss; a confirmed track is deleted after ``misses_to_delete`` misses in a row
-    (it coasts on its prediction until then). Ids are never reused.
+    blockdiag(R, σ_v² I) with σ_v = ``initial_speed_std``, unless ``max_tracks`` are alive.
+    A tentative track is confirmed at ``hits_to_confirm`` hits in a row since its birth and
+    deleted at its first miss; a confirmed track is deleted after ``misses_to_delete`` misses
+    in a row (it coasts on its prediction until then). Ids are never reused.
 """
 
 from __future__ import annotations
@@ -42,6 +43,14 @@ from wheelbase.planning import OccupancyGrid
 __all__ = ["TrackerState", "Tracks", "update_tracker"]
 
 _RADIUS_MEMORY = 10  # detections the running mean of a radius spans at most
+_MAX_TIME = 1e9  # s (31 years): beyond it Δt³ of a prediction nears the float range
+
+
+def _time(time: float) -> float:
+    time = finite("time", time, "s", InputError)
+    if abs(time) > _MAX_TIME:
+        raise InputError(f"time must be within ±{_MAX_TIME:g} s (got {time:g} s)")
+    return time
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,7 +153,7 @@ class TrackerState:
                   np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, bool))  # fmt: skip
         for array in arrays:
             array.setflags(write=False)
-        return cls(finite("time", time, "s", InputError), *arrays, 0)
+        return cls(_time(time), *arrays, 0)
 
     def tracks(self, confirmed_only: bool = False) -> Tracks:
         """The tracks alive, sorted by id.
@@ -170,12 +179,13 @@ class TrackerState:
 
 def _motion(spec: TrackerSpec, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """F and Q of the constant-velocity model over ``dt`` (module docstring)."""
-    eye = np.eye(2)
-    f = np.block([[eye, dt * eye], [np.zeros((2, 2)), eye]])
-    q = spec.process_noise * np.block(
-        [[dt**3 / 3.0 * eye, dt**2 / 2.0 * eye], [dt**2 / 2.0 * eye, dt * eye]]
-    )
-    return f, q
+    f = np.eye(4)
+    f[0, 2] = f[1, 3] = dt
+    q = np.zeros((4, 4))
+    q[0, 0] = q[1, 1] = dt**3 / 3.0
+    q[0, 2] = q[1, 3] = q[2, 0] = q[3, 1] = dt**2 / 2.0
+    q[2, 2] = q[3, 3] = dt
+    return f, spec.process_noise * q
 
 
 def _associate(
@@ -245,7 +255,7 @@ def update_tracker(
         raise InputError(
             f"state has {state.ids.shape[0]} track slots, spec.max_tracks = {spec.max_tracks}"
         )
-    time = finite("time", time, "s", InputError)
+    time = _time(time)
     dt = time - state.time
     if dt < 0.0:
         raise InputError(f"time must not go back: {time:g} s after {state.time:g} s")
@@ -274,15 +284,20 @@ def update_tracker(
         hits[slots] += 1
         misses[slots] = 0
         weight = 1.0 / np.minimum(hits[slots], _RADIUS_MEMORY)
+        weight[found.occluded[taken]] = 0.0  # a partly hidden cluster's radius is too small
         radius[slots] += weight * (found.radius[taken] - radius[slots])
         confirmed[slots] |= hits[slots] >= spec.hits_to_confirm
-    missed = np.setdiff1d(alive, slots)
+    matched = np.zeros(ids.shape, bool)
+    matched[slots] = True
+    missed = alive[~matched[alive]]
     misses[missed] += 1
     gone = missed[~confirmed[missed] | (misses[missed] >= spec.misses_to_delete)]
     ids[gone] = -1
     confirmed[gone] = False
 
-    new = np.setdiff1d(np.arange(len(found)), taken)
+    unclaimed = np.ones(len(found), bool)
+    unclaimed[taken] = False
+    new = np.flatnonzero(unclaimed)
     free = np.flatnonzero(ids < 0)[: new.size]
     new = new[: free.size]
     if free.size:

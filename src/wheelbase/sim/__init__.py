@@ -1,14 +1,18 @@
 """The one closed-loop engine: N robots in lockstep → one batched :class:`Log`.
 
-- :mod:`wheelbase.sim.plants`: what moves (kinematic or dynamic), and its encoder axle;
+- :mod:`wheelbase.sim.plants`: what moves (kinematic, dynamic, or dynamic on terrain with
+  slip and payloads), and its encoder axle;
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
+- :mod:`wheelbase.sim.streams`: counter-based random streams (a step is a function of its
+  state);
 - :mod:`wheelbase.sim.surroundings`: the world beyond the map (obstacles, agents, a fleet's
   other robots) that steps with the robots and that only the sensors see;
 - :mod:`wheelbase.sim.perceiving`: each robot's costmap and tracks from its lidar;
 - :mod:`wheelbase.sim.engine`: the step (estimator → controller → limits → rules → plant →
   encoders) and the run;
+- :mod:`wheelbase.sim.stuck`: the ``stuck`` rule (commanded to move, not moving);
 - :mod:`wheelbase.sim.log`: the record, its statuses, metrics, CSV and plot.
 """
 

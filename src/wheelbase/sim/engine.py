@@ -74,6 +74,10 @@ class Arrival:
         Planar speed [m/s] below which a robot is at rest.
     rest_yaw_rate : float
         Yaw rate [rad/s] below which a robot is at rest (turning on the spot is moving).
+    judge_at_limit : bool
+        At the time limit, a robot still running is judged instead of timing out: its true
+        pose within tolerance of the goal → ``arrived``, else ``missed_goal``. For tracking a
+        timed reference, whose end is the arrival (the robot need not have come to rest).
     """
 
     goal: Any
@@ -82,6 +86,7 @@ class Arrival:
     settle_time: float = math.inf
     rest_speed: float = 0.01
     rest_yaw_rate: float = 0.1
+    judge_at_limit: bool = False
 
     def __post_init__(self) -> None:
         goal = as_float_array("goal", self.goal, 3, min_ndim=1, max_ndim=2)
@@ -154,7 +159,7 @@ class EngineState:
     controllers : list
         One controller copy per robot for a ``per_robot`` controller, else one shared.
     encoders : EncoderReadings or None
-        The per-robot random streams of the encoders.
+        The encoders and their robots' seeds (counter-based random errors).
     plant : object or None
         What a plant keeps between steps besides pose and twist (a drive train's motor
         currents and speed-loop integrals), from ``plant.start``.
@@ -162,7 +167,7 @@ class EngineState:
         What an estimator keeps besides the estimate (a covariance, particles), from
         ``estimator.start``.
     sensors : SensorStreams or None
-        The per-robot random streams of the sensors.
+        The robots' seeds of the sensors' counter-based random streams.
     held : numpy.ndarray, shape (N, k), or None
         The last controller commands, held between controller calls (``control_every``).
     held_status : list or None
@@ -356,7 +361,9 @@ class Engine:
         seeds: ArrayLike | int | None = None,
         twists: ArrayLike | None = None,
     ) -> EngineState:
-        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact.
+        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact
+        (or, for an estimator with ``first_estimate(state)``, such as a global localisation,
+        what it estimates without the start).
 
         Parameters
         ----------
@@ -401,11 +408,14 @@ class Engine:
         else:
             controllers = [self.controller]
         encoder = self.estimator.encoder
+        estimator_state = self.estimator.start(start, seeds)
+        first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
+        estimate = start.copy() if first is None else np.array(first(estimator_state), float)
         return EngineState(
             step=0,
             pose=start,
             twist=twist,
-            estimate=start.copy(),
+            estimate=estimate,
             estimated_twist=twist.copy(),
             wheel_angle=np.zeros((n, 2)),
             ticks=np.zeros((n, 2), dtype=np.int64),
@@ -415,7 +425,7 @@ class Engine:
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
-            estimator=self.estimator.start(start, seeds),
+            estimator=estimator_state,
             sensors=None if self.sensors is None else self.sensors.start(seeds),
             world=None if self.surroundings is None else self.surroundings.start(seeds, start),
             perception=None if self.perception is None else self.perception.start(start),
@@ -430,7 +440,7 @@ class Engine:
             self.surroundings is not None
             and self.perception is not None
             and getattr(self.perception, "tracker", None) is not None
-            and self.surroundings.world.agent_count > 0
+            and getattr(self.surroundings, "has_agents", False)
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -476,7 +486,12 @@ class Engine:
         Parameters
         ----------
         state : EngineState
-            The state at time ``state.step·dt``; it is not changed.
+            The state at time ``state.step·dt``; it is not changed, and the result is a
+            function of it: the random streams are counter-based
+            (:mod:`wheelbase.sim.streams`), so stepping one state twice gives equal states.
+            (A controller that keeps memory between calls, such as a path follower's progress
+            or MPPI's warm start, is an object in ``state.controllers`` that the call
+            advances: :func:`copy.deepcopy` the state to branch with one.)
         command : array_like, shape (N, k), optional
             Commands to apply instead of asking the controller (a learning agent's action).
 
@@ -561,7 +576,12 @@ class Engine:
             status[active & stuck] = STUCK
             active &= ~stuck
         if state.step >= self.steps or t >= limit - 1e-12:
-            status[active] = TIMEOUT
+            if self.arrival is not None and self.arrival.judge_at_limit:
+                truly = self.arrival.within(state.pose, state.goal)
+                status[active & truly] = ARRIVED
+                status[active & ~truly] = MISSED_GOAL
+            else:
+                status[active] = TIMEOUT
             active[:] = False
 
         pose, twist = state.pose.copy(), state.twist.copy()
@@ -585,7 +605,7 @@ class Engine:
                 before = state.wheel_angle.copy()
                 after = before.copy()
                 after[moving] = new_angle
-                delta = state.encoders.tick_deltas(before, after)[moving]
+                delta = state.encoders.tick_deltas(before, after, state.step)[moving]
                 ticks[moving] = state.ticks[moving] + delta
             else:
                 delta = None
@@ -684,6 +704,7 @@ class Engine:
         fans: dict[tuple[int, int], np.ndarray] = {}
         particles: dict[tuple[int, int], np.ndarray] = {}
         particles_of = getattr(self.estimator, "particles_of", None)
+        perceived: dict[tuple[int, int], dict] = {}
         status_names: list[str] = []
         while True:
             was_running = state.running
@@ -692,6 +713,11 @@ class Engine:
                 for i in np.flatnonzero(was_running):  # the belief of this row's estimate
                     cloud = particles_of(state.estimator, int(i))
                     particles[(int(i), len(rows))] = np.asarray(cloud, dtype=np.float32)
+            if fan_now and self.perception is not None and self.record_sensors:
+                for i in np.flatnonzero(was_running):  # what this row's controller saw
+                    perceived[(int(i), len(rows))] = self.perception.snapshot(
+                        state.perception, int(i)
+                    )
             state, row = self.step(state)
             rows.append(row)
             if fan_now:  # the plans the controllers just made for this row's poses
@@ -707,6 +733,8 @@ class Engine:
         if self.progress is not None:
             self.progress(rows[-1].t)
         log = self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        if perceived:
+            log = replace(log, perceived=perceived)
         summaries = [getattr(law, "summary", None) for law in state.controllers]
         if len(state.controllers) == n and any(callable(s) for s in summaries):
             log = replace(log, summaries=tuple(s() if callable(s) else {} for s in summaries))

@@ -132,6 +132,28 @@ class PerceptionSuite:
 
         return LocalView(self.costmap.master(state.costmap, i), self.tracks(state, i), t)
 
+    def snapshot(self, state: PerceptionState, i: int) -> dict:
+        """What robot ``i`` perceives, for drawing: the centres (M, 2) [m] of the cells its
+        lidar marked (``marks``) and its confirmed tracks (K, 5) = (x, y, v_x, v_y, radius)
+        (``tracks``), float32.
+
+        Parameters
+        ----------
+        state : PerceptionState
+            Every robot's perception.
+        i : int
+            The robot.
+        """
+        from wheelbase.perception import LETHAL
+
+        res, (x0, y0) = self.costmap.resolution, self.costmap.origin
+        rows, cols = np.nonzero(state.costmap.obstacle[i] == LETHAL)
+        marks = np.column_stack([x0 + (cols + 0.5) * res, y0 + (rows + 0.5) * res])
+        found = self.tracks(state, i)
+        keep = np.asarray(found.confirmed, bool)
+        tracks = np.column_stack([found.position[keep], found.velocity[keep], found.radius[keep]])
+        return {"marks": marks.astype(np.float32), "tracks": tracks.astype(np.float32)}
+
     def tracks(self, state: PerceptionState, i: int) -> Any:
         """Robot ``i``'s tracks (:class:`~wheelbase.perception.Tracks`; none without a tracker).
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from wheelbase.errors import ConfigError, InputError
 
-__all__ = ["AT_FAULT_SPEED", "Surroundings", "world_metrics"]
+__all__ = ["AT_FAULT_SPEED", "DISCOMFORT_DISTANCE", "Surroundings", "world_metrics"]
 
 AT_FAULT_SPEED = 0.05
 """A contact is the robot's fault when it moved towards the obstacle faster than this [m/s]
@@ -62,6 +62,11 @@ class Surroundings:
         if self.keep_clear is not None:
             keep = np.asarray(self.keep_clear, dtype=np.float64).reshape(-1, 3)
             object.__setattr__(self, "keep_clear", keep)
+
+    @property
+    def has_agents(self) -> bool:
+        """Whether the world has moving agents (whose tracking the log scores)."""
+        return self.world.agent_count > 0
 
     # ------------------------------------------------------------------ batch layout
     def _worlds(self, n: int) -> int:
@@ -233,7 +238,11 @@ class Surroundings:
         return np.concatenate([position, velocity], axis=-1).astype(np.float32)
 
 
-def world_metrics(extras: dict, status: str, planar_speed_end: float) -> dict:
+DISCOMFORT_DISTANCE = 0.2
+"""Closer than this [m] to a person is discomfort (CrowdNav, Chen et al. ICRA 2019)."""
+
+
+def world_metrics(extras: dict, status: str, planar_speed_end: float, dt: np.ndarray) -> dict:
     """The world's figures of one robot's run (``metrics.json``), from its logged signals.
 
     Parameters
@@ -244,12 +253,15 @@ def world_metrics(extras: dict, status: str, planar_speed_end: float) -> dict:
         Its final status.
     planar_speed_end : float
         Its planar speed [m/s] at its last row (a contact with the map: at fault when moving).
+    dt : numpy.ndarray, shape (T,)
+        Duration [s] of each row (0 for the last).
 
     Returns
     -------
     dict
         ``min_obstacle_distance_m``, ``min_agent_distance_m``, ``min_robot_distance_m`` (None
-        where the world has none), ``collision_at_fault`` and ``struck_at_rest``.
+        where the world has none), ``discomfort_s`` (time within :data:`DISCOMFORT_DISTANCE`
+        of an agent), ``collision_at_fault`` and ``struck_at_rest``.
     """
 
     def least(name: str) -> float | None:
@@ -261,6 +273,9 @@ def world_metrics(extras: dict, status: str, planar_speed_end: float) -> dict:
         "min_obstacle_distance_m": least("world_obstacle_distance"),
         "min_agent_distance_m": least("world_agent_distance"),
         "min_robot_distance_m": least("world_robot_distance"),
+        "discomfort_s": float(
+            np.sum(dt[np.asarray(extras["world_agent_distance"]) < DISCOMFORT_DISTANCE])
+        ),
         "collision_at_fault": False,
         "struck_at_rest": False,
     }

@@ -66,6 +66,7 @@ from wheelbase.terrain.map import TerrainMap
 __all__ = [
     "AUX_NAMES",
     "MAX_SUBSTEPS",
+    "MIN_SLIP_SPEED",
     "SIGNAL_NAMES",
     "TerrainDynamics",
     "terrain_step",
@@ -109,6 +110,9 @@ SIGNAL_NAMES: tuple[str, ...] = (
 longitudinal ground force on it [N], its normal load [N], sinkage [m], the index of the
 surface under it, and the substeps the step took."""
 _SIG = len(SIGNAL_NAMES)
+
+MIN_SLIP_SPEED = 1e-4
+"""Smallest v_ε [m/s]: the slip's stiffness at standstill grows as 1/v_ε."""
 
 MAX_SUBSTEPS = 4000
 """Most substeps of one step (a step that would need more integrates with fewer and may go
@@ -462,8 +466,9 @@ class TerrainDynamics:
     slip : bool
         Wheel slip (True) or rigid rolling contact (False).
     slip_speed : float
-        v_ε [m/s], > 0: the speed below which the slip ratio's denominator stops shrinking
-        (a smaller one is more exact at standstill and stiffer to integrate).
+        v_ε [m/s], in [:data:`MIN_SLIP_SPEED`, 10]: the speed below which the slip ratio's
+        denominator stops shrinking (a smaller one is more exact at standstill and stiffer to
+        integrate).
     step_factor : float
         Largest h·λ of a substep (RK4 is stable to 2.78 on a real eigenvalue), in (0, 2.5].
     gravity : float
@@ -506,7 +511,13 @@ class TerrainDynamics:
                 f"contacts must be WheelContacts (got {type(self.contacts).__name__})"
             )
         object.__setattr__(self, "slip", bool(self.slip))
-        object.__setattr__(self, "slip_speed", positive("slip_speed", self.slip_speed, "m/s"))
+        slip_speed = positive("slip_speed", self.slip_speed, "m/s")
+        if not MIN_SLIP_SPEED <= slip_speed <= 10.0:
+            raise ConfigError(
+                f"slip_speed must be in [{MIN_SLIP_SPEED:g}, 10] m/s (got {slip_speed:g}): "
+                "below, the slip at standstill is too stiff to integrate"
+            )
+        object.__setattr__(self, "slip_speed", slip_speed)
         factor = positive("step_factor", self.step_factor)
         if factor > 2.5:
             raise ConfigError(f"step_factor must be in (0, 2.5] (got {factor:g})")

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["STREAM_DIRECTION", "STREAM_GOAL", "STREAM_SPAWN", "counter_uniform"]
+__all__ = ["STREAM_DIRECTION", "STREAM_GOAL", "STREAM_ORCA", "STREAM_SPAWN", "counter_uniform"]
 
 STREAM_GOAL = 1
 """Stream of the goal draws (during steps and at the start)."""
@@ -20,6 +20,8 @@ STREAM_SPAWN = 2
 """Stream of the start positions and the lattice order (:meth:`World.start`)."""
 STREAM_DIRECTION = 3
 """Stream of the first headings of ``straight`` agents and first waypoints."""
+STREAM_ORCA = 4
+"""Stream of ORCA's perturbation of the preferred velocities."""
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _M1 = np.uint64(0xBF58476D1CE4E5B9)

@@ -20,11 +20,13 @@ from wheelbase._validate import as_float_array
 from wheelbase.errors import ConfigError, MapError
 from wheelbase.limits import MAX_COORDINATE
 
-__all__ = ["MAX_OBSTACLES", "Obstacles", "box_polygon"]
+__all__ = ["MAX_OBSTACLES", "MAX_VERTICES", "Obstacles", "box_polygon"]
 
 MAX_OBSTACLES = 100_000
 """Most static obstacles of one world (every beam of a scan looks at each one's bounding
 circle: 1e5 obstacles make a 360-beam scan take about 0.1 s)."""
+MAX_VERTICES = 1_000_000
+"""Most polygon vertices of one world, all polygons together."""
 
 _KIND_POLYGON, _KIND_DISC = 0, 1
 
@@ -95,6 +97,7 @@ class Obstacles:
         import shapely
 
         rings = []
+        total = 0
         for i, poly in enumerate(self.polygons):
             try:
                 ring = np.asarray(poly, dtype=float)
@@ -102,6 +105,9 @@ class Obstacles:
                 raise MapError(f"polygon {i} must be a list of [x, y] vertices [m]") from None
             if ring.ndim != 2 or ring.shape[1] != 2:
                 raise MapError(f"polygon {i} must have shape (M, 2) (got {ring.shape})")
+            total += len(ring)
+            if total > MAX_VERTICES:
+                raise MapError(f"polygon {i}: more than {MAX_VERTICES} vertices in all")
             if not np.all(np.isfinite(ring)) or np.max(np.abs(ring), initial=0) > MAX_COORDINATE:
                 raise MapError(
                     f"polygon {i} must have finite vertices within ±{MAX_COORDINATE:g} m"
@@ -111,7 +117,7 @@ class Obstacles:
             if len(np.unique(ring, axis=0)) < 3:
                 raise MapError(f"polygon {i} needs >= 3 distinct vertices (got {len(ring)})")
             shape = shapely.Polygon(ring)
-            if shape.area <= 1e-12:
+            if shapely.MultiPoint(ring).convex_hull.area <= 1e-12:
                 raise MapError(f"polygon {i} has no area (its vertices are collinear)")
             if not shapely.is_valid(shape):
                 raise MapError(f"polygon {i} is not simple: {shapely.is_valid_reason(shape)}")

@@ -41,7 +41,7 @@ def pair_force(px, py, vx, vy, ra, qx, qy, wx, wy, rb, a, b, k, kappa, cutoff):
         nx, ny = 1.0, 0.0
     overlap = rr - d
     contact = max(overlap, 0.0)
-    push = a * math.exp(overlap / b) + k * contact
+    push = a * math.exp(min(overlap / b, 50.0)) + k * contact
     fx = push * nx
     fy = push * ny
     if contact > 0.0:
@@ -62,7 +62,7 @@ def wall_force(vx, vy, r, d, nx, ny, a, b, k, kappa, cutoff):
         return 0.0, 0.0
     overlap = r - d
     contact = max(overlap, 0.0)
-    push = a * math.exp(overlap / b) + k * contact
+    push = a * math.exp(min(overlap / b, 50.0)) + k * contact
     tx = -ny
     ty = nx
     along = vx * tx + vy * ty

@@ -6,6 +6,7 @@ per world (every world has the same agents, placed by its own seed), R robots pe
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -18,9 +19,10 @@ __all__ = ["Distances", "RobotBodies", "WorldState"]
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
-    array = np.ascontiguousarray(array)
-    array.setflags(write=False)
-    return array
+    """A read-only view (the caller's own array stays writeable)."""
+    view = np.ascontiguousarray(array).view()
+    view.setflags(write=False)
+    return view
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,10 +57,11 @@ class WorldState:
     step: np.ndarray
 
     def __post_init__(self) -> None:
+        # copies: a state never changes, even when the caller changes the arrays it gave
         for name in ("position", "velocity", "goal", "goal_time"):
-            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), np.float64)))
+            object.__setattr__(self, name, _frozen(np.array(getattr(self, name), np.float64)))
         for name in ("waypoint", "seed", "step"):
-            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), np.int64)))
+            object.__setattr__(self, name, _frozen(np.array(getattr(self, name), np.int64)))
         shape = self.position.shape
         if len(shape) != 3 or shape[2] != 2:
             raise InputError(f"position must have shape (B, A, 2) (got {shape})")
@@ -113,6 +116,14 @@ class WorldState:
         )
 
 
+@functools.cache
+def _placeholder_footprint():
+    """The outline of :meth:`RobotBodies.none` (no robot has it; built once)."""
+    from wheelbase.planning import Footprint
+
+    return Footprint.rectangle(0.2, 0.2)
+
+
 @dataclass(frozen=True, eq=False)
 class RobotBodies:
     """The controlled robots of each world, as the agents and the sensors see them.
@@ -147,8 +158,14 @@ class RobotBodies:
     def __post_init__(self) -> None:
         from wheelbase.planning import Footprint
 
-        pose = as_float_array("robots.pose", self.pose, 3, min_ndim=3, max_ndim=3)
-        velocity = as_float_array("robots.velocity", self.velocity, 2, min_ndim=3, max_ndim=3)
+        pose, velocity = self.pose, self.velocity
+        plain = all(isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 3
+                    for x in (pose, velocity))  # fmt: skip
+        if not (plain and pose.shape[2] == 3 and velocity.shape[2] == 2
+                and np.isfinite(pose).all() and np.isfinite(velocity).all()):  # fmt: skip
+            # (the engine passes clean arrays every step; anything else gets the full checks)
+            pose = as_float_array("robots.pose", pose, 3, min_ndim=3, max_ndim=3)
+            velocity = as_float_array("robots.velocity", velocity, 2, min_ndim=3, max_ndim=3)
         if velocity.shape[:2] != pose.shape[:2]:
             raise InputError(f"robots.velocity must have shape {(*pose.shape[:2], 2)} (got "
                              f"{velocity.shape})")  # fmt: skip
@@ -171,8 +188,7 @@ class RobotBodies:
         batch : int
             Number of worlds B.
         """
-        square = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
-        return cls(np.zeros((batch, 0, 3)), np.zeros((batch, 0, 2)), square)
+        return cls(np.zeros((batch, 0, 3)), np.zeros((batch, 0, 2)), _placeholder_footprint())
 
     @property
     def polygon(self) -> np.ndarray:

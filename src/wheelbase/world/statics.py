@@ -34,6 +34,7 @@ __all__ = [
     "obstacle_nearest",
     "pack_statics",
     "static_nearest",
+    "wall_points",
 ]
 
 # indices into the tuple of pack_statics
@@ -260,3 +261,25 @@ def first_overlap(st, discs):
                 if d < r:
                     return b, p, q, d
     return -1, -1, -1, np.inf
+
+
+@numba.njit(cache=True)
+def wall_points(st, px, py, reach, dist, nx, ny):
+    """The walls a behaviour reacts to: the map's nearest point (the feature transform) and
+    the nearest point of each static obstacle within ``reach`` [m] of ``(px, py)``; writes
+    their signed distances and push directions into ``dist, nx, ny`` (room for one more than
+    the obstacles) and returns how many."""
+    count = 0
+    d, wx, wy = map_feature_point(st, px, py)
+    circle = st[CIRCLE]
+    for q in range(-1, circle.shape[0]):
+        if q >= 0:
+            if math.hypot(px - circle[q, 0], py - circle[q, 1]) - circle[q, 2] > reach:
+                continue
+            d, wx, wy = obstacle_nearest(st, q, px, py)
+        if d > reach:
+            continue
+        dist[count] = d
+        nx[count], ny[count] = push_direction(d, wx, wy, px, py)
+        count += 1
+    return count

@@ -29,7 +29,7 @@ import math
 import numba
 import numpy as np
 
-from wheelbase.world.counter_rng import STREAM_DIRECTION, STREAM_GOAL, counter_uniform
+from wheelbase.world.counter_rng import STREAM_DIRECTION, STREAM_GOAL, STREAM_ORCA, counter_uniform
 from wheelbase.world.orca import half_plane, solve_lp
 from wheelbase.world.social_force import (
     CUTOFF,
@@ -50,10 +50,9 @@ from wheelbase.world.statics import (
     RES,
     X0,
     Y0,
-    map_feature_point,
-    obstacle_nearest,
     push_direction,
     static_nearest,
+    wall_points,
 )
 
 __all__ = ["GOAL_TRIES", "draw_goal", "initial_motion", "step_worlds", "uniform_keys"]
@@ -65,7 +64,7 @@ GOAL_TIME_FACTOR = 3.0
 GOAL_TIME_SLACK = 5.0  # s
 _PUSH_EPS = 1e-9  # m beyond contact after a push-out, so the next query finds the disc clear
 # ORCA parameter indices (ORCA.packed)
-TAU, TAU_OBS, NEIGHBOUR_DIST, MAX_NEIGHBOURS, ORCA_FACTOR = range(5)
+TAU, TAU_OBS, NEIGHBOUR_DIST, MAX_NEIGHBOURS, ORCA_FACTOR, PERTURBATION, MARGIN = range(7)
 
 
 @numba.njit(cache=True)
@@ -110,7 +109,7 @@ def _resolve(st, px, py, vx, vy, r, reflect, rob_x, rob_y, rob_r, n_rob):
 
 
 @numba.njit(cache=True)
-def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st, rob_xy,
+def _orca_velocity(a, seed, step, pos, vel, goal, dt, radius, speed, code, reacts, orca, st, rob_xy,
                    rob_v, rob_r, nx, ny, c, pnx, pny, pc, nb_d, nb_i):  # fmt: skip
     """The ORCA velocity of agent ``a`` of one world (``pos``, ``vel``: that world's)."""
     px, py = pos[a, 0], pos[a, 1]
@@ -124,23 +123,17 @@ def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st,
     dist = math.hypot(ex, ey)
     scale = 0.0 if dist == 0.0 else (v0 / dist if dist > v0 * dt else 1.0 / dt)
     ox, oy = ex * scale, ey * scale
-    m = 0
-    # walls (the feature transform's nearest point) and obstacles: hard half-planes
-    reach = r + vmax * tau_obs
-    d, wx, wy = map_feature_point(st, px, py)
-    circle = st[CIRCLE]
-    for q in range(-1, circle.shape[0]):
-        if q >= 0:
-            if math.hypot(px - circle[q, 0], py - circle[q, 1]) - circle[q, 2] > reach:
-                continue
-            d, wx, wy = obstacle_nearest(st, q, px, py)
-        if d > reach:
-            continue
-        hx, hy = push_direction(d, wx, wy, px, py)
-        nx[m] = hx
-        ny[m] = hy
-        c[m] = (r - d) / tau_obs if d >= r else min((r - d) / dt, vmax)
-        m += 1
+    if orca[PERTURBATION] > 0.0:
+        # a tiny random change of the preferred velocity breaks perfectly symmetric deadlocks
+        turn = 2.0 * math.pi * counter_uniform(seed, STREAM_ORCA, step, a, 0)
+        size = orca[PERTURBATION] * counter_uniform(seed, STREAM_ORCA, step, a, 1)
+        ox += size * math.cos(turn)
+        oy += size * math.sin(turn)
+    # walls and obstacles: hard half-planes, first in the program
+    m = wall_points(st, px, py, r + vmax * tau_obs, c, nx, ny)
+    for k in range(m):
+        d = c[k]
+        c[k] = (r - d) / tau_obs if d >= r else min((r - d) / dt, vmax)
     hard = m
     # the nearest neighbours: agents, then robots when the agent reacts to them
     kmax = int(orca[MAX_NEIGHBOURS])
@@ -176,7 +169,8 @@ def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st,
             k = j - n_agents
             qx, qy, wx, wy, rb = rob_xy[k, 0], rob_xy[k, 1], rob_v[k, 0], rob_v[k, 1], rob_r
             share = 1.0
-        hx, hy, hc = half_plane(px, py, vx, vy, r, qx, qy, wx, wy, rb, orca[TAU], dt, share)
+        hx, hy, hc = half_plane(px, py, vx, vy, r + orca[MARGIN], qx, qy, wx, wy,
+                                rb + orca[MARGIN], orca[TAU], dt, share)  # fmt: skip
         nx[m] = hx
         ny[m] = hy
         c[m] = hc
@@ -186,7 +180,7 @@ def _orca_velocity(a, pos, vel, goal, dt, radius, speed, code, reacts, orca, st,
 
 @numba.njit(cache=True)
 def _social_acceleration(a, pos, vel, goal, radius, speed, sf, st, rob_x, rob_y, rob_v,
-                         rob_r, n_rob):  # fmt: skip
+                         rob_r, n_rob, wall_d, wall_nx, wall_ny):  # fmt: skip
     """Force per unit mass on social-force agent ``a`` (:class:`SocialForce`)."""
     px, py = pos[a, 0], pos[a, 1]
     vx, vy = vel[a, 0], vel[a, 1]
@@ -204,18 +198,9 @@ def _social_acceleration(a, pos, vel, goal, radius, speed, sf, st, rob_x, rob_y,
         ax += fx
         ay += fy
     # walls: the map's nearest point and each static obstacle
-    reach = r + sf[CUTOFF]
-    d, wx, wy = map_feature_point(st, px, py)
-    circle = st[CIRCLE]
-    for q in range(-1, circle.shape[0]):
-        if q >= 0:
-            if math.hypot(px - circle[q, 0], py - circle[q, 1]) - circle[q, 2] > reach:
-                continue
-            d, wx, wy = obstacle_nearest(st, q, px, py)
-        if d > reach:
-            continue
-        hx, hy = push_direction(d, wx, wy, px, py)
-        fx, fy = wall_force(vx, vy, r, d, hx, hy, sf[A], sf[B], sf[K], sf[KAPPA], sf[CUTOFF])
+    for k in range(wall_points(st, px, py, r + sf[CUTOFF], wall_d, wall_nx, wall_ny)):
+        fx, fy = wall_force(vx, vy, r, wall_d[k], wall_nx[k], wall_ny[k], sf[A], sf[B], sf[K],
+                            sf[KAPPA], sf[CUTOFF])  # fmt: skip
         ax += fx
         ay += fy
     return ax, ay
@@ -310,7 +295,8 @@ def step_worlds(pos, vel, goal, waypoint, budget, seed, step, dt, radius, speed,
             for a in range(n_agents):
                 if code[a] == ORCA_CODE:
                     new_v[a, 0], new_v[a, 1] = _orca_velocity(
-                        a, p, v, g, dt, radius, speed, code, reacts, orca, st, rob_xy[b],
+                        a, seed[b], step[b], p, v, g, dt, radius, speed, code, reacts, orca, st,
+                        rob_xy[b],
                         rob_v[b], rob_r, nx, ny, c, pnx, pny, pc, nb_d, nb_i,
                     )  # fmt: skip
             for a in range(n_agents):
@@ -328,7 +314,7 @@ def step_worlds(pos, vel, goal, waypoint, budget, seed, step, dt, radius, speed,
                         seen = n_rob if reacts[a] else 0
                         acc[a, 0], acc[a, 1] = _social_acceleration(
                             a, p, v, g, radius, speed, sf, st, rob_x, rob_y, rob_v[b],
-                            rob_r, seen,
+                            rob_r, seen, pnx, pny, pc,
                         )  # fmt: skip
                 for a in range(n_agents):
                     if code[a] == SOCIAL_FORCE:

@@ -130,7 +130,7 @@ class World:
 
         return self.map.raster if isinstance(self.map, PolygonWorld) else self.map
 
-    @property
+    @cached_property
     def agent_count(self) -> int:
         """Agents per world A."""
         return sum(group.count for group in self.agents)
