@@ -108,3 +108,23 @@ def test_the_localise_page_says_what_was_fitted_on_which_robot():
     # robot 1's row is the figures the page reports for it
     ekf, ukf, pf = rows["robot 1"].split()[::2]
     assert f"EKF {ekf} m RMSE" in text and f"UKF {ukf} m" in text and f"PF {pf} m" in text
+
+
+def test_the_home_page_and_every_task_page_show_the_figure_of_their_command():
+    # seven of eight task pages and the home page had no figure
+    import importlib.util
+    import re
+
+    spec = importlib.util.spec_from_file_location("make_images", DOCS / "make_images.py")
+    make_images = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make_images)
+    tasks = {page.stem for page in (DOCS / "tasks").glob("*.rst")}
+    assert set(make_images.PAGES) == {"index"} | (tasks - {"gymnasium"})  # gym: gym_ppo.py's
+    for page in ["index", *sorted(tasks)]:
+        source = DOCS / ("index.rst" if page == "index" else f"tasks/{page}.rst")
+        figures = re.findall(r"^\.\. (?:figure|image):: (\S+)", source.read_text(), re.M)
+        assert figures, page
+        for figure in figures:
+            image = (source.parent / figure).resolve()
+            assert image.read_bytes()[:4] == b"\x89PNG", figure
+            assert image.stat().st_size < 100_000, f"{figure}: keep the repository small"
