@@ -33,10 +33,12 @@ TARGETS = {
     "scenario": (fuzzing.scenario_cases, fuzzing.run_scenario, "scenario", 0.3),
     "scenario_file": (fuzzing.scenario_file_cases, fuzzing.run_scenario_file, "scenario_file",
                       0.05),
-    "map_file": (fuzzing.map_file_cases, fuzzing.load_map_file, "map_file", 0.25),
+    "map_file": (fuzzing.map_file_cases, fuzzing.load_map_file, "map_file", 0.2),
     "map_array": (fuzzing.array_map_cases, fuzzing.grid_from_array, "map_file", 0.05),
     "constructor": (fuzzing.constructor_cases, fuzzing.call_constructor, "constructor", 0.25),
     "cli": (fuzzing.cli_cases, fuzzing.run_cli, "cli", 0.1),
+    "world": (fuzzing.world_cases, fuzzing.run_world, "world", 0.1),
+    "slam_file": (fuzzing.slam_file_cases, fuzzing.slam_file, "slam_file", 0.05),
 }  # fmt: skip
 
 

@@ -28,8 +28,18 @@ Prints one JSON object:
 - ``parking``: the bundled parking scenario (4.5 m car) driven by MPPI over
   ``--parking-seeds`` seeds (none with ``--quick``): statuses, final errors, path deviation.
 
-Usage: ``python benchmarks/mppi.py [--quick] [--seeds N] [--parking-seeds N]`` (``--quick``: 5
-seeds, 5 timed calls).
+- ``default_backend``: what ``MPPI(...)`` picks without ``backend=`` (the fast one, as
+  ``MPPI.from_gains``); ``cpu_hz_2000x56`` also holds ``numba_with_view`` and
+  ``numpy_with_view``: the same call with a perception view (a 3 × 3 m costmap of 0.05 m cells
+  with a box, 20 tracks within 3 m);
+- ``crowd``: MPPI (numba, 1,000 × 56) on the encounters of ``benchmarks/crowd_cases.py``
+  (a disc head-on, one crossing, one to overtake, a group of three, a box in the costmap) over
+  ``--crowd-seeds`` seeds (``--quick``: the head-on disc, one seed), seeing perfect tracks:
+  success rate (no contact and the path's end reached), collisions, least and median gap,
+  stops.
+
+Usage: ``python benchmarks/mppi.py [--quick] [--seeds N] [--parking-seeds N] [--crowd-seeds N]``
+(``--quick``: 5 seeds, 5 timed calls).
 """
 
 from __future__ import annotations
@@ -47,6 +57,7 @@ import numba
 import numpy as np
 
 from control_cases import figure_eight_reference, three_point_turn_path
+from crowd_cases import busy_view, crowd_suite
 from wheelbase.control import (
     MPPI,
     PurePursuit,
@@ -67,18 +78,18 @@ def cluttered():
     return load_map(Path(str(resources.files("wheelbase") / "data" / "maps" / "cluttered.yaml")))
 
 
-def rate(backend: str, grid, calls: int, samples: int = 2000, **options) -> float:
+def rate(backend: str, grid, calls: int, samples: int = 2000, view=None, **options) -> float:
     mppi = MPPI(Unicycle(), 56, 0.05, samples, (0.2, 0.5), 0.03, None, LIMITS, seed=0,
                 backend=backend, grid=grid, footprint=ROBOT, max_sample_steps=samples * 56,
                 **options)  # fmt: skip
     pose = np.array([2.4, 3.9, 0.1])
     for _ in range(3):  # compile / warm up
-        mppi.plan(pose, STRAIGHT)
+        mppi.plan(pose, STRAIGHT, perception=view)
     best = np.inf
     for _ in range(3):
         begin = time.perf_counter()
         for _ in range(calls):
-            mppi.plan(pose, STRAIGHT)
+            mppi.plan(pose, STRAIGHT, perception=view)
         best = min(best, (time.perf_counter() - begin) / calls)
     return 1.0 / best
 
@@ -91,6 +102,9 @@ def speed(grid, calls: int) -> dict:
     numba.set_num_threads(1)
     out["numba_1_thread"] = rate("numba", grid, calls)
     numba.set_num_threads(threads)
+    view = busy_view(np.array([2.4, 3.9, 0.1]))
+    out["numba_with_view"] = rate("numba", grid, calls, view=view)
+    out["numpy_with_view"] = rate("numpy", grid, max(1, calls // 10), view=view)
     try:
         import jax  # noqa: F401
 
@@ -277,6 +291,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="5 seeds, 5 timed calls")
     parser.add_argument("--seeds", type=int, default=50, help="noise seeds of the clearance run")
     parser.add_argument("--parking-seeds", type=int, default=4, help="seeds of the parking run")
+    parser.add_argument("--crowd-seeds", type=int, default=10, help="seeds of each encounter")
     args = parser.parse_args()
     seeds = 5 if args.quick else args.seeds
     calls = 5 if args.quick else 50
@@ -296,6 +311,15 @@ def main() -> None:
     out["tracking"] = tracking()
     out["clearance"] = clearance(grid, seeds)
     out["parking"] = parking(0 if args.quick else args.parking_seeds)
+    out["default_backend"] = MPPI(Unicycle(), 10, 0.05, 16, 0.2, 0.1, None, LIMITS).backend
+
+    def crowd_mppi(seed: int) -> MPPI:
+        return MPPI.from_gains(Unicycle(), samples=1000, footprint=ROBOT, seed=seed)
+
+    if args.quick:  # one encounter, one seed: a smoke run
+        out["crowd"] = crowd_suite(crowd_mppi, 1, ROBOT, cases=("head_on",))
+    else:
+        out["crowd"] = crowd_suite(crowd_mppi, args.crowd_seeds, ROBOT)
     print(json.dumps(out, indent=2))
 
 

@@ -86,7 +86,7 @@ def integrators() -> dict:
 
 def _demo_seconds(gif: bool, cache: str) -> float:
     # this interpreter's wheelbase (the console script may belong to another install)
-    argv = [sys.executable, "-c", "from wheelbase.cli import app; app()"]
+    argv = [sys.executable, "-m", "wheelbase"]
     with tempfile.TemporaryDirectory() as folder:
         argv += ["demo", "--out", os.path.join(folder, "demo"), "--gif" if gif else "--no-gif"]
         environment = {**os.environ, "NUMBA_CACHE_DIR": cache}

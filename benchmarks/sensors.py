@@ -21,7 +21,7 @@ Run ``python benchmarks/sensors.py`` (``--quick`` for a smoke run); prints one J
     space, a robot wandering 12 m; the fraction whose estimate is within 0.2 m for good within
     10 m of travel (target >= 0.95), and the distances (``--quick``: one seed). ``kidnapped``:
     10 robots tracked for 4 m from a known pose, then carried to another corridor
-    (:func:`wheelbase.localization.kidnapped_run`); the fraction whose estimate is within
+    (``amcl_trials.kidnapped_run``); the fraction whose estimate is within
     0.2 m for good within 30 s (ticks of 0.1 s) and the times. ``kidnapped_anywhere``: the
     same, each carried to a random pose of the maze instead.
 """
@@ -141,14 +141,8 @@ def amcl_speed(quick: bool) -> dict:
 
 
 def global_localization(quick: bool) -> dict:
-    from wheelbase.localization import (
-        AMCL,
-        GLOBAL_LOCALIZATION,
-        kidnapped_run,
-        noisy_odometry,
-        run_amcl,
-        wander,
-    )
+    from amcl_trials import kidnapped_run, noisy_odometry, run_amcl, wander
+    from wheelbase.localization import AMCL, GLOBAL_LOCALIZATION
 
     grid = load_map("maze")
     lidar = Lidar(beams=360, max_range=30.0, range_std=0.02)
@@ -179,8 +173,8 @@ def global_localization(quick: bool) -> dict:
 def kidnapped(amcl, lidar, seeds: int, kidnapped_run, anywhere: bool = False) -> dict:
     """Seconds to recover (0.2 m for good) after a kidnapping, over ``seeds`` routes: carried
     to (15, 14, π) (the function's default), or ``anywhere``: to a random pose more than 0.6 m
-    from the walls (:func:`wheelbase.localization.clear_pose`, seed 1000 + the route's)."""
-    from wheelbase.localization import clear_pose
+    from the walls (``amcl_trials.clear_pose``, seed 1000 + the route's)."""
+    from amcl_trials import clear_pose
 
     start = time.perf_counter()
     seconds, poses = [], []

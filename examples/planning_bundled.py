@@ -1,6 +1,6 @@
 """
-Hybrid A* on every bundled map (document 002's "smooth path planning … using Hybrid A*")
-========================================================================================
+Hybrid A* on every bundled map (document 002's smooth path planning)
+=====================================================================
 
 Usage::
 

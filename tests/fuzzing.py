@@ -46,17 +46,23 @@ __all__ = [
     "run_cli",
     "run_scenario",
     "run_scenario_file",
+    "run_world",
     "scenario_cases",
     "scenario_file_cases",
+    "slam_file",
+    "slam_file_cases",
     "warm_up",
+    "world_cases",
 ]
 
 BUDGET_S = {
+    "slam_file": 30.0,
     "scenario": 30.0,
     "scenario_file": 30.0,
     "map_file": 10.0,
     "cli": 60.0,
     "constructor": 60.0,
+    "world": 20.0,
 }
 """Seconds one case of each kind may take. Typical cases take milliseconds; the budgets cover the
 largest work the limits allow (a NumPy MPPI call at 5e6 samples × 10 steps: 19 s on 2 cores)."""
@@ -171,6 +177,7 @@ def warm_up() -> None:
     first call that compiles under a loaded machine can take longer than a case may."""
     for base in BASES:
         outcome(lambda base=base: run_scenario(base), 600.0)
+    outcome(lambda: run_world(WORLD_BASE), 600.0)
 
 
 def _where(error: BaseException) -> str:
@@ -240,7 +247,82 @@ BASES: list[dict[str, Any]] = [
         "dt": 0.02,
         "duration": 10.0,
     },
+    {
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {
+            "model": "diffdrive",
+            "preset": "rm100",
+            "payload": {"mass": 10.0, "position": [0.1, 0.0], "inertia": 0.2},
+            "contacts": {"drive_load_share": 0.6},
+        },
+        "plant": "dynamic",
+        "controller": {
+            "law": "adaptive_computed_torque",
+            "model_payload": False,
+            "traction_control": {"friction": "map"},
+        },
+        "terrain": {
+            "surface": "dry_concrete",
+            "regions": [
+                {
+                    "polygon": [[0.3, -1.0], [0.8, -1.0], [0.8, 1.0], [0.3, 1.0]],
+                    "surface": "ice",
+                    "grade_percent": 5.0,
+                    "uphill_deg": 0.0,
+                },
+                {
+                    "polygon": [[1.0, -1.0], [1.4, -1.0], [1.4, 1.0], [1.0, 1.0]],
+                    "surface": {"like": "grass", "peak_friction": 0.3},
+                },
+            ],
+        },
+        "start": [0.0, 0.0, 0.0],
+        "goals": [[0.8, 0.0, 0.0], {"pose": [1.5, 0.0, 0.0], "payload": None}],
+        "dt": 0.02,
+        "duration": 10.0,
+    },
 ]
+BASES.append(
+    {  # among obstacles the map does not show (issue 22): a lidar, a costmap, walkers, a box
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle", "footprint": [0.3, 0.3]},
+        "controller": {"law": "pure_pursuit"},
+        "control_rate_hz": 5.0,
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 24, "max_range": 4.0, "rate_hz": 5.0}},
+        "world": {
+            "obstacles": [{"box": [1.5, 0.0, 0.3, 0.3, 10.0]}],
+            "agents": [{"count": 2, "radius": 0.2, "behaviour": "wander", "region": [0, 1, 3, 2]}],
+            "path_boxes": {"count": [0, 1], "size": [0.2, 0.3], "clear": 0.5},
+        },
+        "costmap": {"inflation_radius": 0.3},
+        "tracker": {},
+        "replanning": {"rate_hz": 1.0},
+        "recovery": {"max_retries": 2, "wait_time": 0.5},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [3.0, 0.0, 0.0],
+        "dt": 0.1,
+        "duration": 6.0,
+    }
+)
+BASES.append(
+    {  # a fleet of two robots that see each other
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle", "footprint": [0.3, 0.3]},
+        "controller": {"law": "pure_pursuit"},
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 24, "max_range": 4.0, "rate_hz": 5.0}},
+        "fleet": [
+            {"start": [0.0, 0.0, 0.0], "goal": [3.0, 0.0, 0.0]},
+            {"start": [3.0, 1.0, 180.0], "goal": [0.0, 1.0, 180.0]},
+        ],
+        "dt": 0.1,
+        "duration": 6.0,
+    }
+)
 for _base in BASES:
     _base["resources"] = dict(_FUZZ_RESOURCES)
     _base.setdefault("planner", {})["options"] = {"time_limit": 2.0}
@@ -248,9 +330,11 @@ for _base in BASES:
 
 def _scenario_paths() -> list[tuple[str, ...]]:
     """Every field of the scenario schema, and the gains and planner options a file can set."""
+    from dataclasses import fields
+
     from pydantic import BaseModel
 
-    from wheelbase.control import MPPI, Kanayama, PurePursuit, Stanley
+    from wheelbase.control import DWA, MPPI, DWACritics, Kanayama, PurePursuit, Stanley
     from wheelbase.control.mppi_critics import MPPICritics
     from wheelbase.planning import HybridAStar
     from wheelbase.scenario import Scenario
@@ -266,14 +350,76 @@ def _scenario_paths() -> list[tuple[str, ...]]:
 
     walk(Scenario, ())
     paths.append(("goal",))
-    gains = set(inspect.signature(MPPI).parameters) | {f for f in MPPICritics.WEIGHTS}
-    for cls in (Kanayama, PurePursuit, Stanley):
+    gains = set(inspect.signature(MPPI).parameters) | {f.name for f in fields(MPPICritics)}
+    gains |= {f.name for f in fields(DWACritics)} - {"extra"}
+    for cls in (Kanayama, PurePursuit, Stanley, DWA):
         gains |= set(inspect.signature(cls).parameters)
     gains |= {"bandwidth", "speed", "max_torque", "model_error", "max_speed", "max_yaw_rate"}
     paths += [("controller", "gains", name) for name in sorted(gains - {"model", "limits"})]
     options = set(inspect.signature(HybridAStar).parameters)
     paths += [("planner", "options", name) for name in sorted(options)]
+    paths += _ground_paths()
+    paths += _navigation_paths()
     return paths
+
+
+def _navigation_paths() -> list[tuple[str, ...]]:
+    """The keys of the world, fleet, costmap and tracker sections (issue 22), optional
+    sections that the schema walk does not enter."""
+    from dataclasses import fields
+
+    from wheelbase.perception import CostmapSpec, TrackerSpec
+    from wheelbase.scenario_world import FleetRobotSpec, PathBoxesSpec, WorldSpec
+    from wheelbase.world.spec import AGENT_KEYS, OBSTACLE_KINDS
+
+    return [
+        *[("world", name) for name in WorldSpec.model_fields],
+        *[("world", "path_boxes", name) for name in PathBoxesSpec.model_fields],
+        *[("world", "agents", 0, name) for name in AGENT_KEYS],
+        *[("world", "obstacles", 0, name) for name in OBSTACLE_KINDS],
+        *[("fleet", k, name) for k in (0, 1) for name in (*FleetRobotSpec.model_fields, "goal")],
+        *[("costmap", f.name) for f in fields(CostmapSpec)],
+        *[("tracker", f.name) for f in fields(TrackerSpec)],
+        ("fleet",),
+        ("control_rate_hz",),
+    ]
+
+
+def _ground_paths() -> list[tuple[str, ...]]:
+    """The keys of the terrain, payload and coping-control sections (issue 24), whose
+    sections are optional (``X | None``) and so not walked from the schema."""
+    from pydantic import BaseModel
+
+    from wheelbase.runner import ADAPTIVE_GAINS
+    from wheelbase.scenario_terrain import (
+        ContactsSpec,
+        PayloadSpec,
+        RasterSpec,
+        RegionSpec,
+        SoilSpec,
+        SurfaceSpec,
+        TerrainSpec,
+        TractionSpec,
+    )
+
+    def keys(model: type[BaseModel], prefix: tuple[str, ...]) -> list[tuple[str, ...]]:
+        return [(*prefix, name) for name in model.model_fields]
+
+    region = ("terrain", "regions", 0)
+    return [
+        *keys(TerrainSpec, ("terrain",)),
+        *keys(SurfaceSpec, ("terrain", "surface")),
+        *keys(SoilSpec, ("terrain", "surface", "soil")),
+        *keys(RegionSpec, region),
+        *keys(RasterSpec, ("terrain", "raster")),
+        *keys(SurfaceSpec, (*region, "surface")),
+        *keys(PayloadSpec, ("robot", "payload")),
+        *keys(ContactsSpec, ("robot", "contacts")),
+        *keys(TractionSpec, ("controller", "traction_control")),
+        ("controller", "model_payload"),
+        ("goal_payloads",),
+        *[("controller", "gains", name) for name in ADAPTIVE_GAINS],
+    ]
 
 
 _PATHS: list[tuple[str, ...]] = []
@@ -323,6 +469,10 @@ def _mutation(paths: list[tuple[str, ...]]) -> st.SearchStrategy:
                 "exact",
                 "encoders",
                 "trinary",
+                "ice",
+                "dry_sand",
+                "map",
+                "adaptive_computed_torque",
             ]
         ),
     )
@@ -337,6 +487,11 @@ def _apply(data: dict[str, Any], mutation: tuple) -> None:
     path, action, value = mutation
     node: Any = data
     for key in path[:-1]:
+        if isinstance(node, list) and isinstance(key, int):  # a list entry (terrain regions)
+            if key >= len(node):
+                return
+            node = node[key]
+            continue
         if not isinstance(node, dict):
             return
         node = node.setdefault(key, {}) if action == "set" else node.get(key)
@@ -580,6 +735,8 @@ def load_map_file(case: tuple[str, bytes, dict[str, bytes]]) -> Any:
             (Path(folder) / name).write_bytes(data)
         if suffix == ".scen":
             return read_movingai_scenarios(path)
+        if suffix in (".png", ".pgm", ".bmp", ".jpg"):  # a bare image needs its resolution
+            return load_map(path, resolution=0.1)
         return load_map(path)
 
 
@@ -609,6 +766,198 @@ def grid_from_array(kwargs: dict[str, Any]) -> Any:
     return OccupancyGrid.from_array(**kwargs)
 
 
+# =========================================================================== world section
+WORLD_BASE: dict[str, Any] = {
+    "obstacles": [{"box": [6.0, 3.0, 0.6, 0.6, 30]}, {"disc": [8.0, 7.0, 0.3]},
+                  {"polygon": [[2.0, 6.0], [3.0, 6.0], [2.5, 7.0]]}],
+    "agents": [
+        {"count": 3, "radius": 0.3, "speed": 0.5, "behaviour": "straight",
+         "region": [3, 3, 9, 9], "reacts_to_robot": False},
+        {"count": 3, "behaviour": "wander"},
+        {"count": 2, "behaviour": "waypoints", "waypoints": [[2.0, 2.0], [8.0, 2.0]]},
+        {"count": 3, "behaviour": "social_force", "reacts_to_robot": True},
+        {"count": 3, "behaviour": "orca", "reacts_to_robot": True},
+    ],
+    "social_force": {"relaxation_time": 0.5},
+    "orca": {"time_horizon": 5.0},
+}  # fmt: skip
+"""A valid ``world`` section on a 10 m room (:func:`run_world`); cases damage it."""
+
+
+def _world_paths() -> list[tuple]:
+    from dataclasses import fields
+
+    from wheelbase.world import ORCA, SocialForce
+    from wheelbase.world.spec import AGENT_KEYS, OBSTACLE_KINDS, WORLD_KEYS
+
+    paths: list[tuple] = [(key,) for key in WORLD_KEYS]
+    paths += [("obstacles", i, kind) for i in range(3) for kind in OBSTACLE_KINDS]
+    paths += [("obstacles", i) for i in range(4)]
+    paths += [("agents", i, key) for i in range(5) for key in AGENT_KEYS]
+    paths += [("agents", i) for i in range(6)]
+    paths += [("social_force", f.name) for f in fields(SocialForce)]
+    paths += [("orca", f.name) for f in fields(ORCA)]
+    return paths
+
+
+def _apply_world(data: Any, mutation: tuple) -> None:
+    path, action, value = mutation
+    node = data
+    for key in path[:-1]:
+        in_dict = isinstance(node, dict) and key in node
+        in_list = isinstance(node, list) and isinstance(key, int) and key < len(node)
+        if in_dict or in_list:
+            node = node[key]
+        else:
+            return
+    last = path[-1]
+    if isinstance(node, dict):
+        if action == "delete":
+            node.pop(last, None)
+        elif action == "unknown":
+            node[f"{last}_typo"] = copy.deepcopy(value)
+        else:
+            node[last] = copy.deepcopy(value)
+    elif isinstance(node, list) and isinstance(last, int):
+        if last < len(node):
+            if action == "delete":
+                node.pop(last)
+            else:
+                node[last] = copy.deepcopy(value)
+        elif action == "set":
+            node.append(copy.deepcopy(value))
+
+
+@st.composite
+def world_cases(draw) -> Any:
+    """The base ``world`` section with one to three entries set to hostile values (numbers,
+    lists, huge counts, other behaviours), deleted or misspelt; or a hostile section."""
+    if draw(st.integers(0, 19)) == 0:
+        return draw(st.sampled_from(HOSTILE))
+    data = copy.deepcopy(WORLD_BASE)
+    value = st.one_of(
+        _TUPLES,
+        st.sampled_from(HOSTILE),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(min_value=-(2**70), max_value=2**70),
+        st.sampled_from(["wander", "orca", "social_force", "waypoints", "dance", [[0.0, 0.0]],
+                         {"box": [5, 5, 0.5, 0.5]}, {"disc": [1.0, 1.0, 0.5]}, 10_000, 5000,
+                         [0, 0, 10, 10], [[1, 1], [1e9, 1]], 1e-9, 0.01, 9.9]),
+    )  # fmt: skip
+    for path in draw(st.lists(st.sampled_from(_world_paths()), min_size=1, max_size=3)):
+        action = draw(st.sampled_from(["set", "set", "set", "delete", "unknown"]))
+        _apply_world(data, (path, action, draw(value)))
+    return data
+
+
+def run_world(spec: Any) -> Any:
+    """Build the world of a case on a 10 m room, start two worlds clear of a robot's start
+    and goal, step them with the robot, cast a scan and measure distances."""
+    from wheelbase.planning import Footprint, OccupancyGrid
+    from wheelbase.world import RobotBodies, world_from_spec
+
+    occupied = np.zeros((100, 100), bool)
+    occupied[[0, -1], :] = occupied[:, [0, -1]] = True
+    world = world_from_spec(spec, OccupancyGrid(occupied, 0.1))
+    keep = [[1.0, 1.0, 0.4], [9.0, 9.0, 0.4]]
+    state = world.start([0, 1], keep, labels=["start", "goal"])
+    footprint = Footprint.rectangle(0.4, 0.4)
+    robots = RobotBodies(np.tile([1.0, 1.0, 0.3], (2, 1, 1)), np.tile([0.3, 0.1], (2, 1, 1)),
+                         footprint)  # fmt: skip
+    for _ in range(3):
+        state = world.step(state, 0.1, robots)
+    if not np.all(np.isfinite(state.position)) or not np.all(np.isfinite(state.velocity)):
+        raise AssertionError("non-finite agent state")  # silently wrong: a raw failure
+    poses = robots.pose.reshape(-1, 3)
+    index = np.arange(2, dtype=np.int64)
+    world.cast(poses, np.linspace(-np.pi, np.pi, 90, endpoint=False), 8.0, index, state,
+               robots, np.zeros(2, np.int64))  # fmt: skip
+    return world.distances(poses, footprint, index, state, robots, np.zeros(2, np.int64))
+
+
+# =========================================================================== SLAM inputs
+_G2O_LINES = [
+    "VERTEX_SE2 0 0 0 0",
+    "VERTEX_SE2 1 1 0 0.1",
+    "VERTEX_SE2 2 2 0.1 0.2",
+    "EDGE_SE2 0 1 1 0 0.1 100 0 0 100 0 400",
+    "EDGE_SE2 1 2 1 0.1 0.1 100 0 0 100 0 400",
+    "EDGE_SE2 0 2 2 0.1 0.2 50 0 0 50 0 200",
+    "FIX 0",
+]
+
+
+def _flaser(ranges: list[str], pose: str = "1 2 0.5", t: str = "1.0") -> str:
+    return f"FLASER {len(ranges)} {' '.join(ranges)} {pose} {pose} {t} host {t}"
+
+
+@st.composite
+def _g2o(draw) -> tuple[str, bytes]:
+    lines = list(_G2O_LINES)
+    for _ in range(draw(st.integers(0, 3))):
+        k = draw(st.integers(0, len(lines) - 1))
+        tokens = lines[k].split()
+        j = draw(st.integers(0, len(tokens) - 1))
+        tokens[j] = draw(st.sampled_from(HOSTILE_TEXT))
+        lines[k] = " ".join(tokens) if draw(st.booleans()) else " ".join(tokens[: j + 1])
+    if draw(st.booleans()):
+        lines = draw(st.permutations(lines))[: draw(st.integers(0, len(lines)))]
+    return ".g2o", "\n".join(lines).encode()
+
+
+@st.composite
+def _carmen(draw) -> tuple[str, bytes]:
+    scans = draw(st.integers(0, 6))
+    beams = draw(st.sampled_from([1, 4, 30]))
+    lines = ["# CARMEN", "PARAM robot_x 0 host 0", "ODOM 0 0 0 0 0 0 1 h 1"]
+    moving = draw(st.booleans())  # a robot that never moves, or one that does
+    for k in range(scans):
+        ranges = [draw(st.sampled_from(["1.0", "2.5", "nan", "inf", "-1", "81.83", "0",
+                                        "1e300"])) for _ in range(beams)]  # fmt: skip
+        pose = f"{0.3 * k if moving else 0.0} 0 0"
+        lines.append(_flaser(ranges, pose, str(1.0 + k)))
+    for _ in range(draw(st.integers(0, 2))):
+        if lines:
+            k = draw(st.integers(0, len(lines) - 1))
+            tokens = lines[k].split()
+            j = draw(st.integers(0, len(tokens) - 1))
+            tokens[j] = draw(st.sampled_from(HOSTILE_TEXT))
+            lines[k] = " ".join(tokens)
+    return draw(st.sampled_from([".log", ".clf"])), "\n".join(lines).encode()
+
+
+@st.composite
+def slam_file_cases(draw) -> tuple[str, bytes, dict[str, Any]]:
+    """(suffix, bytes, options) of a g2o graph or a CARMEN log, possibly damaged, and the
+    mapping options to build its map with (resolution, max_cells, max_range)."""
+    suffix, content = draw(st.one_of(_g2o(), _carmen()))
+    options = {
+        "resolution": draw(st.sampled_from([0.05, 0.5, 1e-5, 0.0, -1.0, float("nan")])),
+        "max_cells": draw(st.sampled_from([10**6, 10, 1])),
+        "max_range": draw(st.sampled_from([30.0, 1e-9, float("inf")])),
+    }
+    return suffix, content, options
+
+
+def slam_file(case: tuple[str, bytes, dict[str, Any]]) -> Any:
+    """Read a SLAM input as a user would and run what reads it: a g2o file is optimised, a
+    CARMEN log mapped with its own poses (within ``max_cells``) and run through lidar SLAM."""
+    from wheelbase.datasets import read_carmen, read_g2o
+    from wheelbase.mapping import LidarSlam, OccupancyMapper, optimize_pose_graph
+
+    suffix, content, options = case
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"data{suffix}"
+        path.write_bytes(content)
+        if suffix == ".g2o":
+            return optimize_pose_graph(read_g2o(path), initial="chordal")
+        log = read_carmen(path)
+    mapper = OccupancyMapper(resolution=options["resolution"], max_range=options["max_range"])
+    mapper.build(log.reference, log.ranges, log.angles, sensor_max_range=log.max_range,
+                 max_cells=options["max_cells"])  # fmt: skip
+    return LidarSlam().run(log)
+
+
 # =========================================================================== constructors
 def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
     """Public constructors and entry points with valid arguments (one is then made hostile)."""
@@ -634,6 +983,38 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
     def mppi_pose(pose, reference):
         controller = wb.MPPI(wb.Unicycle(), 10, 0.1, 32, 0.2, 0.1, None, limits)
         return controller(0.0, pose, reference)
+
+    def perceived(law, cost, resolution, origin, position, velocity, covariance, radius, time):
+        from types import SimpleNamespace
+
+        costmap = SimpleNamespace(cost=cost, resolution=resolution, origin=origin)
+        tracks = SimpleNamespace(position=position, velocity=velocity, covariance=covariance,
+                                 radius=radius)  # fmt: skip
+        view = SimpleNamespace(costmap=costmap, tracks=tracks, time=time)
+        if law == "dwa":
+            controller = wb.control.DWA(wb.Unicycle(), v_samples=5, w_samples=5,
+                                        footprint=Footprint.rectangle(0.4, 0.4))  # fmt: skip
+        else:
+            controller = wb.MPPI(wb.Unicycle(), 10, 0.1, 32, 0.2, 0.1, None, limits,
+                                 footprint=Footprint.rectangle(0.4, 0.4))  # fmt: skip
+        command = controller(0.2, (0.5, 0.5, 0.0), line, perception=view)
+        finite(command)
+        return command
+
+    view_arguments = {
+        "cost": np.zeros((20, 30), np.uint8) + np.uint8(40),
+        "resolution": 0.1,
+        "origin": (-0.5, -0.5),
+        "position": [[1.2, 0.6]],
+        "velocity": [[-0.3, 0.0]],
+        "covariance": np.eye(4)[None] * 0.01,
+        "radius": [0.3],
+        "time": 0.1,
+    }
+
+    def dwa(**kw):
+        controller = wb.control.DWA.from_gains(wb.Unicycle(), **kw)
+        return controller(0.0, (0.5, 0.5, 0.0), line)
 
     def simulate(**kw):
         return wb.simulate(wb.DiffDrive(0.05, 0.2), **kw)
@@ -717,6 +1098,69 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
         finite(estimate.pose, estimate.cov)
         return estimate
 
+    beams = np.linspace(-math.pi, math.pi, 24, endpoint=False)
+
+    def true_ranges(pose):
+        """The true ranges of the room."""
+        from wheelbase.sensors import scan_rays
+
+        return scan_rays(room, [pose[:2]], [pose[2]], beams, 3.0, "exact")[0]
+
+    def scan_of(pose, discs=((1.4, 1.2, 0.2),)):
+        """A lidar scan of ``room`` with discs in it (the walkers of the perception cases)."""
+        ranges = true_ranges(pose)
+        angle = pose[2] + beams
+        for cx, cy, rho in discs:
+            dx, dy = cx - pose[0], cy - pose[1]
+            b = np.cos(angle) * dx + np.sin(angle) * dy
+            disc = b * b - (dx * dx + dy * dy - rho * rho)
+            t = b - np.sqrt(np.maximum(disc, 0.0))
+            ranges = np.where((disc >= 0) & (t >= 0) & (t < ranges), t, ranges)
+        return ranges
+
+    def costmap(**keys):
+        from wheelbase.perception import CostmapSpec, LayeredCostmap, update_costmap
+
+        spec = CostmapSpec.from_mapping(keys)
+        layers = LayeredCostmap.from_map(spec, room, 0.1)
+        pose = np.array([[1.0, 1.0, 0.3]])
+        state = update_costmap(layers, layers.initial_state(1), pose, beams,
+                               scan_of(pose[0])[None], 3.0)  # fmt: skip
+        return layers.rolling_window(state, 0, pose[0]).to_occupancy_grid()
+
+    def costmap_args(sensor_poses, beam_angles, ranges, max_range, index):
+        from wheelbase.perception import CostmapSpec, LayeredCostmap, update_costmap
+
+        layers = LayeredCostmap.from_map(CostmapSpec(), room, 0.1)
+        return update_costmap(layers, layers.initial_state(2), sensor_poses, beam_angles,
+                              ranges, max_range, index)  # fmt: skip
+
+    def tracker(**keys):
+        from wheelbase.perception import TrackerSpec, TrackerState, update_tracker
+
+        spec = TrackerSpec.from_mapping(keys)
+        state = TrackerState.initial(spec)
+        for k in range(4):
+            pose = np.array([1.0, 1.0, 0.3])
+            disc = ((1.4 + 0.05 * k, 1.2, 0.2),)
+            state = update_tracker(spec, state, 0.1 * k, pose, beams, scan_of(pose, disc), 3.0,
+                                   room)  # fmt: skip
+        tracks = state.tracks()
+        finite(tracks.position, tracks.velocity, tracks.covariance)
+        return tracks
+
+    def tracker_args(time, sensor_pose, beam_angles, ranges, max_range):
+        from wheelbase.perception import TrackerSpec, TrackerState, update_tracker
+
+        spec = TrackerSpec()
+        state = update_tracker(spec, TrackerState.initial(spec), 0.0, (1.0, 1.0, 0.3), beams,
+                               scan_of((1.0, 1.0, 0.3)), 3.0, room)  # fmt: skip
+        state = update_tracker(spec, state, time, sensor_pose, beam_angles, ranges, max_range,
+                               room)  # fmt: skip
+        tracks = state.tracks()
+        finite(tracks.position, tracks.velocity, tracks.covariance)
+        return tracks
+
     return {
         "DiffDrive": (wb.DiffDrive, {"wheel_radius": 0.05, "half_track": 0.2}),
         "Bicycle": (wb.Bicycle, {"wheel_base": 0.5, "max_steering": 0.6}),
@@ -771,6 +1215,25 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
             },
         ),
         "MPPI(pose)": (mppi_pose, {"pose": (0.5, 0.5, -6.12), "reference": line}),
+        "MPPI(perception)": (perceived, {"law": "mppi", **view_arguments}),
+        "DWA(perception)": (perceived, {"law": "dwa", **view_arguments}),
+        "DWA": (
+            dwa,
+            {
+                "max_speed": 0.5,
+                "min_speed": 0.0,
+                "max_yaw_rate": 1.5,
+                "max_acceleration": 2.5,
+                "sim_time": 1.7,
+                "sim_dt": 0.1,
+                "v_samples": 5,
+                "w_samples": 5,
+                "path_dist": 640.0,
+                "dynamic_inflation": 0.5,
+                "oscillation": True,
+                "goal_tolerance": (0.05, 0.25),
+            },
+        ),
         "simulate": (
             simulate,
             {
@@ -866,6 +1329,56 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
                 "recovery_alpha_fast": 0.1,
                 "update_min_d": 0.25,
                 "resample_interval": 1,
+            },
+        ),
+        "CostmapSpec.from_mapping": (
+            costmap,
+            {
+                "inflation_radius": 0.55,
+                "cost_scaling_factor": 10.0,
+                "obstacle_max_range": 2.5,
+                "obstacle_min_range": 0.0,
+                "raytrace_max_range": 3.0,
+                "raytrace_min_range": 0.0,
+                "window": 3.0,
+                "resolution": 0.1,
+                "track_unknown": False,
+            },
+        ),
+        "update_costmap": (
+            costmap_args,
+            {
+                "sensor_poses": [[1.0, 1.0, 0.3]],
+                "beam_angles": beams,
+                "ranges": np.full((1, 24), 1.5),
+                "max_range": 3.0,
+                "index": [1],
+            },
+        ),
+        "TrackerSpec.from_mapping": (
+            tracker,
+            {
+                "map_tolerance": 0.2,
+                "cluster_distance": 0.3,
+                "min_points": 2,
+                "max_radius": 1.0,
+                "measurement_std": 0.05,
+                "process_noise": 0.5,
+                "initial_speed_std": 1.0,
+                "gate_probability": 0.99,
+                "hits_to_confirm": 3,
+                "misses_to_delete": 5,
+                "max_tracks": 64,
+            },
+        ),
+        "update_tracker": (
+            tracker_args,
+            {
+                "time": 0.1,
+                "sensor_pose": (1.0, 1.0, 0.3),
+                "beam_angles": beams,
+                "ranges": np.full(24, 1.5),
+                "max_range": 3.0,
             },
         ),
         "AMCL.update": (
@@ -965,11 +1478,12 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
             "--xy-resolution": 1,
             "--collision-step": 1,
             "--time-limit": 1,
+            "--resolution": 1,
         },
     ),
     "goto": (
-        ["--goal", "0.5", "0.5", "--unit", "m"],
-        {"--goal": 2, "--unit": 1, "--ed": 1, "--eb": 1, "--method": 1, "--seed": 1},
+        ["--goal", "0.5", "0.5"],
+        {"--goal": 2, "--ed": 1, "--eb": 1, "--method": 1, "--seed": 1},
     ),
     "dynamics": (
         ["--no-gif", "--t-end", "2"],
@@ -979,7 +1493,7 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
     "scenarios": ([], {}),
     "batch": (
         ["demo", "--seeds", "2"],
-        {"--seeds": 1, "--workers": 1, "--chunk-size": 1},  # (--scheduler: a network wait)
+        {"--seeds": 1, "--workers": 1, "--chunk-size": 1, "--memory-mb": 1},  # not --scheduler
     ),
     "localize": (
         [str(_MRCLAM), "--robot", "1", "--filter", "ekf"],

@@ -6,10 +6,12 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from wheelbase.commands.control import parse_angle, register
+from wheelbase.commands.control import register
+from wheelbase.commands.options import PoseGroup, parse_angle
+from wheelbase.control.pose import POSE_LAWS
 from wheelbase.errors import ConfigError, InputError
 
-app = typer.Typer()
+app = typer.Typer(cls=PoseGroup)
 
 
 @app.callback()
@@ -25,14 +27,15 @@ def test_angles():
     assert parse_angle("180deg") == pytest.approx(math.pi)
     assert parse_angle("90°") == pytest.approx(0.5 * math.pi)
     assert parse_angle("1.5rad") == 1.5
-    assert parse_angle("-0.5") == -0.5
+    assert parse_angle("-0.5rad") == -0.5
+    assert parse_angle("-90") == pytest.approx(-0.5 * math.pi)
     with pytest.raises(ConfigError, match="angle"):
         parse_angle("north")
 
 
 def test_single_run_writes_files_and_refuses_to_overwrite(tmp_path):
-    args = ["control", "--law", "polar", "--start", "2", "0", "180deg",
-            "--goal", "0", "0", "0deg", "--out", str(tmp_path)]  # fmt: skip
+    args = ["control", "--law", "polar", "--start", "2", "0", "180",
+            "--goal", "0,0,0deg", "--out", str(tmp_path)]  # fmt: skip
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
     assert "arrived" in result.output
@@ -69,7 +72,8 @@ def test_bad_cli_input(tmp_path):
     result = runner.invoke(app, ["control", "--law", "magic", "--start", "1", "1", "0",
                                  "--out", str(tmp_path)])  # fmt: skip
     assert isinstance(result.exception, ConfigError)
-    assert "unknown law" in str(result.exception)
+    assert "unknown law 'magic'" in str(result.exception)
+    assert str(result.exception).endswith(", ".join(map(repr, (*POSE_LAWS, "mppi"))))
     result = runner.invoke(app, ["control", "--out", str(tmp_path)])
     assert isinstance(result.exception, ConfigError)
     assert "--start" in str(result.exception)
@@ -87,5 +91,12 @@ def test_goal_beyond_1e10_m_is_refused(tmp_path):
     # a goal 1e300 m away overflowed the metrics (found by the fuzz suite's explore run)
     result = runner.invoke(app, ["control", "--start", "1", "1", "0", "--goal", "0", "1e300",
                                  "0", "--out", str(tmp_path / "o")])  # fmt: skip
-    assert isinstance(result.exception, ConfigError)
-    assert "goal x and y must be within ±1e+10 m" in str(result.exception)
+    assert result.exit_code == 2  # a flag's error: usage error naming --goal
+    assert "'--goal': goal x and y must be within ±1e+10 m" in result.output
+
+
+def test_help_lists_every_law():
+    from wheelbase.cli import app as wheelbase
+
+    text = " ".join(runner.invoke(wheelbase, ["control", "--help"]).stdout.split())
+    assert f"Control law: {', '.join((*POSE_LAWS, 'mppi'))}" in text

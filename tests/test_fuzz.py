@@ -10,6 +10,7 @@ cases instead of stopping at the first.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 
@@ -46,6 +47,17 @@ def check(call, case, kind: str) -> None:
 @example({**fuzzing.BASES[3], "controller": {"law": "mppi", "gains": {"seed": 2**70}}})
 @example({**fuzzing.BASES[0], "planner": {"options": {"headings": float("inf")}}})
 @example({**fuzzing.BASES[0], "trajectory": {"max_speed": 1e-300}})  # 1e301 reference samples
+@example({**fuzzing.BASES[5], "terrain": {"surface": "ice", "slip_speed": 1e-300}})
+@example({**fuzzing.BASES[5], "robot": {"preset": "rm100", "payload": {"mass": 1e5}}})
+@example({**fuzzing.BASES[5], "terrain": {"resolution": 1e-9}})  # a raster of 1e20 cells
+@example({**fuzzing.BASES[5], "goals": [{"pose": [1, 0, 0], "payload": {"mass": "x"}}]})
+@example({**fuzzing.BASES[6], "control_rate_hz": 1e300})
+@example({**fuzzing.BASES[6], "costmap": {"inflation_radius": -1.0}})
+@example({**fuzzing.BASES[6], "world": {"agents": [{"count": 10**6}]}})
+@example({**fuzzing.BASES[6], "world": {"obstacles": [{"disc": [0.0, 0.0, 0.5]}]}})  # on start
+@example({**fuzzing.BASES[6], "world": {"path_boxes": {"count": [5, 5], "size": [9, 9]}}})
+@example({**fuzzing.BASES[7], "fleet": [{"start": [0, 0, 0], "goal": [1, 0, 0]}] * 2})
+@example({**fuzzing.BASES[7], "fleet": []})
 def test_scenario_fields(case):
     check(fuzzing.run_scenario, case, "scenario")
 
@@ -101,6 +113,16 @@ def test_map_arrays(case):
 )  # 4e9 covering circles
 @example(("HybridAStar.plan", {**fuzzing.constructors()["HybridAStar.plan"][1],
                                "xy_resolution": 1e-320}))  # fmt: skip
+@example(("update_costmap", {**fuzzing.constructors()["update_costmap"][1],
+                             "sensor_poses": [[1e300, 1.0, 0.0]]}))  # fmt: skip
+@example(("update_costmap", {**fuzzing.constructors()["update_costmap"][1], "max_range": 1e-300}))
+@example(("update_tracker", {**fuzzing.constructors()["update_tracker"][1], "time": 1e300}))
+@example(("update_tracker", {**fuzzing.constructors()["update_tracker"][1],
+                             "ranges": np.full(24, np.nan)}))  # fmt: skip
+@example(("CostmapSpec.from_mapping", {**fuzzing.constructors()["CostmapSpec.from_mapping"][1],
+                                       "resolution": 1e-9}))  # fmt: skip
+@example(("TrackerSpec.from_mapping", {**fuzzing.constructors()["TrackerSpec.from_mapping"][1],
+                                       "max_tracks": 2**70}))  # fmt: skip
 def test_constructors(case):
     check(fuzzing.call_constructor, case, "constructor")
 
@@ -111,6 +133,22 @@ def test_constructors(case):
 @example(["batch", "demo", "--seeds", "99999999999999999999"])
 def test_cli_flags(case):
     check(fuzzing.run_cli, case, "cli")
+
+
+@settings(**FAST, **_examples(40, 1500))
+@given(fuzzing.world_cases())
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2, "speed": 0}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2, "speed": 50}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 5000, "radius": 0.3}]})  # do not fit
+@example({**fuzzing.WORLD_BASE, "agents": [{"behaviour": "dance"}]})
+@example({**fuzzing.WORLD_BASE, "agents": [{"behaviour": "waypoints"}]})  # no waypoints
+@example({**fuzzing.WORLD_BASE, "obstacles": [{"box": [1.0, 1.0, 0.6, 0.6]}]})  # on the start
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 3, "radius": 1e-300}]})
+@example({**fuzzing.WORLD_BASE, "social_force": {"range": 1e-300}})
+@example({**fuzzing.WORLD_BASE, "orca": {"time_horizon": 1e-300}})
+@example({**fuzzing.WORLD_BASE, "agents": [{"count": 2**70}]})
+def test_world_section(case):
+    check(fuzzing.run_world, case, "world")
 
 
 def test_outcome_classifies_and_stops_a_hang():
@@ -128,3 +166,31 @@ def test_outcome_classifies_and_stops_a_hang():
     assert fuzzing.outcome(lambda: 1 / 0, 1.0).kind == "raw"
     stopped = fuzzing.outcome(loop, 0.2)
     assert stopped.kind == "hang" and stopped.seconds < 1.0
+
+
+@settings(**FAST, **_examples(40, 1000))
+@given(fuzzing.slam_file_cases())
+@example(
+    (
+        ".g2o",
+        b"VERTEX_SE2 0 0 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n",
+        {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0},
+    )
+)  # missing vertex
+@example(
+    (
+        ".g2o",
+        b"EDGE_SE2 0 1 1 0 0 1 0 0 -1 0 1\n",
+        {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0},
+    )
+)  # not positive definite
+@example((".log", b"", {"resolution": 0.05, "max_cells": 10**6, "max_range": 30.0}))
+@example(
+    (
+        ".log",
+        b"FLASER 2 nan inf 0 0 0 0 0 0 1 h 1\nFLASER 2 1 1 0 0 0 0 0 0 2 h 2\n",
+        {"resolution": 1e-5, "max_cells": 10, "max_range": 30.0},
+    )
+)  # map over the limit
+def test_slam_files(case):
+    check(fuzzing.slam_file, case, "slam_file")

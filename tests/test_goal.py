@@ -128,3 +128,25 @@ def test_bad_input():
         run_go_to_goal((1.0, 1.0), control_period=0.025)
     with pytest.raises(ConfigError, match="max_wheel_speed"):
         saturate_keep_turn_rate(1.0, 1.0, 0.035, 0.075, 0.0)
+
+
+def test_a_drive_train_step_with_slip_is_a_function_of_its_state():
+    from wheelbase.sim import DriveTrainPlant
+
+    plant = DriveTrainPlant(DriveTrain(errors=OdometryErrors(slip_std=0.05)))
+    state = plant.start(3, np.array([0, 1, 2]))
+    pose, twist = np.zeros((3, 3)), np.zeros((3, 3))
+    command, index = np.tile([0.3, 0.2], (3, 1)), np.arange(3)
+    for _ in range(5):
+        pose, twist, _, state = plant.step(pose, twist, command, None, None, 0.05, state, index)
+    first = plant.step(pose, twist, command, None, None, 0.05, state, index)
+    second = plant.step(pose, twist, command, None, None, 0.05, state, index)
+    np.testing.assert_array_equal(first[0], second[0])  # the same slip both times
+    np.testing.assert_array_equal(first[3].motors, second[3].motors)
+    assert not np.allclose(first[0][0], first[0][1])  # each robot slips its own way
+    # robot 1 alone (seed 1) slips as robot 1 of the batch
+    one = plant.start(1, np.array([1]))
+    p1, t1 = np.zeros((1, 3)), np.zeros((1, 3))
+    for _ in range(6):
+        p1, t1, _, one = plant.step(p1, t1, command[:1], None, None, 0.05, one, np.arange(1))
+    np.testing.assert_allclose(p1[0], first[0][1], atol=1e-12)

@@ -5,18 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from wheelbase.errors import ConfigError, InputError, MapError
+from amcl_trials import kidnapped_run, noisy_odometry, run_amcl, wander
+from wheelbase.errors import ConfigError, InputError, MapError, PlanningError
 from wheelbase.localization import (
     AMCL,
     GLOBAL_LOCALIZATION,
     OdometryMotion,
-    kidnapped_run,
     kld_particles,
     low_variance_resample,
-    noisy_odometry,
     odometry_delta,
-    run_amcl,
-    wander,
 )
 from wheelbase.localization.likelihood import likelihood_field, scan_log_likelihood
 from wheelbase.localization.particles import _bin_keys, _kld_bound, clusters
@@ -232,7 +229,9 @@ def test_an_ambiguous_map_gives_several_clusters_not_a_confident_wrong_pose():
     run = run_amcl(amcl, lidar, truth, odometry, state, rng)
     estimate = amcl.estimate(run.state)
     assert estimate.ambiguous
-    assert sum(c.weight >= 0.1 for c in estimate.clusters) >= 2
+    # no confident pose: the weight is split over several clusters
+    assert estimate.clusters[0].weight < 0.5
+    assert sum(c.weight >= 0.05 for c in estimate.clusters) >= 2
 
 
 def test_update_rules_and_bad_input():
@@ -246,7 +245,10 @@ def test_update_rules_and_bad_input():
     scan[:5] = np.nan
     scan[5] = -1.0
     _, info = amcl.update(state, [0.3, 0.0, 0.0], 0, scan=scan)
-    assert info.updated and info.beams_skipped == 6 and info.beams_used > 0
+    # skipped: the 6 bad readings and the max-range ones (no return: the likelihood field
+    # skips them); with every beam chosen, used + skipped = 36
+    assert info.updated and info.beams_skipped == 6 + np.sum(scan[6:] >= lidar.max_range)
+    assert info.beams_used + info.beams_skipped == 36 and info.beams_used > 0
     with pytest.raises(ConfigError, match="max_particles"):
         AMCL(grid=grid, max_particles=0)
     with pytest.raises(ConfigError, match="min_particles"):
@@ -272,3 +274,94 @@ def test_update_rules_and_bad_input():
         force=True,
     )
     assert info.landmarks_used == 1 and info.landmarks_skipped == 2
+
+
+def test_wander_stops_with_an_error_where_every_heading_is_blocked():
+    import signal
+
+    def too_long(signum, frame):
+        raise TimeoutError("wander still turning after 20 s: it loops forever")
+
+    room = np.ones((19, 19), dtype=bool)
+    room[2:-2, 2:-2] = False  # a 1.5 m walled room of 0.1 m cells
+    grid = OccupancyGrid.from_array(room, 0.1)
+    previous = signal.signal(signal.SIGALRM, too_long)
+    signal.alarm(20)
+    try:
+        with pytest.raises(PlanningError, match=r"every heading .* blocked within clearance"):
+            wander(grid, 5.0, 0, start=np.array([0.95, 0.95, 0.0]))
+        with pytest.raises(PlanningError, match=r"every heading .* blocked within clearance"):
+            wander(grid, 5.0, 0)  # a start drawn in the middle, 0.75 m from the walls
+        closet = OccupancyGrid.from_array(np.pad(np.zeros((10, 10), bool), 2, constant_values=True),
+                                          0.1)  # fmt: skip
+        with pytest.raises(MapError, match=r"more than clearance = 0\.6 m"):
+            wander(closet, 5.0, 0)  # 1 m wide: no cell 0.6 m from the walls to start from
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    # where there is room, it wanders the distance asked for
+    free = np.zeros((60, 60), dtype=bool)
+    free[[0, -1], :] = free[:, [0, -1]] = True
+    truth = wander(OccupancyGrid.from_array(free, 0.1), 3.0, 1, start=np.array([3.0, 3.0, 0.0]))
+    assert np.sum(np.hypot(*np.diff(truth[:, :2], axis=0).T)) >= 3.0 - 1e-9
+
+
+def corridor() -> OccupancyGrid:
+    """A 10 m × 2 m corridor (0.1 m cells) closed at both ends."""
+    cells = np.zeros((22, 102), bool)
+    cells[[0, -1], :] = cells[:, [0, -1]] = True
+    return OccupancyGrid.from_array(cells, 0.1, origin=(-0.1, -0.1))
+
+
+def weigh(amcl, particles, scan):
+    """Weights of ``particles`` after one update with ``scan`` (no motion, no resampling)."""
+    from wheelbase.localization import AMCLState
+
+    n = particles.shape[0]
+    state = AMCLState(particles, np.full(n, 1.0 / n), np.zeros(3))
+    new, info = amcl.update(state, np.zeros(3), 0, scan=scan, force=True)
+    return new.weights, info
+
+
+def test_the_beam_model_scores_max_range_readings_with_z_max():
+    # Beam 0 looks down the corridor (no return within 3 m: it reads 3 m), beam 1 at the side
+    # wall 1 m away. A particle near the end wall expects a return on beam 0: the missed
+    # return must count against it (Nav2's z_max), not be thrown away.
+    grid = corridor()
+    lidar = Lidar(beams=4, fov=2 * math.pi, max_range=3.0)  # 0°, 90°, 180°, 270°
+    truth = np.array([5.0, 1.0, 0.0])
+    scan = lidar.scan(grid, truth, noise=False)
+    assert scan[0] == 3.0 and scan[2] == 3.0 and abs(scan[1] - 1.0) < 0.06
+    near_end = np.array([8.8, 1.0, 0.0])  # beam 0 would hit the end wall 1.2 m ahead
+    amcl = AMCL(grid=grid, lidar=lidar, sensor_model="beam", motion=OdometryMotion(0, 0, 0, 0),
+                resample_interval=1000, min_particles=2, max_particles=2)  # fmt: skip
+    weights, info = weigh(amcl, np.array([truth, near_end]), scan)
+    assert info.beams_used == 4 and info.beams_skipped == 0
+    assert weights[0] > 0.9  # the missed return counts against the particle near the end
+    # z_max is the probability of the missed return: the log-ratio of the two particles is
+    # that of z_hit + z_max (nothing to hit) against z_max alone, on beam 0
+    total = amcl.z_hit + amcl.z_short + amcl.z_max + amcl.z_rand
+    expected = math.log((amcl.z_hit + amcl.z_max) / total) - math.log(amcl.z_max / total)
+    assert math.log(weights[0] / weights[1]) == pytest.approx(expected, rel=1e-9)
+    # the likelihood field skips the max-range readings, as Nav2's does, and says so
+    field = AMCL(grid=grid, lidar=lidar, motion=OdometryMotion(0, 0, 0, 0),
+                 resample_interval=1000, min_particles=2, max_particles=2)  # fmt: skip
+    _, info = weigh(field, np.array([truth, near_end]), scan)
+    assert info.beams_used == 2 and info.beams_skipped == 2
+
+
+def test_beams_skipped_counts_only_the_chosen_beams_left_unused():
+    grid = corridor()
+    lidar = Lidar(beams=360, max_range=3.0)
+    amcl = AMCL(grid=grid, lidar=lidar, max_beams=60, motion=OdometryMotion(0, 0, 0, 0),
+                resample_interval=1000, min_particles=2, max_particles=2)  # fmt: skip
+    truth = np.array([5.0, 1.0, 0.0])
+    scan = lidar.scan(grid, truth, noise=False)
+    chosen = np.unique(np.round(np.linspace(0, 359, 60)).astype(int))
+    others = np.setdiff1d(np.arange(360), chosen)
+    scan[others[:100]] = np.nan  # beams the filter never looks at
+    scan[chosen[:3]] = np.nan  # three it chose
+    _, info = weigh(amcl, np.array([truth, truth]), scan)
+    unused = np.sum(~(scan[chosen] < 3.0))  # NaN or max range: no use to the likelihood field
+    assert info.beams_skipped == unused >= 3
+    assert info.beams_used + info.beams_skipped == chosen.size == 60

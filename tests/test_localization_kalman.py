@@ -254,3 +254,24 @@ def test_relative_motion_sampling_is_exact_without_noise_and_has_the_arc_varianc
     model = VelocityMotion(0.0, 0.0, 0.0, 0.0, 0.0, heading_per_s=0.01)
     moved = model.sample_relative(np.zeros((20000, 3)), [0.0, 0.0, 0.0], 2.0, rng)
     assert moved[:, 2].std() == pytest.approx(math.sqrt(0.02), rel=0.03)
+
+
+@pytest.mark.parametrize("cls", [EKF, UKF])
+def test_a_noise_scale_is_a_measurement_covariance_that_many_times_larger(cls):
+    marks = np.array([[2.0, 1.0], [-1.0, 3.0]])
+    mean, cov = np.array([0.1, -0.2, 0.3]), np.diag([0.04, 0.03, 0.01])
+    z = np.array([[2.1, 0.2], [3.0, 1.7]])
+    ids = np.array([0, 1])
+    base = cls(marks, range_std=0.1, bearing_std=0.02, gate_probability=1.0)
+    wide = cls(marks, range_std=0.1 * 2.0, bearing_std=0.02 * 2.0, gate_probability=1.0)
+    scaled = base.update(mean, cov, ids, z, noise_scale=[4.0, 4.0])
+    expected = wide.update(mean, cov, ids, z)
+    np.testing.assert_allclose(scaled[0], expected[0], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(scaled[1], expected[1], rtol=1e-12, atol=1e-15)
+    # a factor on one measurement only: the same as applying the two in turn
+    one = base.update(mean, cov, ids[:1], z[:1], noise_scale=[1.0])
+    two = wide.update(*one[:2], ids[1:], z[1:])
+    mixed = base.update(mean, cov, ids, z, noise_scale=[1.0, 4.0])
+    np.testing.assert_allclose(mixed[1], two[1], rtol=1e-12, atol=1e-15)
+    with pytest.raises(InputError, match="noise_scale"):
+        base.update(mean, cov, ids, z, noise_scale=[1.0, 0.0])

@@ -304,9 +304,10 @@ def test_numba_kernel_has_no_infinity_sentinels():
     import inspect
     import re
 
-    from wheelbase.control import mppi_numba
+    from wheelbase.control import dwa_kernels, footprint_field, mppi_numba, obstacle_critics
 
-    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest):
+    for kernel in (mppi_numba.mppi_kernel, mppi_numba._nearest, footprint_field.clearance_at,
+                   obstacle_critics.track_cost_at, dwa_kernels.dwa_kernel):  # fmt: skip
         source = inspect.getsource(kernel.py_func)
         assert not re.search(r"\b(np|math|numpy)\.inf\b|float\(.-?inf", source)
 
@@ -559,6 +560,9 @@ def test_benchmark_quick_prints_the_promised_json():
         assert key in report
     assert report["gpu"].startswith("none") == (report["gpu_hz_2000x56"] is None)
     assert report["parking"]["seeds"] == 0  # the 4.5 m car runs only in the full benchmark
+    assert report["default_backend"] == "numba"
+    assert rates["numba_with_view"] > 0 and rates["numpy_with_view"] > 0
+    assert report["crowd"]["head_on"]["collisions"] == 0
 
 
 def test_closed_path_is_driven_round_before_arriving():
@@ -587,9 +591,9 @@ def test_cusp_is_passed_when_the_robot_crosses_its_line():
     path = PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0], [1.0, 0.0]], [1, -1])
     mppi = make(samples=100)
     mppi(0.0, (1.7, 0.0, 0.0), path)
-    assert mppi._section == 0
+    assert mppi._path.section == 0
     command = mppi(0.0, (2.01, 0.08, 0.0), path)
-    assert mppi._section == 1 and command[0] <= 0.0
+    assert mppi._path.section == 1 and command[0] <= 0.0
 
 
 def test_reverse_against_path_samples_both_signs():
@@ -642,12 +646,12 @@ def test_conservative_collisions_do_not_freeze_a_clear_robot():
     bike = RearWheelBicycle(wheel_base=2.7, max_steering=0.6)
     mppi = MPPI(bike, 30, 0.05, 200, (0.2, 0.3), 0.03, None, SteeringLimits(0.6, max_speed=1.0),
                 backend="numba", grid=grid, footprint=car)  # fmt: skip
-    now, _ = mppi._clearance(pose)
+    now, _ = mppi._field.clearance(pose)
     assert now <= 0.0
     plan = mppi.plan(pose, PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]]))
     assert plan.status == "ok"
     best = mppi.predict(plan, plan.samples[np.argmin(plan.costs)])
-    assert mppi._clearance(best)[0].min() >= now - 0.01
+    assert mppi._field.clearance(best)[0].min() >= now - 0.01
     # truly inside the wall, every rollout stays lethal: a safe stop
     assert mppi.plan(
         np.array([1.5, 5.0, 0.0]), PlannedPath.from_points([[2.0, 5.0], [6.0, 5.0]])
@@ -718,7 +722,7 @@ def test_a_huge_step_keeps_the_path_window_to_the_path():
     # never holds more than the path has.
     mppi = MPPI(Unicycle(), 10, 157409.0, 32, 0.2, 0.1, None, LIMITS)
     assert mppi(0.0, (0.5, 0.0, 0.0), STRAIGHT).shape == (2,)
-    assert mppi._window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2
+    assert mppi._path.window_points * 0.05 <= 1.2 * STRAIGHT.length + 0.2
 
 
 def test_a_long_horizon_smooths_without_a_horizon_squared_matrix():

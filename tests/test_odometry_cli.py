@@ -7,9 +7,10 @@ import typer
 from typer.testing import CliRunner
 
 from wheelbase.commands.odometry import CALIBRATE_FILES, GOTO_FILES, register
+from wheelbase.commands.options import PoseGroup
 from wheelbase.errors import ConfigError
 
-app = typer.Typer()
+app = typer.Typer(cls=PoseGroup)
 
 
 @app.callback()
@@ -24,39 +25,62 @@ runner = CliRunner()
 def test_goto_writes_files_and_metrics(tmp_path):
     out = tmp_path / "run"
     result = runner.invoke(
-        app, ["goto", "--goal", "100", "100", "--goal", "-100", "-50", "--out", str(out)]
+        app, ["goto", "--goal", "100cm", "100cm", "--goal", "-1,-500mm", "--out", str(out)]
     )
     assert result.exit_code == 0, result.output
     for name in GOTO_FILES:
         assert (out / name).stat().st_size > 0
     metrics = json.loads((out / "metrics.json").read_text())
     goals = metrics["goals"]
-    assert [g["goal"] for g in goals] == [[1.0, 1.0], [-1.0, -0.5]]  # cm → m
+    assert [g["goal"] for g in goals] == [[1.0, 1.0], [-1.0, -0.5]]  # cm, mm → m
     for g in goals:
         assert g["true_final_error_m"] < 0.02 and g["odometry_final_error_m"] < 0.015
     header = (out / "log.csv").read_text().splitlines()[0].split(",")
     assert header[:3] == ["robot", "t", "true_x"]
     assert "setpoint_rpm_0" in header and "duty_1" in header
     # No overwrite without --force.
-    again = runner.invoke(app, ["goto", "--goal", "1", "1", "--unit", "m", "--out", str(out)])
+    again = runner.invoke(app, ["goto", "--goal", "1", "1", "--out", str(out)])
     assert again.exit_code != 0 and isinstance(again.exception, FileExistsError)
-    forced = runner.invoke(
-        app, ["goto", "--goal", "0.5", "0", "--unit", "m", "--out", str(out), "--force"]
-    )
+    forced = runner.invoke(app, ["goto", "--goal", "0.5", "0", "--out", str(out), "--force"])
     assert forced.exit_code == 0, forced.output
     assert json.loads((out / "metrics.json").read_text())["goals"][0]["goal"] == [0.5, 0.0]
+
+
+def test_goto_no_gif_writes_the_rest(tmp_path):
+    # goto always wrote route.gif; the other commands that animate take --gif/--no-gif
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["goto", "--goal", "0.5,0.5", "--no-gif", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert not (out / "route.gif").exists()
+    assert {p.name for p in out.iterdir()} == set(GOTO_FILES) - {"route.gif"}
+    assert "route.gif" not in result.output
 
 
 @pytest.mark.parametrize(
     ("argv", "match"),
     [
-        (["--goal", "nan", "1"], "goal"),
-        (["--goal", "1"], "two numbers"),
-        (["--goal", "1", "abc"], "goal"),
-        (["--goal", "1", "1", "--unit", "km"], "unit"),
-        (["--goal", "1", "1", "--bogus", "3"], "unknown option"),
+        (["--goal", "nan", "1"], "goal x must be finite"),
+        (["--goal", "1"], "goal needs 2 values X,Y"),
+        (["--goal", "1", "abc"], "goal y must be a number"),
+        (["--goal", "1", "1km"], "goal y must be a number such as 1.5, 1.5m or 150cm"),
+        (["--goal", "1", "1", "--bogus", "3"], "No such option: --bogus"),
+        (["--goal", "1", "1", "--unit", "cm"], "No such option: --unit"),  # metres, or 100cm
+        (["--goal", "1e300", "1"], "within ±1e+10 m"),  # was a LinAlgError
+    ],
+)
+def test_goto_bad_flags_name_the_flag(tmp_path, argv, match):
+    from wheelbase.cli import app as wheelbase
+
+    result = runner.invoke(wheelbase, ["goto", *argv, "--out", str(tmp_path / "x")])
+    assert result.exit_code == 2
+    assert match in result.stderr and len(result.stderr.splitlines()) == 1
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [
         (["--goal", "1", "1", "--seed", "-1"], "seed must be an integer in [0, "),  # was ValueError
-        (["--goal", "1e300", "1", "--unit", "m"], "within ±1e+10 m"),  # was a LinAlgError
         (["--goal", "1", "1", "--seed", "99999999999999999999"], "seed must be an integer in"),
     ],
 )

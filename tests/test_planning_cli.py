@@ -9,10 +9,11 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
+from wheelbase.commands.options import PoseGroup
 from wheelbase.commands.plan import register
 from wheelbase.errors import ConfigError, PlanningError
 
-app = typer.Typer()
+app = typer.Typer(cls=PoseGroup)
 
 
 @app.callback()
@@ -88,7 +89,7 @@ def test_plan_no_reverse_and_errors(tmp_path):
             str(tmp_path / "y"),
         ],
     )
-    assert isinstance(heading.exception, ConfigError) and "heading" in str(heading.exception)
+    assert heading.exit_code == 2 and "start heading must be an angle" in heading.output
     unknown = runner.invoke(
         app,
         [
@@ -234,3 +235,55 @@ def test_plan_case_errors(tmp_path):
         result = runner.invoke(app, ["plan", *args, "--out", str(tmp_path / "o")])
         assert isinstance(result.exception, ConfigError), result.output
         assert words in str(result.exception)
+
+
+def test_plan_accepts_empty_like_run_and_control(tmp_path):
+    # `wheelbase run` and `control --map empty` took 'empty'; plan said "unknown map"
+    from wheelbase.scenario import EMPTY_MAP_MARGIN, empty_map
+
+    result = runner.invoke(app, ["plan", "empty", "--start", "0", "0", "0", "--goal", "6,-2,90",
+                                 "--turning-radius", "1", "--out", str(tmp_path)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["success"] is True and metrics["length_m"] >= math.dist((0, 0), (6, -2))
+    grid = empty_map([(0.0, 0.0, 0.0), (6.0, -2.0, 0.0)])
+    assert not grid.occupied.any()
+    np.testing.assert_allclose(grid.origin, (-EMPTY_MAP_MARGIN, -2 - EMPTY_MAP_MARGIN))
+    assert grid.width_m == pytest.approx(6 + 2 * EMPTY_MAP_MARGIN)
+
+
+def test_a_bare_image_map_needs_its_resolution(tmp_path):
+    # a screenshot was read at an assumed 0.05 m/pixel without a word
+    from PIL import Image
+
+    from wheelbase.cli import app as wheelbase
+    from wheelbase.errors import MapError
+    from wheelbase.planning import load_map
+
+    pixels = np.full((40, 60), 255, np.uint8)
+    pixels[:, 28:32] = 0  # a wall with a gap at the top
+    pixels[:8, 28:32] = 255
+    image = tmp_path / "screenshot.png"
+    Image.fromarray(pixels).save(image)
+    with pytest.raises(MapError, match=r"bare image: give its resolution \[m/pixel\]"):
+        load_map(image)
+    grid = load_map(image, resolution=0.2)
+    assert grid.resolution == 0.2 and grid.width_m == pytest.approx(12.0)
+    with pytest.raises(MapError, match="resolution applies to a bare image map only"):
+        load_map("maze", resolution=0.2)
+    args = [
+        "plan",
+        str(image),
+        "--start",
+        "2,4,0",
+        "--goal",
+        "10,4,0",
+        "--out",
+        str(tmp_path / "p"),
+    ]
+    refused = runner.invoke(wheelbase, args)
+    assert refused.exit_code == 2 and "--resolution" in refused.stderr
+    assert not (tmp_path / "p").exists()
+    planned = runner.invoke(wheelbase, [*args, "--resolution", "0.2"])
+    assert planned.exit_code == 0, planned.output
+    assert json.loads((tmp_path / "p" / "metrics.json").read_text())["success"] is True

@@ -160,6 +160,8 @@ def test_unreadable_map_files_are_wheelbase_errors(tmp_path, name, content, matc
     with pytest.raises(WheelbaseError, match=match):
         if name.endswith(".scen"):
             read_movingai_scenarios(path)
+        elif name.endswith((".pgm", ".png")):
+            load_map(path, resolution=0.1)  # a bare image needs its scale
         else:
             load_map(path)
 

@@ -51,9 +51,16 @@ def test_odometry_alone_misses_where_amcl_arrives(amcl_result):
     assert alone.metrics["localization_max_error_m"] > 0.05
     m = amcl_result.metrics
     assert m["status"] == "arrived" and m["localization"] == "amcl"
+    # a filter's final error is its own, not an odometry drift
+    assert "odometry_drift_m" not in m and m["localization_final_error_m"] < 0.04
+    assert "odometry_drift_m" in alone.metrics and "localization_final_error_m" not in alone.metrics
     assert m["localization_rms_error_m"] < 0.02 and m["localization_max_error_m"] < 0.04
     assert m["localization_updates"] > 10 and m["localization_beams_used"] > 40 * 10
-    assert m["localization_beams_skipped"] == 0
+    # of the 60 beams each update chooses, those not used are skipped (max-range readings)
+    assert (
+        m["localization_beams_used"] + m["localization_beams_skipped"]
+        == 60 * m["localization_updates"]
+    )
     assert isinstance(amcl_result.sensors.lidar.beams, int)
 
 
@@ -196,3 +203,12 @@ def test_bad_sensor_and_localization_keys_are_clear_errors(change, match):
 
     with pytest.raises(ScenarioError, match=match):
         prepare({**AISLE, **change})
+
+
+@pytest.mark.parametrize("beta", [0.0, 0.5])
+def test_a_ukf_beta_of_zero_stays_zero(beta):
+    from wheelbase.runner import prepare
+
+    prepared = prepare(scenario("ukf", LANDMARKS, beta=beta, kappa=0.0, alpha=0.5))
+    ukf = prepared.engine.estimator.filter
+    assert (ukf.beta, ukf.kappa, ukf.alpha) == (beta, 0.0, 0.5)

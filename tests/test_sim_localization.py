@@ -238,3 +238,110 @@ def test_bad_sensor_and_filter_settings_are_clear_errors():
     full = OccupancyGrid.from_array(np.ones((10, 10), bool), 0.1)
     with pytest.raises(MapError, match="no free cell"):
         ParticleLocalizer(AMCL(grid=full, lidar=LIDAR), odometry(), global_start=True)
+
+
+def test_the_particle_filter_gets_the_time_its_per_second_motion_noise_needs():
+    # A robot at rest: the particles spread only by the motion model's per-second heading
+    # noise, over the whole time since the start (11 steps of 0.1 s), as σ² = q·t.
+    q = 0.01  # rad²/s
+    amcl = AMCL(
+        landmarks=LANDMARKS, motion=VelocityMotion(0.0, 0.0, 0.0, 0.0, 0.0, q),
+        min_particles=4000, max_particles=4000, update_min_d=0.0, update_min_a=0.0,
+    )  # fmt: skip
+    localizer = ParticleLocalizer(amcl, odometry(), initial_std=(0.0, 0.0, 0.0))
+    pose = np.array([[2.0, 2.0, 0.0]])
+    state = localizer.start(pose, np.array([0]))
+    index, still = np.array([0]), np.zeros((1, 2), dtype=np.int64)
+    nothing = Readings(landmark_ids=np.zeros((1, 0), np.int64), landmark_z=np.zeros((1, 0, 2)))
+    for k in range(11):
+        readings = nothing if k == 10 else None  # the filter runs once, at t = 1.1 s
+        _, _, state = localizer.update(
+            pose, still, 0.1, pose, np.zeros((1, 3)), state=state, index=index, readings=readings
+        )
+    heading = state.filters[0].particles[:, 2]
+    assert state.counts[0, 0] == 1 and state.filters[0].time == pytest.approx(1.1)
+    assert np.std(heading) == pytest.approx(math.sqrt(q * 1.1), rel=0.05)
+
+
+def _same(a, b) -> None:
+    """Two engine states (or the parts of one) are equal, array by array."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(a) and not isinstance(a, type):
+        for f in dataclasses.fields(a):
+            if f.name != "controllers":
+                _same(getattr(a, f.name), getattr(b, f.name))
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            _same(x, y)
+    elif isinstance(a, np.ndarray):
+        np.testing.assert_array_equal(a, b)
+    elif isinstance(a, (int, float, np.number)):
+        assert a == b or (np.isnan(a) and np.isnan(b))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: ekf(),
+        lambda: amcl(),
+        lambda: ParticleLocalizer(
+            AMCL(grid=GRID, lidar=LIDAR, min_particles=100, max_particles=300),
+            EncoderOdometry(
+                Encoder(PULSES, noise_std=0.3, miss_probability=0.01),
+                WheelOdometry(RADIUS, HALF_TRACK, PULSES),
+            ),
+        ),
+    ],
+)
+def test_stepping_one_state_twice_gives_the_same_state(make):
+    import copy
+
+    eng = engine(make(), SUITE, radius_scale=(1.0, 1.01))
+    state = eng.reset([[1.0, 2.0, 0.0], [1.0, 2.05, 0.0]], seeds=[3, 4])
+    for _ in range(30):  # past a few sensor readings and filter updates
+        state, _ = eng.step(state)
+    saved = copy.deepcopy(state)
+    first, _ = eng.step(state)
+    second, _ = eng.step(state)
+    _same(state, saved)  # the step changed nothing of what it was given
+    _same(first, second)
+    for _ in range(40):  # and the futures of the two stay equal
+        first, _ = eng.step(first)
+        second, _ = eng.step(second)
+    _same(first, second)
+    assert not np.array_equal(first.pose, saved.pose)
+
+
+class _Blind:
+    """An estimator that hands the one it wraps NaN for the true start poses."""
+
+    def __init__(self, inner):
+        self.inner = inner
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+    def start(self, poses, seeds):
+        return self.inner.start(np.full_like(poses, np.nan), seeds)
+
+
+def test_global_localisation_never_starts_from_the_truth():
+    def make():
+        filter_ = amcl(min_particles=500, max_particles=3000, update_min_d=0.1).amcl
+        return ParticleLocalizer(filter_, odometry(0.3), global_start=True)
+
+    starts = [[1.0, 2.0, 0.0], [1.0, 2.05, 0.0]]
+    seen = engine(make(), SUITE).run(starts, seeds=[5, 6])
+    hidden = engine(_Blind(make()), SUITE).run(starts, seeds=[5, 6])
+    # the truth of the start plays no part: a run that hides it is the same run
+    np.testing.assert_array_equal(seen.estimated_pose, hidden.estimated_pose)
+    np.testing.assert_array_equal(seen.true_pose, hidden.true_pose)
+    np.testing.assert_array_equal(seen.status, hidden.status)
+    # the first estimate is the filter's heaviest cluster of a spread over the room, flagged
+    # not converged; it converges once the lidar has told where the robot is
+    first_error = np.hypot(*(seen.estimated_pose[:, 0, :2] - np.array(starts)[:, :2]).T)
+    assert np.all(first_error > 0.05)
+    converged = seen.extras["loc_converged"]
+    assert np.all(converged[:, 0] == 0) and np.all(converged[:, -1] == 1)

@@ -10,11 +10,13 @@ Commands
 ``wheelbase demo`` / ``run`` / ``batch`` / ``schema``
     The closed loop on scenario files (:mod:`wheelbase.commands.run`).
 
-Degrees are accepted at this edge only (``90deg``, ``1.57``, ``1.57rad``) and converted to
-radians on entry. Every :class:`~wheelbase.errors.WheelbaseError`, ``FileExistsError`` and
-usage error ends the program with one red line ``error: ...`` on stderr and exit code 2; no
-traceback. Sub-commands of other areas live in :mod:`wheelbase.commands` (each module there has
-``register(app)``) and are added here.
+Angles, rates, lengths and poses follow one rule, parsed by :mod:`wheelbase.commands.options`
+(angles in degrees unless written ``1.57rad``, rates in rad/s, lengths in metres, poses
+``X,Y,HEADING``), converted to SI on entry. Every :class:`~wheelbase.errors.WheelbaseError`,
+``FileExistsError``, ``OSError`` of a file or folder and usage error ends the program with one
+red line ``error: ...`` on stderr and exit code 2; no traceback. What commands print goes
+through :mod:`wheelbase.commands.output`. Sub-commands of other areas live in
+:mod:`wheelbase.commands` (each module there has ``register(app)``) and are added here.
 """
 
 from __future__ import annotations
@@ -26,20 +28,29 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.table import Table
 from rich.text import Text
-from typer.core import TyperGroup
 
-from wheelbase._validate import check_choice, finite, parse_angle, positive
+from wheelbase._validate import check_choice, finite, positive
+from wheelbase.commands.options import (
+    ANGLE_RULE,
+    OUT_RULE,
+    PoseGroup,
+    angle_option,
+    out_option,
+    pose_option,
+    rate_option,
+)
+from wheelbase.commands.output import console as make_console
+from wheelbase.commands.output import plural
 from wheelbase.errors import ConfigError, WheelbaseError
 from wheelbase.integrate import METHODS, SimResult, simulate
 
-__all__ = ["app", "parse_angle"]
+__all__ = ["app"]
 
 MODELS: tuple[str, ...] = (
     "diffdrive",
@@ -60,11 +71,13 @@ DEMO_DIR = "wheelbase-kinematics-demo"
 def _error_line(message: str) -> None:
     """One red line on stderr (no markup interpretation, no wrapping)."""
     line = " ".join(str(message).split())
-    Console(stderr=True, highlight=False).print(Text(f"error: {line}", style="red"), soft_wrap=True)
+    make_console(stderr=True).print(Text(f"error: {line}", style="red"), soft_wrap=True)
 
 
-class _OneLineErrors(TyperGroup):
+class _OneLineErrors(PoseGroup):
     """Turns usage errors and wheelbase errors of any command into one line and exit code 2.
+
+    A :class:`~wheelbase.commands.options.PoseGroup`: pose flags take ``X Y HEADING`` too.
 
     Commands raise; this wrapper (the group's ``main``, which both the console script and
     typer's CliRunner call) reports. Other exceptions are bugs and keep their traceback.
@@ -77,6 +90,10 @@ class _OneLineErrors(TyperGroup):
             code = super().main(*args, standalone_mode=False, **kwargs)
         except (WheelbaseError, FileExistsError) as error:
             _error_line(str(error))
+            sys.exit(2)
+        except OSError as error:  # a folder that cannot be made or a file that cannot be written
+            where = f": {error.filename}" if error.filename else ""
+            _error_line(f"{error.strerror or error}{where}")
             sys.exit(2)
         except typer.Abort:
             _error_line("aborted")
@@ -100,8 +117,7 @@ class _OneLineErrors(TyperGroup):
 app = typer.Typer(
     cls=_OneLineErrors,
     name="wheelbase",
-    help="Model, simulate, plan for and control wheeled mobile robots (SI units; angles in "
-    "rad unless written like 90deg).",
+    help=f"Model, simulate, plan for and control wheeled mobile robots. {ANGLE_RULE} {OUT_RULE}",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_show_locals=False,
@@ -128,16 +144,6 @@ def _main(
     ),
 ) -> None:
     """Model, simulate, plan for and control wheeled mobile robots."""
-
-
-# --------------------------------------------------------------------------- parsing
-def _parse_length(text: str, name: str) -> float:
-    raw = str(text).strip().lower().removesuffix("m").strip()
-    try:
-        value = float(raw)
-    except ValueError:
-        raise ConfigError(f"{name} must be a number of metres (got {text!r})") from None
-    return finite(name, value, "m")
 
 
 # --------------------------------------------------------------------------- models
@@ -198,14 +204,14 @@ _TWIST_UNITS = (("u", "m/s"), ("v", "m/s"), ("r", "rad/s"))
 def _steering(given: dict[str, Any], model: str) -> tuple[float, float]:
     speed = _need(given, "speed", "m/s", model)
     if given.get("steering") is None:
-        raise ConfigError(f"--model {model} needs --steering [rad, or e.g. 10deg]")
-    return speed, parse_angle(given["steering"], "steering")
+        raise ConfigError(f"--model {model} needs --steering [deg, or e.g. 0.2rad]")
+    return speed, finite("steering", given["steering"], "rad")
 
 
 def _max_steering(given: dict[str, Any]) -> dict[str, float]:
     if given.get("max_steering") is None:
         return {}
-    return {"max_steering": parse_angle(given["max_steering"], "max_steering")}
+    return {"max_steering": finite("max_steering", given["max_steering"], "rad")}
 
 
 def _build_bicycle(given: dict[str, Any]) -> _Built:
@@ -363,13 +369,13 @@ def simulate_command(
         help="unicycle: forward speed [m/s]; twist, mecanum, omni: lateral speed, left "
         "positive [m/s] (default 0).",
     ),
-    omega: float | None = typer.Option(None, "--omega", help="Yaw rate [rad/s] (unicycle)."),
+    omega: Annotated[float | None, rate_option("--omega", "Yaw rate (unicycle).")] = None,
     u: float | None = typer.Option(
         None, "--u", help="Forward speed [m/s] (twist, mecanum, omni; default 0)."
     ),
-    r: float | None = typer.Option(
-        None, "--r", help="Yaw rate [rad/s] (twist, mecanum, omni; default 0)."
-    ),
+    r: Annotated[
+        float | None, rate_option("--r", "Yaw rate (twist, mecanum, omni; default 0).")
+    ] = None,
     wheel_base: float | None = typer.Option(
         None, help="Axle distance [m] (bicycle, rear-bicycle, ackermann; default 1.0)."
     ),
@@ -379,12 +385,14 @@ def simulate_command(
     speed: float | None = typer.Option(
         None, help="Speed [m/s]: front wheel (bicycle) or rear axle (rear-bicycle, ackermann)."
     ),
-    steering: str | None = typer.Option(
-        None, help="Steering angle [rad, or e.g. 10deg] (bicycle, rear-bicycle, ackermann)."
-    ),
-    max_steering: str | None = typer.Option(
-        None, help="Steering stop [rad, or e.g. 35deg] (bicycle, rear-bicycle, ackermann)."
-    ),
+    steering: Annotated[
+        float | None,
+        angle_option("--steering", "Steering angle (bicycle, rear-bicycle, ackermann)."),
+    ] = None,
+    max_steering: Annotated[
+        float | None,
+        angle_option("--max-steering", "Steering stop (bicycle, rear-bicycle, ackermann)."),
+    ] = None,
     half_length: float | None = typer.Option(
         None, help="Centre to front/rear axle [m] (mecanum; default 0.2)."
     ),
@@ -397,12 +405,10 @@ def simulate_command(
     t_end: float = typer.Option(10.0, help="Duration [s], > 0."),
     dt: float = typer.Option(0.1, help="Time step [s], 0 < dt <= t-end."),
     method: str = typer.Option("rk4", help=f"Integrator: {', '.join(METHODS)}."),
-    pose0: tuple[str, str, str] = typer.Option(
-        ("0", "0", "0"),
-        metavar="X Y THETA",
-        help="Initial pose: x [m], y [m], heading [rad, or e.g. 90deg].",
-    ),
-    out: str = typer.Option("out", help="Output folder (created if missing)."),
+    pose0: Annotated[np.ndarray, pose_option("--pose0", "Initial pose (default 0,0,0):")] = "0,0,0",
+    out: Annotated[
+        Path, out_option("simulate", "trajectory.csv, states.png, path.png, animation.gif")
+    ] = "wheelbase-simulate",
     force: bool = typer.Option(False, "--force", help="Replace existing output files."),
     gif: bool = typer.Option(True, "--gif/--no-gif", help="Write animation.gif."),
     length: float | None = typer.Option(
@@ -416,7 +422,7 @@ def simulate_command(
     animation.gif to --out.
 
     Example (document 000 §3.2, case 1): wheelbase simulate --model diffdrive --left 0.8
-    --right 0.6 --t-end 100 --dt 0.1 --method euler --pose0 0 0 90deg --out DIR
+    --right 0.6 --t-end 100 --dt 0.1 --method euler --pose0 0,0,90 --out DIR
     """
     given = {
         "wheel_radius": wheel_radius,
@@ -438,11 +444,7 @@ def simulate_command(
     }
     check_choice("method", method, METHODS)
     built = build_model(model, given)
-    start = (
-        _parse_length(pose0[0], "pose0 x"),
-        _parse_length(pose0[1], "pose0 y"),
-        parse_angle(pose0[2], "pose0 heading"),
-    )
+    start = pose0
     footprint = (
         positive("length", length, "m") if length is not None else built.footprint[0],
         positive("width", width, "m") if width is not None else built.footprint[1],
@@ -454,10 +456,12 @@ def simulate_command(
     result.to_csv(paths["trajectory.csv"], overwrite=True)
     title = f"{model}, {method}, dt = {dt:g} s"
     _write_figures(result, paths, footprint, title, gif=gif)
-    console = Console()
+    console = make_console()
     console.print(_summary(result, model, "wheelbase simulate"))
     console.print(
-        f"wrote {len(paths)} files to {out}/: " + ", ".join(names), soft_wrap=True, markup=False
+        f"wrote {plural(len(paths), 'file')} to {out}/: " + ", ".join(names),
+        soft_wrap=True,
+        markup=False,
     )
 
 
@@ -521,7 +525,7 @@ def demo_command(
     """Run document 000 §3.2's kinematics demo: three wheel-speed cases on one plot [SI units]
     and the animation of case 1."""
     batch, paths = run_demo(out)
-    console = Console()
+    console = make_console()
     table = Table(title="document 000 §3.2, Euler, dt = 0.1 s, 100 s")
     for column in ("ω_L, ω_R [rad/s]", "final x [m]", "final y [m]", "final θ [rad]"):
         table.add_column(Text(column), justify="right")

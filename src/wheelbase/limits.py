@@ -32,12 +32,18 @@ limit                  what it bounds (default)                     raised by
 ``MAX_PRIMITIVE_``     collision samples of Hybrid A*'s motion      fixed
 ``SAMPLES``            primitives, and of one escape move (1e7:
                        240 MB)
+``MAX_TRACKS``         tracks one obstacle tracker keeps (1e4: its  scenario
+                       association matrix is 1e4 × beams)           ``tracker.max_tracks``
+``BATCH_MEMORY``       bytes the logs of the seeds run together in  ``run_batch(...,
+                       one vectorised chunk may take (512 MiB;      memory_budget=)``,
+                       only each finished run's metrics are kept)   ``batch --memory-mb``
 =====================  ===========================================  ==========================
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "BATCH_MEMORY",
     "MAX_BEAMS",
     "MAX_COORDINATE",
     "MAX_FALSE_RATE",
@@ -49,6 +55,7 @@ __all__ = [
     "MAX_SEEDS",
     "MAX_STATE_BINS",
     "MAX_STEPS",
+    "MAX_TRACKS",
 ]
 
 MAX_STEPS = 1_000_000
@@ -62,3 +69,5 @@ MAX_FALSE_RATE = 1_000.0  # per scan
 MAX_SEEDS = 1_000_000
 MAX_PATH_POINTS = 10_000_000
 MAX_PRIMITIVE_SAMPLES = 10_000_000
+MAX_TRACKS = 10_000
+BATCH_MEMORY = 512 * 2**20  # bytes

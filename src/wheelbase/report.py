@@ -15,11 +15,13 @@ from wheelbase.sim import Log
 __all__ = [
     "MCAP_FILE",
     "REPORT_FILES",
+    "TRACTION_FILE",
     "animate_run",
     "figure_commands",
     "figure_errors",
     "figure_map",
     "sensing_overlay",
+    "status_at",
     "write_report",
 ]
 
@@ -52,8 +54,11 @@ def _outline(pose: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     return transform_points(pose, closed)
 
 
-def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
-    """Map with the plan, the driven path, the odometry estimate and footprints.
+def figure_map(
+    grid, plan_poses, log: Log, polygon=None, *, title: str = "", terrain=None, world=None
+):
+    """Map with the plan, the driven path, the odometry estimate and footprints (and the
+    terrain's surfaces and slopes under them).
 
     Parameters
     ----------
@@ -67,11 +72,24 @@ def figure_map(grid, plan_poses, log: Log, polygon=None, *, title: str = ""):
         Footprint outline in the body frame, drawn at the start, the end and along the way.
     title : str
         Figure title.
+    terrain : TerrainMap, optional
+        The ground, coloured by surface (:func:`wheelbase.terrain_plot.draw_terrain`).
+    world : World, optional
+        The obstacles the map does not show (:func:`wheelbase.world_plot.draw_world`); the
+        navigator's replans are drawn too.
     """
     import matplotlib.pyplot as plt
 
+    from wheelbase.world_plot import draw_plans, draw_world
+
     fig, ax = plt.subplots(figsize=(8, 7))
     _draw_map(ax, grid)
+    draw_world(ax, world)
+    draw_plans(ax, log)
+    if terrain is not None:  # over the map's white, translucent over its obstacles
+        from wheelbase.terrain_plot import draw_terrain
+
+        draw_terrain(ax, terrain)
     if plan_poses is not None:
         ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.5, label="plan")
     ax.plot(
@@ -242,6 +260,7 @@ def sensing_overlay(log: Log, lidar=None, *, robot: int = 0):
             origin = lidar.sensor_poses(pose)[:2]
             ends = lidar.endpoints(pose, ranges)
             ends = ends[np.all(np.isfinite(ends), axis=-1)]
+            ends = ends[:: max(1, len(ends) // 72)]  # a fan of at most ~72 beams stays legible
             drawn["tab:red"] = [np.array([origin, end]) for end in ends]
         _, cloud = latest(log.particles, k, 1.5)
         if cloud is not None:
@@ -255,9 +274,37 @@ def sensing_overlay(log: Log, lidar=None, *, robot: int = 0):
     return overlay
 
 
+def status_at(log: Log, step: int, robot: int = 0) -> str:
+    """What the animation's title says at recorded step ``step``: ``running`` (with the
+    controller's own status when it reports one other than ``ok``, e.g. ``all_collide``) until
+    the robot's last step, then its final status (``arrived``, ``collision``, …).
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    step : int
+        Index into ``log.t``.
+    robot : int
+        Which robot.
+
+    Returns
+    -------
+    str
+    """
+    if step >= int(log.length[robot]) - 1:
+        return log.statuses[robot]
+    codes = log.controller_status
+    if codes is not None and codes[robot, step] >= 0:
+        name = log.controller_status_names[int(codes[robot, step])]
+        if name != "ok":
+            return f"running ({name})"
+    return "running"
+
+
 def animate_run(
     grid, plan_poses, log: Log, robot_footprint, path, *, frames: int = 120, fps: int = 15,
-    lidar=None,
+    lidar=None, world=None,
 ):  # fmt: skip
     """GIF of the footprint moving over the map with the plan and the trace, and what the
     robot senses (:func:`sensing_overlay`: lidar beams, particles or the covariance ellipse,
@@ -281,24 +328,40 @@ def animate_run(
         Frames per second.
     lidar : Lidar, optional
         The lidar of ``log.scans`` (its beams are drawn).
+    world : World, optional
+        The world beyond the map: its obstacles, its agents and what the robot perceived of
+        them (:func:`wheelbase.world_plot.world_overlay`); every robot of a fleet is drawn.
     """
     from types import SimpleNamespace
 
     from wheelbase.plot import animate
+    from wheelbase.world_plot import draw_world, world_overlay
 
     length, width, offset = robot_footprint
 
     def background(ax) -> None:
         _draw_map(ax, grid)
+        draw_world(ax, world)
         if plan_poses is not None:
             ax.plot(plan_poses[:, 0], plan_poses[:, 1], "--", color="tab:orange", lw=1.2)
         _zoom(ax, grid, plan_poses, log)
 
-    overlay = sensing_overlay(log, lidar)
-    run = SimpleNamespace(t=log.t, poses=log.true_pose[0])
+    sensed = sensing_overlay(log, lidar)
+    around = world_overlay(log, world) if world is not None or log.agents is not None else None
+
+    def overlay(k: int) -> dict:
+        drawn = dict(sensed(k))
+        if around is not None:
+            for colour, lines in around(k).items():
+                drawn[colour] = drawn.get(colour, []) + lines
+        return drawn
+
+    poses = log.true_pose[0] if log.n_robots == 1 else log.true_pose.transpose(1, 0, 2)
+    run = SimpleNamespace(t=log.t, poses=poses)
     return animate(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
-        overwrite=True, background=background, title=log.statuses[0], overlay=overlay,
+        overwrite=True, background=background, title=lambda k: status_at(log, k),
+        overlay=overlay,
     )  # fmt: skip
 
 
@@ -315,6 +378,9 @@ REPORT_FILES = (
 
 MCAP_FILE = "run.mcap"
 """The report's MCAP file for Foxglove (written on request: ``wheelbase run --mcap``)."""
+
+TRACTION_FILE = "traction.png"
+"""The report's slip and traction figure (a run on terrain or with a payload)."""
 
 
 def write_report(
@@ -352,7 +418,7 @@ def write_report(
     import matplotlib.pyplot as plt
 
     folder = Path(folder)
-    names = (*REPORT_FILES, MCAP_FILE) if mcap else REPORT_FILES
+    names = (*REPORT_FILES, TRACTION_FILE, *((MCAP_FILE,) if mcap else ()))
     if mcap:
         from wheelbase.mcap_export import require_foxglove
 
@@ -379,11 +445,25 @@ def write_report(
         written.append(write_mcap(result, folder / MCAP_FILE))
     plan = None if result.plan is None else result.plan.poses
     polygon = result.footprint_polygon
+    terrain = getattr(result, "terrain", None)
+    world = getattr(result, "world", None)
     figures = {
-        "map.png": figure_map(result.grid, plan, result.log, polygon, title=result.scenario.name),
+        "map.png": figure_map(
+            result.grid,
+            plan,
+            result.log,
+            polygon,
+            title=result.scenario.name,
+            terrain=terrain,
+            world=world,
+        ),
         "errors.png": figure_errors(result.log),
         "commands.png": figure_commands(result.log),
     }
+    from wheelbase.terrain_plot import figure_traction, has_traction
+
+    if has_traction(result.log):
+        figures[TRACTION_FILE] = figure_traction(result.log, terrain)
     for name, fig in figures.items():
         fig.savefig(folder / name, dpi=110)
         plt.close(fig)
@@ -393,7 +473,13 @@ def write_report(
         lidar = None if result.sensors is None else result.sensors.lidar
         written.append(
             animate_run(
-                result.grid, plan, result.log, geometry, folder / "animation.gif", lidar=lidar
+                result.grid,
+                plan,
+                result.log,
+                geometry,
+                folder / "animation.gif",
+                lidar=lidar,
+                world=world,
             )
         )
     return written

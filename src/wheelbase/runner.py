@@ -16,8 +16,12 @@ silent:
 - Multiple goals are planned leg by leg (each from the previous goal) and tracked as one
   trajectory that stops at every goal.
 - The run ends when the true pose is within the goal tolerance after the trajectory has ended
-  and the robot has (nearly) stopped, at a collision, or ``settle_time`` = 15 s after the
-  trajectory has ended (status ``timeout``), whichever comes first, and never after ``duration``.
+  and the robot has (nearly) stopped, at a collision, or at the time limit ``duration``
+  (status ``timeout``), whichever comes first: a robot slower than its reference (a path
+  follower, MPPI, one that waits for someone to pass) has until ``duration``. A scenario's
+  ``settle_time`` ends the run that long after the trajectory's end instead, when that comes
+  before ``duration``. ``arrival_delay_s`` says how much later than the reference's end the
+  robot stopped.
 """
 
 from __future__ import annotations
@@ -30,18 +34,19 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import nonnegative
+from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
 from wheelbase.models.path import PoseTrajectory
 from wheelbase.polyline import distance_to_polyline
 from wheelbase.scenario import Scenario, load_scenario
-from wheelbase.sim import Arrival, DynamicPlant, Engine, KinematicPlant, Log, WheelAxle
+from wheelbase.sim import STATUSES, Arrival, DynamicPlant, Engine, KinematicPlant, Log, WheelAxle
 from wheelbase.timing import SpeedLimits, time_parametrize
 
 __all__ = [
     "LAWS",
+    "LOG_COPIES",
     "Prepared",
     "Robot",
     "RunResult",
@@ -50,9 +55,9 @@ __all__ = [
     "run",
     "run_metrics",
     "run_seeds",
+    "seeds_per_chunk",
 ]
 
-SETTLE_TIME = 15.0  # s after the end of the trajectory
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
 TURNING_MARGIN = 1.2
 
@@ -122,6 +127,9 @@ def build_robot(spec) -> Robot:
             "footprint": (0.66, 0.455),
         }
         values.update({k: v for k, v in preset.items() if values.get(k) is None})
+        wheels = {"wheel_radius": values["wheel_radius"], "half_track": values["half_track"]}
+        if tuple(wheels.values()) != (RM100.wheel_radius, RM100.half_track):
+            dynamics = replace(RM100, **wheels)  # its own wheels on the RM100's body
     model_name = spec.model
     if model_name in ("diffdrive", "unicycle"):
         radius = values["wheel_radius"] or 0.05
@@ -236,6 +244,9 @@ class TorqueTracking:
         path has curvature jumps (line to arc), so the time-parametrised ω steps and its
         derivative is an impulse the wheels cannot deliver; feeding it forward would only
         saturate the torques. The PID corrects the remaining error.
+    law : callable, optional
+        Builds the torque law from (model, gains, max_torque=, derivative_filter=) (default
+        :class:`~wheelbase.control.ComputedTorquePID`; the adaptive law learns its model).
     """
 
     command_names = ("tau_left", "tau_right")
@@ -250,6 +261,7 @@ class TorqueTracking:
         model_error: float = 0.0,
         max_acceleration: float = math.inf,
         max_yaw_acceleration: float = math.inf,
+        law: Callable[..., Any] | None = None,
     ) -> None:
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
 
@@ -258,7 +270,7 @@ class TorqueTracking:
         if model_error:
             factor = 1.0 + model_error
             model = model.with_body(model.body.scaled(factor, factor))
-        self._pid = ComputedTorquePID(
+        self._pid = (law or ComputedTorquePID)(
             model,
             TorqueGains.pole_placement(bandwidth, speed=speed),
             max_torque=max_torque,
@@ -270,6 +282,20 @@ class TorqueTracking:
     def reset(self) -> None:
         """Forget the integrals of the PID."""
         self._pid.reset()
+
+    @property
+    def law(self) -> Any:
+        """The torque law it runs (its estimates, for the adaptive one)."""
+        return self._pid
+
+    @property
+    def model(self) -> Any:
+        """The law's model of the robot (settable: a payload it knows it picked up)."""
+        return self._pid.model
+
+    @model.setter
+    def model(self, model: Any) -> None:
+        self._pid.model = model
 
     def __call__(self, t: float, state: np.ndarray, reference: PoseTrajectory) -> np.ndarray:
         """Wheel torques (left, right) [N·m] for the estimated state (6,) at time ``t`` [s].
@@ -305,6 +331,23 @@ def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits,
     return TorqueTracking(robot, **{**defaults, **gains}), "trajectory"
 
 
+ADAPTIVE_GAINS = ("forgetting", "filter_time", "initial_spread", "force_drift")
+"""Gains of ``adaptive_computed_torque`` that set its estimator (the others as computed_torque)."""
+
+
+def _adaptive_computed_torque(
+    robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None
+):
+    """Computed torque on a model whose mass, inertia and CG moment are learnt online."""
+    import functools
+
+    from wheelbase.control.adaptive import AdaptiveComputedTorque
+
+    options = {key: gains.pop(key) for key in ADAPTIVE_GAINS if key in gains}
+    law = functools.partial(AdaptiveComputedTorque, **options)
+    return _computed_torque(robot, {**gains, "law": law}, limits, grid)
+
+
 def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
     """MPPI (Williams et al.) on the map's distance field, following the planned path."""
     from wheelbase.control.mppi import MPPI
@@ -317,9 +360,29 @@ def _mppi(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = 
     ), "path"
 
 
+def _dwa(robot: Robot, gains: dict[str, Any], limits: SpeedLimits, grid: Any = None):
+    """The dynamic window approach (Fox, Burgard and Thrun; Nav2's DWB critics) along the
+    planned path, for (v, ω) robots."""
+    from wheelbase.control.dwa import DWA
+
+    if robot.kind != "diff":
+        raise ConfigError("dwa drives (v, omega) robots: use mppi for a car-like robot")
+    defaults: dict[str, Any] = {
+        "max_speed": limits.max_speed,
+        "max_yaw_rate": limits.max_yaw_rate,
+        "max_acceleration": limits.max_acceleration,
+        "max_yaw_acceleration": limits.max_yaw_acceleration,
+    }
+    return DWA.from_gains(
+        robot.model, grid=grid, footprint=_footprint(robot), **{**defaults, **gains}
+    ), "path"
+
+
 LAWS: dict[str, Callable[..., Any]] = {
     "mppi": _mppi,
+    "dwa": _dwa,
     "computed_torque": _computed_torque,
+    "adaptive_computed_torque": _adaptive_computed_torque,
     "kanayama": _tracker("Kanayama"),
     "linear": _tracker("LinearTracker"),
     "pure_pursuit": _follower("PurePursuit"),
@@ -328,6 +391,8 @@ LAWS: dict[str, Callable[..., Any]] = {
     "segment": _follower("SegmentFollower"),
 }
 """Control laws a scenario can name (``controller.law``) and how each is built."""
+TORQUE_LAWS = ("computed_torque", "adaptive_computed_torque")
+"""The laws that give wheel torques themselves (a dynamic plant; the others are wrapped)."""
 
 
 def _build_controller(
@@ -372,6 +437,10 @@ class RunResult:
         Planning and tracking figures (see ``metrics.json`` in the README).
     sensors : SensorSuite or None
         The sensors the robot read (a lidar, landmarks), for drawing.
+    terrain : TerrainMap or None
+        The ground it drove on (a scenario with terrain or a payload), for drawing.
+    world : World or None
+        The world beyond the map it drove in (the truth, for drawing and evaluation).
     """
 
     scenario: Scenario
@@ -382,6 +451,8 @@ class RunResult:
     log: Log | None
     metrics: dict[str, Any]
     sensors: Any = None
+    terrain: Any = None
+    world: Any = None
 
     @property
     def footprint_polygon(self) -> np.ndarray:
@@ -401,8 +472,9 @@ class RunResult:
             raise PlanningError(f"no run to plot: {self.metrics.get('message', 'no plan')}")
         plan = None if self.plan is None else self.plan.poses
         return figure_map(
-            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name
-        )
+            self.grid, plan, self.log, self.footprint_polygon, title=self.scenario.name,
+            terrain=self.terrain,
+        )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- run
@@ -432,6 +504,14 @@ class Prepared:
         The closed loop, ready to run (None when planning failed).
     footprint : Footprint or None
         The robot's outline (for collisions and clearance).
+    starts : numpy.ndarray, shape (R, 3), or None
+        Every robot's start (a fleet's R robots; R = 1 otherwise).
+    plans, references : tuple
+        Every robot's plan and its time-parametrised reference (``plan`` and ``reference``
+        are robot 0's).
+    follows_path : bool
+        The controller follows the path (its tracking error is the distance to the path),
+        not the timed trajectory.
     """
 
     scenario: Scenario
@@ -444,12 +524,17 @@ class Prepared:
     planning: dict[str, Any]
     engine: Engine | None
     footprint: Any = None
+    starts: np.ndarray | None = None
+    plans: tuple = ()
+    references: tuple = ()
+    follows_path: bool = False
 
 
 def prepare(
     scenario: Scenario | str | Path | dict[str, Any],
     *,
     progress: Callable[[float, float], None] | None = None,
+    seed: int | None = None,
 ) -> Prepared:
     """Resolve a scenario, plan it and build its closed-loop :class:`~wheelbase.sim.Engine`.
 
@@ -459,6 +544,9 @@ def prepare(
         A validated scenario, a YAML path, a bundled scenario name, or a mapping.
     progress : callable, optional
         ``progress(simulated_time, expected_end_time)`` now and then during the run.
+    seed : int, optional
+        The seed of what the world draws for this run (``world.path_boxes``; default the
+        scenario's ``seed``).
 
     Raises
     ------
@@ -475,7 +563,12 @@ def prepare(
     start = _pose(scenario.start)
     goals = [_pose(goal) for goal in scenario.goals]
     grid = _field(
-        "map", lambda: _load_map(scenario.map, [start, *goals], scenario.resources.max_map_cells)
+        "map",
+        lambda: _load_map(
+            scenario.map,
+            [_pose(p) for p in scenario.robot_poses()],
+            scenario.resources.max_map_cells,
+        ),
     )
     _check_free(grid, robot, start, "start")
     for index, goal in enumerate(goals):
@@ -488,33 +581,44 @@ def prepare(
             f"controller.law: unknown law {scenario.controller.law!r}; allowed: {allowed}"
         )
     gains = dict(scenario.controller.gains)
-    if scenario.controller.law == "mppi":
+    if scenario.controller.law == "adaptive_computed_torque":
+        from wheelbase.scenario_ground import adaptive_defaults
+
+        gains = {**adaptive_defaults(scenario), **gains}
+    if scenario.controller.law in ("mppi", "dwa"):
         # MPPI stops itself at the goal: within half the scenario's tolerance, so that the
         # true pose, off by the odometry drift, still lands inside it.
         position, heading_deg = scenario.goal_tolerance
         gains.setdefault("goal_tolerance", (0.5 * position, 0.5 * math.radians(heading_deg)))
+    dynamic = scenario.plant == "dynamic"
+    believed = robot  # the controller's model: the robot with the payload it believes in
+    if dynamic and robot.dynamics is not None:
+        from wheelbase.scenario_ground import controller_model
+
+        believed = replace(robot, dynamics=controller_model(scenario, robot))
     controller, reference_kind = _field(
         "controller.gains",
-        lambda: _build_controller(scenario.controller.law, robot, gains, limits, grid),
+        lambda: _build_controller(scenario.controller.law, believed, gains, limits, grid),
     )
 
-    dynamic = scenario.plant == "dynamic"
-    if not dynamic and scenario.controller.law == "computed_torque":
+    if not dynamic and scenario.controller.law in TORQUE_LAWS:
         raise ScenarioError(
-            "controller.law: computed_torque gives wheel torques: use it with plant: dynamic"
+            f"controller.law: {scenario.controller.law} gives wheel torques: use it with "
+            "plant: dynamic"
         )
     if dynamic and robot.dynamics is None:
         raise ScenarioError("plant: dynamic needs a robot with a dynamics preset (rm100)")
-    if dynamic and scenario.controller.law != "computed_torque":
+    if dynamic and scenario.controller.law not in TORQUE_LAWS:
         from wheelbase.control.torque import TwistTorqueLoop
 
         loop = scenario.controller.torque_loop
         controller = _field(
             "controller.torque_loop",
             lambda: TwistTorqueLoop(
-                controller, robot.dynamics, bandwidth=loop.bandwidth, max_torque=loop.max_torque
+                controller, believed.dynamics, bandwidth=loop.bandwidth,
+                max_torque=loop.max_torque,
             ),
-        )
+        )  # fmt: skip
     if (
         not dynamic
         and robot.kind == "diff"
@@ -525,18 +629,39 @@ def prepare(
         )
     ):
         raise ScenarioError("controller: a steering law cannot drive a differential drive")
-    plan, planning = _plan(grid, robot, scenario, start, goals)
-    if plan is None:
-        return Prepared(scenario, robot, grid, start, goals, None, None, planning, None)
-    reference = _timed_reference(plan, limits, scenario.dt, scenario.resources.max_steps)
-    end_time = float(reference.t[-1])
-    ref_table = np.column_stack([reference.poses[:, :2], np.unwrap(reference.poses[:, 2])])
+    robots = _fleet(scenario, start, goals)
+    if len(robots) > 1:
+        _check_fleet_apart(robots, _footprint(robot))
+    plans, planning = [], {}
+    for index, (robot_start, robot_goals) in enumerate(robots):
+        if index:
+            _check_free(grid, robot, robot_start, f"fleet[{index}].start")
+            for k, goal in enumerate(robot_goals):
+                _check_free(grid, robot, goal, f"fleet[{index}].goals[{k}]")
+        plan, stats = _plan(grid, robot, scenario, robot_start, robot_goals)
+        planning = stats if not index else _sum_planning(planning, stats)
+        if plan is None:
+            if index:
+                planning["message"] = f"fleet[{index}]: {stats.get('message')}"
+            return Prepared(scenario, robot, grid, start, goals, None, None, planning, None)
+        plans.append(plan)
+    plan = plans[0]
+    references = [
+        _timed_reference(leg, limits, scenario.dt, scenario.resources.max_steps) for leg in plans
+    ]
+    reference = references[0]
+    end_time = max(float(timed.t[-1]) for timed in references)
     from wheelbase.control.torque import interpolate_rows
 
+    tables = [
+        (timed.t, np.column_stack([timed.poses[:, :2], np.unwrap(timed.poses[:, 2])]))
+        for timed in references
+    ]
+
     def reference_pose(t: float) -> np.ndarray:
-        row = interpolate_rows(reference.t, ref_table, t)
-        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
-        return row
+        rows = np.array([interpolate_rows(times, table, t) for times, table in tables])
+        rows[:, 2] = np.arctan2(np.sin(rows[:, 2]), np.cos(rows[:, 2]))
+        return rows[0] if len(rows) == 1 else rows
 
     footprint = _footprint(robot)
     axle = WheelAxle(
@@ -546,33 +671,210 @@ def prepare(
         track_scale=scenario.odometry.track_scale,
     )
     plant = DynamicPlant(robot.dynamics, axle) if dynamic else KinematicPlant(robot.model, axle)
+    if dynamic:  # the ground, the payloads and what the controller knows of them
+        from wheelbase import scenario_ground as ground
+
+        timeline = ground.payload_timeline(scenario, robot, reference, goals)
+        terrain = ground.build_terrain(scenario, grid)
+        if ground.ground_active(scenario):
+            plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
+    from wheelbase.scenario_navigation import build_perception
     from wheelbase.scenario_sensors import build_estimator, build_sensors
 
     sensors = _field("sensors", lambda: build_sensors(scenario, grid))
     estimator = _field("localization", lambda: build_estimator(scenario, robot, grid, sensors))
+    surroundings = _field(
+        "world", lambda: _surroundings(scenario, grid, robot, footprint, robots, plans, seed)
+    )
+    perception = _field("costmap", lambda: build_perception(scenario, grid, footprint, sensors))
+    engine_reference: Any = reference if reference_kind == "trajectory" else plan
+    fleet_references = None
+    if perception is not None and reference_kind == "path":
+        controller = _navigator(scenario, robot, controller, grid, footprint, dynamic)
+        from wheelbase.navigation import Route
+
+        routes = tuple(
+            Route(leg, tuple(leg_goals), priority)
+            for priority, (leg, (_, leg_goals)) in enumerate(zip(plans, robots, strict=True))
+        )
+        engine_reference = routes[0]
+        fleet_references = routes if len(routes) > 1 else None
+    elif len(robots) > 1:
+        fleet_references = tuple(
+            timed if reference_kind == "trajectory" else leg
+            for timed, leg in zip(references, plans, strict=True)
+        )
+    if dynamic:  # the payload changes the controller knows of, traction control
+        controller = ground.wrap_controller(scenario, controller, robot, timeline, terrain)
+    control_every = 1
+    if scenario.control_rate_hz is not None:
+        control_every = max(1, round(1.0 / (scenario.control_rate_hz * scenario.dt)))
     engine = Engine(
         plant=plant,
         controller=controller,
-        reference=reference if reference_kind == "trajectory" else plan,
+        reference=engine_reference,
         dt=scenario.dt,
         duration=scenario.duration,
         estimator=estimator,
         sensors=sensors,
         arrival=Arrival(
-            goals[-1],
+            np.array([robot_goals[-1] for _, robot_goals in robots]),
             (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
             end_time=end_time,
-            settle_time=SETTLE_TIME,
+            settle_time=math.inf if scenario.settle_time is None else scenario.settle_time,
         ),
         collides=lambda poses: grid.in_collision(footprint, poses),
         reference_pose=reference_pose,
         progress=None if progress is None else lambda t: progress(t, end_time),
         fan_every=max(1, round(FAN_PERIOD / scenario.dt)),
         max_steps=scenario.resources.max_steps,
+        control_every=control_every,
+        surroundings=surroundings,
+        perception=perception,
+        references=fleet_references,
+        stuck=_stuck(scenario),
     )
     return Prepared(
-        scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint
+        scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,
+        np.array([robot_start for robot_start, _ in robots]), tuple(plans), tuple(references),
+        reference_kind == "path",
+    )  # fmt: skip
+
+
+def _stuck(scenario: Scenario) -> Any:
+    from wheelbase.scenario_ground import build_stuck
+
+    return build_stuck(scenario)
+
+
+def _fleet(scenario: Scenario, start: np.ndarray, goals: list[np.ndarray]) -> list:
+    """(start, goals) of every robot: the fleet's, or the scenario's one robot."""
+    if scenario.fleet is None:
+        return [(start, goals)]
+    return [(_pose(robot.start), [_pose(goal) for goal in robot.goals]) for robot in scenario.fleet]
+
+
+def _check_fleet_apart(robots: list, footprint) -> None:
+    """Two robots of a fleet may not start (or end) where their footprints overlap."""
+    import shapely
+
+    def outline(pose):
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        body = footprint.polygon
+        return shapely.Polygon(
+            np.column_stack([pose[0] + c * body[:, 0] - s * body[:, 1],
+                             pose[1] + s * body[:, 0] + c * body[:, 1]])
+        )  # fmt: skip
+
+    for what, pick in (("start", lambda r: r[0]), ("goal", lambda r: r[1][-1])):
+        shapes = [outline(pick(r)) for r in robots]
+        for i in range(len(shapes)):
+            for j in range(i):
+                if shapes[i].intersects(shapes[j]):
+                    raise ScenarioError(
+                        f"fleet[{i}].{what} overlaps fleet[{j}].{what}: the robots' footprints "
+                        "touch there; place them apart"
+                    )
+
+
+def _sum_planning(total: dict[str, Any], stats: dict[str, Any]) -> dict[str, Any]:
+    """Planning figures of a fleet: times, nodes, lengths and cusps summed over its robots."""
+    out = dict(total)
+    for key in ("planning_time_s", "expanded_nodes", "compile_time_s", "path_length_m", "cusps"):
+        if key in stats:
+            out[key] = out.get(key, 0) + stats[key]
+    out["planning_success"] = total.get("planning_success", True) and stats["planning_success"]
+    return out
+
+
+def _surroundings(scenario, grid, robot: Robot, footprint, robots, plans, seed):
+    """The world beyond the map (None without a world or a fleet of several robots)."""
+    if scenario.world is None and len(robots) == 1:
+        return None
+    from wheelbase.scenario_navigation import build_world, path_boxes
+    from wheelbase.sim.surroundings import Surroundings
+
+    boxes = None
+    if scenario.world is not None and scenario.world.path_boxes is not None:
+        from wheelbase.planning import PolygonWorld
+        from wheelbase.scenario_sensors import world_grid
+
+        def passable(polygons) -> bool:
+            truth = PolygonWorld(polygons, grid=world_grid(grid))
+            found, _ = _plan(truth, robot, scenario, robots[0][0], robots[0][1])
+            return found is not None
+
+        boxes = path_boxes(scenario, plans[0], passable, scenario.seed if seed is None else seed)
+    world = build_world(scenario, grid, boxes)
+    keep, labels = [], []
+    radius = footprint.max_radius + 0.1  # nothing spawns where a robot stands or stops
+    for index, (robot_start, robot_goals) in enumerate(robots):
+        who = "" if len(robots) == 1 else f" of robot {index}"
+        keep.append((*robot_start[:2], radius))
+        labels.append(f"the start{who}")
+        for k, goal in enumerate(robot_goals):
+            keep.append((*goal[:2], radius))
+            labels.append(f"goal {k}{who}" if len(robot_goals) > 1 else f"the goal{who}")
+    return Surroundings(world, footprint, len(robots), np.array(keep), tuple(labels))
+
+
+def _reach(law) -> float:
+    """How far ahead a local controller looks [m]: MPPI's horizon, DWA's simulated time, at
+    full speed (0 for a law without a horizon)."""
+    limits = getattr(law, "limits", None)
+    speed = float(getattr(limits, "max_speed", 0.0) or getattr(law, "max_speed", 0.0) or 0.0)
+    if hasattr(law, "horizon_steps"):
+        return law.horizon_steps * law.dt * speed
+    return float(getattr(law, "sim_time", 0.0)) * speed
+
+
+def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
+    """The path law wrapped in a :class:`~wheelbase.navigation.Navigator` (replanning and
+    recovery on the robot's costmap); on a dynamic plant inside the torque loop."""
+    from wheelbase.control.torque import TwistTorqueLoop
+    from wheelbase.navigation import Navigator
+    from wheelbase.scenario_navigation import navigator_options
+
+    inner = law.law if isinstance(law, TwistTorqueLoop) else law
+    spec = scenario.planner
+    radius = robot.turning_radius if spec.turning_radius is None else spec.turning_radius
+    margin = spec.margin
+    options = {**spec.options, "max_iterations": scenario.replanning.max_expansions}
+    options.setdefault("time_limit", 60.0)
+
+    def plan_route(believed, start, goals):
+        from wheelbase.planning import HybridAStar
+
+        planner = HybridAStar(
+            believed,
+            footprint=(robot.footprint[0] + 2 * margin, robot.footprint[1] + 2 * margin),
+            turning_radius=radius,
+            reverse=spec.reverse,
+            rear_axle_to_center=robot.center_offset,
+            **options,
+        )
+        legs, leg_start = [], start
+        for goal in goals:
+            try:
+                leg = planner.plan(leg_start, goal)
+            except PlanningError:  # the start or a goal inside what the robot now sees
+                return None
+            if not leg.success:
+                return None
+            legs.append(leg)
+            leg_start = goal
+        from wheelbase.planning.path import PlannedPath
+
+        return legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
+
+    navigator = Navigator(
+        inner, plan_route, footprint, navigator_options(scenario, _reach(inner)), kind=robot.kind
     )
+    if isinstance(law, TwistTorqueLoop):
+        return TwistTorqueLoop(
+            navigator, law.model, bandwidth=law.bandwidth, max_torque=law.max_torque
+        )
+    return navigator
 
 
 def run(
@@ -585,8 +887,8 @@ def run(
     The run ends as the engine's one arrival rule says (:class:`wheelbase.sim.Arrival`): the
     robot stops when its *estimate* is within the goal tolerance, at rest, after the
     trajectory has ended; the *true* pose then decides ``arrived`` or ``missed_goal``. A
-    collision, ``settle_time`` = 15 s after the trajectory's end, or ``duration`` end it
-    earlier (``collision``, ``timeout``).
+    collision or ``duration`` (or the scenario's ``settle_time`` after the trajectory's end,
+    when given and earlier) end it earlier (``collision``, ``timeout``).
 
     Parameters
     ----------
@@ -617,7 +919,9 @@ def run(
         return RunResult(
             prepared.scenario, prepared.robot, prepared.grid, None, None, None, metrics
         )
-    log = prepared.engine.run(prepared.start, seeds=[prepared.scenario.seed])
+    starts = prepared.starts if prepared.starts is not None else prepared.start[None]
+    log = prepared.engine.run(starts, seeds=np.full(len(starts), prepared.scenario.seed))
+    metrics = _world_metrics(prepared, log, 0)
     return RunResult(
         prepared.scenario,
         prepared.robot,
@@ -625,16 +929,30 @@ def run(
         prepared.plan,
         prepared.reference,
         log,
-        run_metrics(prepared, log, 0),
+        metrics,
         prepared.engine.sensors,
+        getattr(getattr(prepared.engine.plant, "model", None), "terrain", None),
+        None if prepared.engine.surroundings is None else prepared.engine.surroundings.world,
     )
 
 
-def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> list[dict[str, Any]]:
-    """Run one scenario over many noise seeds as one vectorised batch; metrics per seed.
+LOG_COPIES = 3
+"""A run's record is held about three times while it is made: the rows of every step, the
+stacked arrays of the log, and the per-robot copies its metrics are taken from."""
+
+
+def run_seeds(
+    scenario: Scenario | str | Path | dict[str, Any],
+    seeds: Any,
+    *,
+    memory_budget: float | None = None,
+) -> list[dict[str, Any]]:
+    """Run one scenario over many noise seeds in vectorised chunks; metrics per seed.
 
     The plan is made once (it does not depend on the seed); the engine then steps one robot
-    per seed in lockstep. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
+    per seed in lockstep, as many seeds at a time as :func:`seeds_per_chunk` lets into
+    ``memory_budget``, and keeps only each finished chunk's metrics: memory stays flat however
+    many seeds there are. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
 
     Parameters
     ----------
@@ -642,20 +960,104 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
         The scenario (its own ``seed`` is ignored).
     seeds : sequence of int
         Noise seeds, one run each.
+    memory_budget : float, optional
+        Bytes the logs of one chunk may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB), > 0.
 
     Returns
     -------
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
-    prepared = prepare(scenario)
+    from wheelbase.limits import BATCH_MEMORY
+
+    budget = BATCH_MEMORY if memory_budget is None else memory_budget
+    budget = positive("memory_budget", budget, "bytes")
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
+    if scenario.world is not None and scenario.world.path_boxes is not None:
+        # each seed drops its own boxes: its own world, run alone
+        return [
+            row
+            for seed in seeds
+            for row in _run_batch(prepare(scenario, seed=seed), [seed], budget)
+        ]
+    return _run_batch(prepare(scenario), seeds, budget)
+
+
+def _run_batch(prepared: Prepared, seeds: list[int], budget: float) -> list[dict[str, Any]]:
+    """Engine runs of a prepared scenario for ``seeds`` (a world of R robots per seed), as many
+    worlds at a time as fit ``budget`` bytes (:func:`seeds_per_chunk`)."""
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
-    starts = np.tile(prepared.start, (len(seeds), 1))
+    fleet = len(prepared.starts)
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    log = engine.run(starts, seeds=np.array(seeds, dtype=np.int64))
-    return [run_metrics(prepared, log, i) for i in range(len(seeds))]
+    size = seeds_per_chunk(engine, prepared.starts, budget) if seeds else 1
+    rows: list[dict[str, Any]] = []
+    for first in range(0, len(seeds), size):
+        chunk = seeds[first : first + size]
+        starts = np.tile(prepared.starts, (len(chunk), 1))
+        log = engine.run(starts, seeds=np.repeat(np.array(chunk, dtype=np.int64), fleet))
+        rows.extend(_world_metrics(prepared, log, k) for k in range(len(chunk)))
+        del log  # only the rows outlive the chunk
+    return rows
+
+
+def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
+    """The metrics of world ``world`` of a run: its robot's, or a fleet's first robot's with
+    ``robots`` (each robot's) and the fleet's status (the first that is not ``arrived``)."""
+    fleet = len(prepared.starts) if prepared.starts is not None else 1
+    metrics = run_metrics(prepared, log, world * fleet)
+    if fleet > 1:
+        robots = [run_metrics(prepared, log, world * fleet + i) for i in range(fleet)]
+        worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
+        metrics = {**metrics, "status": worst, "robots": robots}
+    return metrics
+
+
+def seeds_per_chunk(engine: Engine, starts: np.ndarray, budget: float) -> int:
+    """How many worlds (seeds) of ``engine`` one vectorised run can hold within ``budget``
+    bytes, a world being the robots of ``starts`` (one, or a fleet).
+
+    One step of one world is recorded (its rows' arrays: poses, command, wheel rates, ticks,
+    the estimator's and plant's signals) and counted :data:`LOG_COPIES` times for each of the
+    engine's ``steps`` (the longest a run can last).
+
+    Parameters
+    ----------
+    engine : Engine
+        The closed loop.
+    starts : numpy.ndarray, shape (3,) or (R, 3)
+        The start pose(s) of one world.
+    budget : float
+        Bytes.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    seeds = np.zeros(len(starts), dtype=np.int64)
+    _, row = engine.step(engine.reset(starts, seeds=seeds))
+    per_step = _nbytes(row) + 64  # and the row's own bookkeeping
+    return max(1, int(budget // (per_step * engine.steps * LOG_COPIES)))
+
+
+def _nbytes(value: Any) -> int:
+    """Bytes of the arrays in a value (a dataclass, dict, list or array), recursively."""
+    import dataclasses
+
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return sum(_nbytes(getattr(value, f.name)) for f in dataclasses.fields(value))
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value) + 8 * len(value)
+    return 0
 
 
 def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
@@ -676,28 +1078,76 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     """
     seed = int(log.seeds[index])
     one = log.robot(index)
+    plan, reference = prepared.plan, prepared.reference
+    if len(prepared.plans) > 1:  # robot i of a batch of fleets is robot i % R of its world
+        plan = prepared.plans[index % len(prepared.plans)]
+        reference = prepared.references[index % len(prepared.plans)]
     metrics = {**_base_metrics(prepared, seed), **one.metrics()[0]}
     metrics.pop("controller_statuses", None)
-    metrics["trajectory_duration_s"] = float(prepared.reference.t[-1])
+    metrics["trajectory_duration_s"] = float(reference.t[-1])
+    if metrics["status"] in ("arrived", "missed_goal"):  # it stopped: how late
+        metrics["arrival_delay_s"] = metrics["duration_s"] - metrics["trajectory_duration_s"]
     counts = one.controller_status_counts(0)
     if counts:
         metrics["controller_statuses"] = counts
     true_pose = one.true_pose[0]
-    deviation = distance_to_polyline(true_pose[:, :2], prepared.plan.poses[:, :2])
+    deviation = distance_to_polyline(true_pose[:, :2], plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))
+    if prepared.follows_path:
+        # a path law is scored by its distance to the path; the error against the timed
+        # reference (where the trajectory would be at that time) keeps its own name
+        for name in ("rms_position_error_m", "max_position_error_m", "rms_heading_error_deg"):
+            metrics[f"timed_{name}"] = metrics.pop(f"tracking_{name}")
+        metrics["tracking_rms_position_error_m"] = metrics["path_deviation_rms_m"]
+        metrics["tracking_max_position_error_m"] = metrics["path_deviation_max_m"]
+    metrics["tracking_error_of"] = "path" if prepared.follows_path else "trajectory"
     if one.torques is not None:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
         metrics["wheel_energy_j"] = float(np.sum(np.clip(power[:-1], 0, None) * np.diff(one.t)))
-    every = max(1, len(one.t) // 400)
-    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
+    from wheelbase.scenario_ground import terrain_metrics
+
+    metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
+    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose)  # every pose
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end
-        if key.startswith("loc_") and key != "loc_particles":
+        if key == "loc_converged":  # a global localisation's belief is one cluster at the end
+            metrics["localization_converged"] = bool(value[0, -1])
+        elif key.startswith("loc_") and key != "loc_particles":
             metrics[f"localization_{key[4:]}"] = int(value[0, -1])
+    summary = log.summaries[index] if log.summaries else {}
+    if summary or (prepared.engine is not None and prepared.engine.surroundings is not None):
+        metrics.update(_navigation_metrics(one, plan, summary))
     return metrics
+
+
+def _navigation_metrics(one: Log, plan, summary: dict[str, Any]) -> dict[str, Any]:
+    """Figures of a run among obstacles: contacts, least distances, replans and stops."""
+    from wheelbase.sim.surroundings import world_metrics
+
+    out: dict[str, Any] = {}
+    extras = {key: value[0] for key, value in one.extras.items() if key.startswith("world_")}
+    if extras:
+        speed = float(np.hypot(*one.twist[0, -1, :2]))
+        dt = np.append(np.diff(one.t), 0.0)
+        out.update(world_metrics(extras, STATUSES[int(one.status[0])], speed, dt))
+    if "track_matches" in one.extras:
+        matches = float(one.extras["track_matches"][0, -1])
+        for name, key in (("position", "track_position_rmse_m"),
+                          ("velocity", "track_velocity_rmse_m_s")):  # fmt: skip
+            total = float(one.extras[f"track_{name}_sq_sum"][0, -1])
+            out[key] = math.sqrt(total / matches) if matches else None
+        out["track_matches"] = int(matches)
+    out["replans"] = int(summary.get("replans", 0))
+    out["yields"] = int(summary.get("yields", 0))
+    out["recoveries"] = int(summary.get("recoveries", 0))
+    speed = np.hypot(one.twist[0, :-1, 0], one.twist[0, :-1, 1])
+    out["time_stopped_s"] = float(np.sum(np.diff(one.t)[speed < 0.01]))
+    driven = float(np.sum(np.hypot(*np.diff(one.true_pose[0, :, :2], axis=0).T)))
+    out["path_length_ratio"] = driven / plan.length if plan.length > 0 else None
+    return out
 
 
 def _min_clearance(grid, footprint, poses: np.ndarray) -> float:
@@ -751,19 +1201,12 @@ def _pose(values) -> np.ndarray:
 def _load_map(name: str, points: list[np.ndarray], max_cells: int):
     """A bundled map or a map file; ``empty`` is an obstacle-free field around the points,
     walled by the map edge (sized as the scenario's validation sized it)."""
-    from wheelbase.planning import OccupancyGrid
     from wheelbase.planning.maps import load_map
-    from wheelbase.scenario import EMPTY_MAP_MARGIN, EMPTY_MAP_RESOLUTION
+    from wheelbase.scenario import empty_map
 
     if name != "empty":
         return load_map(name, max_cells=max_cells)
-    xy = np.array([point[:2] for point in points])
-    low = np.floor(xy.min(0) - EMPTY_MAP_MARGIN)
-    high = np.ceil(xy.max(0) + EMPTY_MAP_MARGIN)
-    cols, rows = np.ceil((high - low) / EMPTY_MAP_RESOLUTION).astype(int)
-    return OccupancyGrid.from_array(
-        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=tuple(low)
-    )
+    return empty_map(points, max_cells)
 
 
 def _footprint(robot: Robot):

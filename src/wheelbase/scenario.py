@@ -20,6 +20,19 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from wheelbase._validate import count_text, read_text
 from wheelbase.errors import ScenarioError
 from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
+from wheelbase.scenario_terrain import (
+    ContactsSpec,
+    PayloadSpec,
+    TerrainSpec,
+    TractionSpec,
+)
+from wheelbase.scenario_world import (
+    FleetRobotSpec,
+    RecoverySpec,
+    ReplanningSpec,
+    WorldSpec,
+    goal_alias,
+)
 
 __all__ = [
     "EMPTY_MAP_MARGIN",
@@ -35,6 +48,8 @@ __all__ = [
     "Scenario",
     "SensorsSpec",
     "TrajectorySpec",
+    "empty_map",
+    "empty_map_shape",
     "format_validation_error",
     "load_scenario",
     "scenario_json_schema",
@@ -88,6 +103,12 @@ class RobotSpec(_Strict):
     )
     max_wheel_speed: float | None = Field(
         None, gt=0, description="Wheel angular speed limit of a differential drive [rad/s]."
+    )
+    payload: PayloadSpec | None = Field(
+        None, description="What the robot carries from the start (a dynamic plant)."
+    )
+    contacts: ContactsSpec | None = Field(
+        None, description="Drive wheels, casters and load sharing on terrain (default RM100's)."
     )
 
     @field_validator("footprint")
@@ -170,6 +191,14 @@ class ControllerSpec(_Strict):
         default_factory=TorqueLoopSpec,
         description="On a dynamic plant, a law other than computed_torque commands (v, ω), "
         "tracked by computed torque with these settings.",
+    )
+    model_payload: bool | PayloadSpec = Field(
+        True,
+        description="The payload of the controller's model: true, the robot's (as goals change "
+        "it); false, none; or a payload of its own (a mismatch with the truth).",
+    )
+    traction_control: TractionSpec | None = Field(
+        None, description="Limit the wheel torques by the estimated friction (a dynamic plant)."
     )
 
 
@@ -401,8 +430,9 @@ class Scenario(_Strict):
     name: str = Field("scenario", description="Name used in reports.")
     map: str = Field(
         "warehouse",
-        description="Bundled map name, path to a ROS YAML / Moving AI .map / image map, or "
-        "'empty' for an obstacle-free field around the start and goals.",
+        description="Bundled map name, path to a ROS YAML (an image with its resolution) / "
+        "Moving AI .map / polygon world, or 'empty' for an obstacle-free field around the "
+        "start and goals.",
     )
     robot: RobotSpec = Field(default_factory=RobotSpec)
     plant: Literal["kinematic", "dynamic"] = Field("kinematic")
@@ -426,26 +456,135 @@ class Scenario(_Strict):
     goal_tolerance: tuple[float, float] = Field(
         (0.05, 5.0), description="Arrival tolerance (position [m], heading [deg])."
     )
-    duration: float = Field(120.0, gt=0, description="Longest run [s].")
+    duration: float = Field(
+        120.0, gt=0, description="Longest run [s]: the time limit (status timeout)."
+    )
+    settle_time: float | None = Field(
+        None, ge=0, description="End the run this long [s] after the reference trajectory "
+        "ends (status timeout), when that comes before duration (default: none, duration "
+        "governs)."
+    )  # fmt: skip
     dt: float = Field(0.01, gt=0, description="Simulation and control step [s].")
     resources: ResourceSpec = Field(
         default_factory=ResourceSpec, description="Resource limits (raise them on purpose)."
+    )
+    world: WorldSpec | None = Field(
+        None,
+        description="The truth beyond map (obstacles, moving agents), seen only by the sensors.",
+    )
+    fleet: tuple[FleetRobotSpec, ...] | None = Field(
+        None,
+        min_length=1,
+        description="Several robots (each its start and goals) in one world, each seeing the "
+        "others; start and goal then come from the fleet's first robot.",
+    )
+    costmap: dict[str, float | int | bool] | None = Field(
+        None,
+        description="Layered costmap options (wheelbase.perception.CostmapSpec: "
+        "inflation_radius [m], cost_scaling_factor [1/m], obstacle_max_range [m], "
+        "raytrace_max_range [m], window [m], ...); default Nav2's.",
+    )
+    tracker: dict[str, float | int | bool] | None = Field(
+        None,
+        description="Tracker of moving obstacles (wheelbase.perception.TrackerSpec options).",
+    )
+    replanning: ReplanningSpec = Field(
+        default_factory=ReplanningSpec,
+        description="Replanning on the costmap (with a lidar and a path-following law).",
+    )
+    recovery: RecoverySpec = Field(
+        default_factory=RecoverySpec, description="Recoveries when no plan exists."
+    )
+    control_rate_hz: float | None = Field(
+        None,
+        gt=0,
+        description="Controller calls per second (default: every step dt); the command is "
+        "held between calls.",
+    )
+    terrain: TerrainSpec | None = Field(
+        None,
+        description="The ground: surfaces, regions with grades, wheel slip (a dynamic plant).",
+    )
+    goal_payloads: tuple[PayloadSpec | None, ...] | None = Field(
+        None,
+        description="The payload from each goal on (None: unchanged; mass 0: dropped); a goal "
+        "written {pose: [x, y, deg], payload: {...}} fills it.",
     )
 
     @model_validator(mode="before")
     @classmethod
     def _goal_alias(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "goal" in data:
-            if "goals" in data:
-                raise ValueError("give either goal or goals, not both")
-            data = dict(data)
-            data["goals"] = [data.pop("goal")]
+        data = goal_alias(data)
+        if isinstance(data, dict) and data.get("fleet"):
+            fleet = data["fleet"]
+            if "start" in data or "goals" in data:
+                raise ValueError(
+                    "with fleet, give each robot's start and goal in the fleet, not start/goal"
+                )
+            first = fleet[0] if isinstance(fleet, (list, tuple)) else None
+            if isinstance(first, dict):
+                data = dict(data)
+                data["start"] = first.get("start")
+                data["goals"] = first.get("goals", [first["goal"]] if "goal" in first else None)
         return data
 
-    @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
+    @model_validator(mode="before")
+    @classmethod
+    def _goals_with_payloads(cls, data: Any) -> Any:
+        # a goal may be {pose: [x, y, deg], payload: {...} | null}: split it into the pose and
+        # goal_payloads (null drops the load: mass 0)
+        if not isinstance(data, dict):
+            return data
+        key = "goals" if "goals" in data else "goal" if "goal" in data else None
+        goals = data.get(key) if key else None
+        entries = [goals] if key == "goal" else goals
+        if not isinstance(entries, (list, tuple)) or not any(isinstance(g, dict) for g in entries):
+            return data
+        if "goal_payloads" in data:
+            raise ValueError("give payloads in the goals or in goal_payloads, not both")
+        poses, payloads = [], []
+        for index, goal in enumerate(entries):
+            if not isinstance(goal, dict):
+                poses.append(goal)
+                payloads.append(None)
+                continue
+            unknown = sorted(set(goal) - {"pose", "payload"})
+            if unknown or "pose" not in goal:
+                raise ValueError(
+                    f"goals[{index}]: a goal mapping has pose: [x, y, deg] and optionally "
+                    f"payload (got keys {sorted(goal)})"
+                )
+            poses.append(goal["pose"])
+            if "payload" in goal:
+                payloads.append(goal["payload"] if goal["payload"] is not None else {"mass": 0})
+            else:
+                payloads.append(None)
+        data = dict(data)
+        data[key] = poses[0] if key == "goal" else poses
+        data["goal_payloads"] = payloads
+        return data
+
+    @model_validator(mode="after")
+    def _terrain_needs(self):
+        dynamic = self.plant == "dynamic"
+        for name, given in (
+            ("terrain", self.terrain is not None),
+            ("robot.payload", self.robot.payload is not None),
+            ("goal_payloads", self.goal_payloads is not None),
+            ("controller.traction_control", self.controller.traction_control is not None),
+        ):
+            if given and not dynamic:
+                raise ValueError(f"{name} acts on the dynamics: set plant: dynamic")
+        if self.goal_payloads is not None and len(self.goal_payloads) != len(self.goals):
+            raise ValueError(
+                f"goal_payloads has {len(self.goal_payloads)} entries for {len(self.goals)} goals"
+            )
+        return self
+
+    @field_validator("start", "goals", "goal_tolerance", "duration", "dt", "settle_time")
     @classmethod
     def _finite(cls, value):
-        if not all(math.isfinite(number) for number in _numbers(value)):
+        if value is not None and not all(math.isfinite(number) for number in _numbers(value)):
             raise ValueError(f"must be finite (got {value})")
         return value
 
@@ -503,7 +642,7 @@ class Scenario(_Strict):
                 "use a larger dt or a shorter duration, or raise resources.max_steps"
             )
         if self.map == "empty":
-            rows, cols = empty_map_shape([self.start, *self.goals])
+            rows, cols = empty_map_shape(self.robot_poses())
             limit = self.resources.max_map_cells
             if rows * cols > limit:
                 raise ValueError(
@@ -513,6 +652,12 @@ class Scenario(_Strict):
                     "raise resources.max_map_cells"
                 )
         return self
+
+    def robot_poses(self) -> list[tuple[float, float, float]]:
+        """Every start and goal of every robot (the fleet's, or the one robot's) [m, m, deg]."""
+        if self.fleet is None:
+            return [self.start, *self.goals]
+        return [pose for robot in self.fleet for pose in (robot.start, *robot.goals)]
 
     def to_yaml(self) -> str:
         """The resolved scenario (all defaults filled) as YAML, loadable again."""
@@ -535,6 +680,47 @@ def empty_map_shape(points: list[tuple[float, ...]]) -> tuple[int, int]:
     width = math.ceil(max(xs) + EMPTY_MAP_MARGIN) - math.floor(min(xs) - EMPTY_MAP_MARGIN)
     height = math.ceil(max(ys) + EMPTY_MAP_MARGIN) - math.floor(min(ys) - EMPTY_MAP_MARGIN)
     return math.ceil(height / EMPTY_MAP_RESOLUTION), math.ceil(width / EMPTY_MAP_RESOLUTION)
+
+
+def empty_map(points: Any, max_cells: int = MAX_MAP_CELLS) -> Any:
+    """The ``map: empty`` field: an obstacle-free grid around ``points``, walled by its edge.
+
+    The one rule of ``empty`` for scenarios, ``wheelbase plan empty`` and ``wheelbase control
+    --map empty``: :data:`EMPTY_MAP_MARGIN` around the points' bounding box (rounded out to
+    whole metres) at :data:`EMPTY_MAP_RESOLUTION`.
+
+    Parameters
+    ----------
+    points : sequence of array_like
+        Poses or points (x [m], y [m], ...): the start and the goals.
+    max_cells : int
+        Most cells allowed (``resources.max_map_cells``).
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    MapError
+        If the field would hold more than ``max_cells`` cells.
+    """
+    import numpy as np
+
+    from wheelbase.errors import MapError
+    from wheelbase.planning import OccupancyGrid
+
+    rows, cols = empty_map_shape(points)
+    if rows * cols > max_cells:
+        raise MapError(
+            f"map: empty around the start and goals would be {rows} × {cols} = "
+            f"{count_text(rows * cols)} cells of {EMPTY_MAP_RESOLUTION} m: more than "
+            f"max_map_cells = {max_cells}; bring them closer or use a map file"
+        )
+    low = [math.floor(min(p[k] for p in points) - EMPTY_MAP_MARGIN) for k in (0, 1)]
+    return OccupancyGrid.from_array(
+        np.zeros((rows, cols), bool), EMPTY_MAP_RESOLUTION, origin=(float(low[0]), float(low[1]))
+    )
 
 
 def _numbers(value: Any) -> list[float]:
@@ -616,6 +802,13 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
             beside = path.parent / map_name
             if beside.exists():
                 data = {**data, "map": str(beside)}
+        terrain = data.get("terrain")
+        raster = terrain.get("raster") if isinstance(terrain, dict) else None
+        image = raster.get("image") if isinstance(raster, dict) else None
+        if isinstance(image, str) and not Path(image).is_absolute():  # as the map
+            beside = path.parent / image
+            if beside.exists():
+                data = {**data, "terrain": {**terrain, "raster": {**raster, "image": str(beside)}}}
     try:
         return Scenario.model_validate(data)
     except ValidationError as error:

@@ -202,8 +202,13 @@ def build_estimator(scenario: Scenario, robot: Any, world: Any, sensors: Any) ->
         if spec.gate_probability is not None:
             options["gate_probability"] = spec.gate_probability
         if spec.method == "ukf":
+            # `is not None`, not truthiness: β = 0 and κ = 0 are values a user may choose
             options.update(
-                {k: getattr(spec, k) for k in ("alpha", "beta", "kappa") if getattr(spec, k)}
+                {
+                    k: getattr(spec, k)
+                    for k in ("alpha", "beta", "kappa")
+                    if getattr(spec, k) is not None
+                }
             )
         cls = EKF if spec.method == "ekf" else UKF
         return KalmanLocalizer(

@@ -1,6 +1,6 @@
 """``wheelbase control``: one pose-law (or MPPI) run to files.
 
-``wheelbase control --law polar --start 2 0 180deg --goal 0 0 0deg --out DIR`` drives a unicycle
+``wheelbase control --law polar --start 2,0,180 --goal 0,0,0 --out DIR`` drives a unicycle
 (|v| ≤ 0.5 m/s, |ω| ≤ 1.5 rad/s by default) from the start to the goal with one pose law and
 writes ``run.csv`` (t, x, y, θ, v, ω), ``run.png`` and ``metrics.json``.
 
@@ -8,8 +8,9 @@ The 128-case pose benchmark and the tracking benchmark are benchmark harness, no
 ``python benchmarks/control.py`` prints their tables and ``examples/control_fans.py`` /
 ``examples/control_tracking.py`` draw their figures.
 
-Angles accept ``90deg``, ``90°`` or ``1.57rad``; a bare number is in radians (as in the rest of
-the command line). Existing files are kept unless ``--force``.
+Poses are ``X,Y,HEADING`` with the heading in degrees unless written ``1.57rad``, as everywhere
+on the command line (:mod:`wheelbase.commands.options`). Existing files are kept unless
+``--force``.
 """
 
 from __future__ import annotations
@@ -22,39 +23,26 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 
-from wheelbase._validate import finite, parse_angle, positive
+from wheelbase._validate import check_choice, positive
+from wheelbase.commands.options import out_option, pose_option, rate_option
+from wheelbase.commands.output import console as make_console
 from wheelbase.control.base import VelocityLimits
 from wheelbase.control.pose import POSE_LAWS, make_pose_law
 from wheelbase.errors import ConfigError, InputError
-from wheelbase.limits import MAX_COORDINATE
 from wheelbase.sim import Log
 
-__all__ = ["control_run_to_files", "plot_run", "register"]
+__all__ = ["LAWS", "control_run_to_files", "plot_run", "register"]
 
 ARRIVAL_TOLERANCE = (0.01, math.radians(1.0))
 """Position [m] and heading [rad] tolerance of a pose-law run."""
 
 RUN_FILES: tuple[str, ...] = ("run.csv", "run.png", "metrics.json")
+LAWS: tuple[str, ...] = (*POSE_LAWS, "mppi")
+"""Every ``--law``: the pose laws of document 002, and MPPI (on ``--map``)."""
 
 
-# --------------------------------------------------------------------------- parsing
-def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
-    try:
-        x, y = float(values[0]), float(values[1])
-    except ValueError:
-        raise ConfigError(f"{name} must be X Y ANGLE, e.g. 2 0 180deg (got {values!r})") from None
-    pose = np.array([finite(f"{name} x", x, "m"), finite(f"{name} y", y, "m"),
-                     parse_angle(values[2])])  # fmt: skip
-    if max(abs(x), abs(y)) > MAX_COORDINATE:
-        raise ConfigError(
-            f"{name} x and y must be within ±{MAX_COORDINATE:g} m, where float64 still resolves "
-            f"micrometres (got ({x:g}, {y:g}))"
-        )
-    return pose
-
-
+# --------------------------------------------------------------------------- files
 def _check_free(out: Path, names: tuple[str, ...], force: bool) -> None:
     out.mkdir(parents=True, exist_ok=True)
     existing = [name for name in names if (out / name).exists()]
@@ -175,7 +163,7 @@ def _mppi_run(map_name, start, goal, out, *, force, max_speed, max_yaw_rate, t_e
         "dt": 0.05,
         "duration": t_end,
     }
-    _run_and_report(scenario, Path(out), force=force, gif=True, console=Console())
+    _run_and_report(scenario, Path(out), force=force, gif=True, console=make_console())
 
 
 # --------------------------------------------------------------------------- command
@@ -184,9 +172,15 @@ def register(app: typer.Typer) -> None:
 
     @app.command("control")
     def control(
-        out: Annotated[Path, typer.Option("--out", help="Output directory.")],
+        out: Annotated[Path, out_option("control", "run.csv, run.png, metrics.json")] = (
+            "wheelbase-control"
+        ),
         law: Annotated[
-            str, typer.Option(help=f"Pose law: {', '.join(POSE_LAWS)}; or mppi (with --map).")
+            str,
+            typer.Option(
+                help=f"Control law: {', '.join(LAWS)} (the pose laws of document 002; mppi "
+                "follows a Hybrid A* path on --map)."
+            ),
         ] = "polar",
         map_name: Annotated[
             str,
@@ -197,33 +191,28 @@ def register(app: typer.Typer) -> None:
             ),
         ] = "empty",
         start: Annotated[
-            tuple[str, str, str] | None,
-            typer.Option(help="Start pose X [m] Y [m] ANGLE (90deg, 1.57rad; bare = rad)."),
+            np.ndarray | None, pose_option("--start", "Start pose (required):")
         ] = None,
-        goal: Annotated[
-            tuple[str, str, str],
-            typer.Option(help="Goal pose X [m] Y [m] ANGLE (90deg, 1.57rad; bare = rad)."),
-        ] = ("0", "0", "0deg"),
+        goal: Annotated[np.ndarray, pose_option("--goal", "Goal pose (default 0,0,0):")] = "0,0,0",
         max_speed: Annotated[float, typer.Option(help="Speed limit |v| [m/s].")] = 0.5,
-        max_yaw_rate: Annotated[float, typer.Option(help="Yaw-rate limit |ω| [rad/s].")] = 1.5,
+        max_yaw_rate: Annotated[float, rate_option("--max-yaw-rate", "Yaw-rate limit |ω|.")] = 1.5,
         t_end: Annotated[float, typer.Option(help="Time limit [s].")] = 60.0,
         dt: Annotated[float, typer.Option(help="Control period and step [s].")] = 0.01,
         force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
     ) -> None:
         """Drive to a pose with one of the pose laws (document 002), or MPPI on a map."""
-        console = Console()
+        console = make_console()
         if start is None:
-            raise ConfigError("--start X Y ANGLE is required")
+            raise ConfigError("--start X,Y,HEADING is required")
+        check_choice("law", law, LAWS)
         if law == "mppi":
-            _mppi_run(map_name, _pose(start, "start"), _pose(goal, "goal"), out, force=force,
+            _mppi_run(map_name, start, goal, out, force=force,
                       max_speed=max_speed, max_yaw_rate=max_yaw_rate, t_end=t_end)  # fmt: skip
             return
-        if law not in POSE_LAWS:
-            raise ConfigError(f"unknown law {law!r}; allowed: {', '.join(POSE_LAWS)}")
         metrics = control_run_to_files(
             law,
-            _pose(start, "start"),
-            _pose(goal, "goal"),
+            start,
+            goal,
             out,
             max_speed=max_speed,
             max_yaw_rate=max_yaw_rate,

@@ -28,6 +28,7 @@ import typer
 
 from wheelbase._io import write_csv
 from wheelbase._validate import check_choice, finite, nonnegative, positive
+from wheelbase.commands.options import out_option, rate_option
 from wheelbase.errors import ConfigError
 
 __all__ = ["DYNAMICS_FILES", "PRESETS", "TRACK_FILES", "parse_waypoints", "register"]
@@ -121,7 +122,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("dynamics")
     def dynamics_command(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("dynamics", ", ".join(DYNAMICS_FILES))
+        ] = "wheelbase-dynamics",
         preset: str = typer.Option("rm100", "--preset", help="Robot preset: rm100."),
         torques: tuple[float, float] = typer.Option(
             (0.01, 0.01), "--torques", help="Wheel torques LEFT RIGHT [N·m] (held constant)."
@@ -167,7 +170,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command("track-waypoints")
     def track_command(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[Path, out_option("track-waypoints", ", ".join(TRACK_FILES))] = (
+            "wheelbase-track-waypoints"
+        ),
         preset: str = typer.Option("rm100", "--preset", help="Robot preset: rm100."),
         waypoints: str = typer.Option(
             "0,0 10,10 20,0 30,0", "--waypoints", help="Waypoints 'x,y x,y ...' [m]."
@@ -175,9 +180,9 @@ def register(app: typer.Typer) -> None:
         peak_velocity: str = typer.Option(
             "0.1", "--peak-velocity", help="Peak velocity of x and y [m/s]: 'V' or 'VX,VY'."
         ),
-        peak_yaw_rate: str = typer.Option(
-            "0.2", "--peak-yaw-rate", help="Peak yaw rate of the turns in place [rad/s]."
-        ),
+        peak_yaw_rate: Annotated[
+            float, rate_option("--peak-yaw-rate", "Peak yaw rate of the turns in place")
+        ] = 0.2,
         reference_kind: str = typer.Option(
             "feasible",
             "--reference",
@@ -197,10 +202,9 @@ def register(app: typer.Typer) -> None:
         force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
     ) -> None:
         """Trapezoidal waypoint trajectory, inverse dynamics, open loop vs computed-torque PID."""
-        from rich.console import Console
         from rich.table import Table
 
-        from wheelbase.cli import parse_angle
+        from wheelbase.commands.output import console
         from wheelbase.control.torque import ComputedTorquePID, TorqueGains
         from wheelbase.dynamics import inverse_dynamics
         from wheelbase.dynamics_plot import plot_inverse_dynamics, plot_tracking
@@ -211,7 +215,7 @@ def register(app: typer.Typer) -> None:
         robot = _preset(preset)
         points = parse_waypoints(waypoints)
         vmax = _parse_numbers(peak_velocity, "peak_velocity")
-        yaw_rate = parse_angle(peak_yaw_rate, "peak_yaw_rate")
+        yaw_rate = peak_yaw_rate
         check_choice("reference", reference_kind, ("feasible", "document"))
         error = nonnegative("model_error", model_error)
         if error >= 1.0:
@@ -277,6 +281,6 @@ def register(app: typer.Typer) -> None:
                 f"{m['tracking_rms_position_error_m']:.3g}",
                 f"{m['tracking_rms_heading_error_deg']:.3g}",
             )
-        Console(highlight=False).print(table)
+        console().print(table)
         written = [p for name, p in paths.items() if gif or name != "animation.gif"]
         typer.echo(f"wrote {', '.join(map(str, written))}")

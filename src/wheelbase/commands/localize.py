@@ -17,6 +17,7 @@ from typing import Annotated
 import typer
 
 from wheelbase._validate import check_choice, integer
+from wheelbase.commands.options import out_option
 
 __all__ = ["LOCALIZE_FILES", "register"]
 
@@ -35,7 +36,9 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def localize(
         data_dir: Annotated[Path, typer.Argument(help="Folder of one MRCLAM data set.")],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("localize", ", ".join(LOCALIZE_FILES))
+        ] = "wheelbase-localize",
         robot: int = typer.Option(1, "--robot", help="Robot number, 1-5."),
         filter: str = typer.Option("ekf", "--filter", help="ekf, ukf or pf."),
         seed: int = typer.Option(0, "--seed", help="Seed of the particle filter."),
@@ -64,6 +67,7 @@ def register(app: typer.Typer) -> None:
             f"{filter.upper()} robot {robot}: position RMSE {metrics['position_rmse_m']:.3f} m, "
             f"max {metrics['position_max_m']:.3f} m, heading RMSE "
             f"{metrics['heading_rmse_deg']:.2f} deg (dead reckoning "
-            f"{metrics['dead_reckoning_rmse_m']:.2f} m)"
+            f"{metrics['dead_reckoning_rmse_m']:.2f} m), position NEES "
+            f"{metrics['position_nees_mean']:.2f} (2 when consistent)"
         )
         typer.echo(f"wrote {', '.join(map(str, paths.values()))}")

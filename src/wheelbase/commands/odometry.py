@@ -1,10 +1,11 @@
 """``wheelbase goto`` and ``wheelbase calibrate``: document 003's go-to-goal loop and UMBmark.
 
-``wheelbase goto --goal 100 100 [--goal -100 100 ...] --out DIR`` drives the simulated robot of
+``wheelbase goto --goal 1,1 [--goal -1,1 ...] --out DIR`` drives the simulated robot of
 :class:`~wheelbase.control.goal.DriveTrain` to each goal through the full loop (set-points in
 RPM → PI speed loop → PWM → motor → encoder ticks → odometry) and writes ``routes.png``,
-``log.csv``, ``route.gif`` and ``metrics.json``. Goals are read in ``--unit`` (default ``cm``,
-the unit in which document 003 Fig. 8's (±100, ±100) are read); everything written is in metres.
+``log.csv``, ``route.gif`` (unless ``--no-gif``) and ``metrics.json``. Goals are in metres
+like every length on the command line, or written with their unit (document 003 Fig. 8's
+``--goal 100cm,100cm``; :mod:`wheelbase.commands.options`); everything written is in metres.
 
 ``wheelbase calibrate --ed 1.005 --eb 1.02 --out DIR`` runs UMBmark on a robot with those errors
 and writes ``before_after.png`` and ``metrics.json`` (E_max,syst before/after and the
@@ -22,17 +23,16 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from wheelbase._validate import check_choice, finite, integer
+from wheelbase._validate import integer
+from wheelbase.commands.options import out_option, point_option
 from wheelbase.errors import ConfigError
-from wheelbase.limits import MAX_COORDINATE
 
-__all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
+__all__ = ["CALIBRATE_FILES", "GOTO_FILES", "plot_calibration", "register"]
 
 GOTO_FILES: tuple[str, ...] = ("routes.png", "log.csv", "route.gif", "metrics.json")
 """What ``wheelbase goto`` writes: ``log.csv`` is the engine's long format (a ``robot`` column,
 one robot per goal, with the speed loop's set-points, measured speeds and duty)."""
 CALIBRATE_FILES: tuple[str, ...] = ("before_after.png", "metrics.json")
-_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 
 
 def _prepare(out: Path, names: tuple[str, ...], force: bool) -> dict[str, Path]:
@@ -46,39 +46,6 @@ def _prepare(out: Path, names: tuple[str, ...], force: bool) -> dict[str, Path]:
         raise FileExistsError(f"{', '.join(existing)} exists; pass --force to overwrite")
     out.mkdir(parents=True, exist_ok=True)
     return paths
-
-
-def _goals(values: list[str] | None, extra: list[str], unit: str) -> list[tuple[float, float]]:
-    """Pair each ``--goal X`` with the Y that follows it on the command line."""
-    from wheelbase.control.goal import FIGURE8_GOALS
-
-    check_choice("unit", unit, tuple(_UNITS))
-    stray = [token for token in extra if token.startswith("--")]
-    if stray:
-        raise ConfigError(f"unknown option {stray[0]} (see 'wheelbase goto --help')")
-    if not values:
-        if extra:
-            raise ConfigError(f"unexpected argument {extra[0]!r}; goals are given as --goal X Y")
-        return list(FIGURE8_GOALS)
-    if len(extra) != len(values):
-        raise ConfigError("each --goal needs two numbers, X and Y (e.g. --goal 100 100)")
-    scale = _UNITS[unit]
-    goals = []
-    for x_text, y_text in zip(values, extra, strict=True):
-        coords = []
-        for text in (x_text, y_text):
-            try:
-                number = float(text)
-            except ValueError:
-                raise ConfigError(f"goal must be two numbers (got {text!r})") from None
-            coords.append(finite("goal", number, unit) * scale)
-        if max(abs(coords[0]), abs(coords[1])) > MAX_COORDINATE:
-            raise ConfigError(
-                f"goal x and y must be within ±{MAX_COORDINATE:g} m (got ({x_text}, {y_text}) "
-                f"{unit})"
-            )
-        goals.append((coords[0], coords[1]))
-    return goals
 
 
 def _plot_routes(log: Any, path: Path) -> None:
@@ -116,7 +83,16 @@ def _animate(log: Any, path: Path, overwrite: bool) -> None:
     animate(result, path, footprint=(0.2, 0.17), overwrite=overwrite, max_frames=60, title="goto")
 
 
-def _plot_calibration(cal: Any, path: Path) -> None:
+def plot_calibration(cal: Any, path: Path) -> None:
+    """Draw a UMBmark calibration (true paths before and after, return errors) into ``path``.
+
+    Parameters
+    ----------
+    cal : wheelbase.odometry.calibration.UMBmarkCalibration
+        What :func:`wheelbase.odometry.calibrate_umbmark` returns.
+    path : pathlib.Path
+        PNG file (replaced if it exists).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -166,40 +142,41 @@ def register(app: typer.Typer) -> None:
         The main application (or a test app).
     """
 
-    @app.command(context_settings={"allow_extra_args": True, "ignore_unknown_options": True})
+    @app.command()
     def goto(
-        ctx: typer.Context,
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[Path, out_option("goto", ", ".join(GOTO_FILES))] = "wheelbase-goto",
         goal: Annotated[
-            list[str] | None,
-            typer.Option(
+            list[np.ndarray] | None,
+            point_option(
                 "--goal",
-                help="Goal X Y in --unit (repeat for several goals; default: document 003 "
-                "Fig. 8's (100, 100), (-100, 100), (-100, -100), (100, -100) cm).",
+                "A goal (repeat for several; default: document 003 Fig. 8's (1, 1), (-1, 1), "
+                "(-1, -1), (1, -1) m)",
             ),
         ] = None,
-        unit: str = typer.Option("cm", "--unit", help="Unit of --goal: m, cm or mm."),
         ed: float = typer.Option(1.0, "--ed", help="Real wheel-diameter ratio E_d = D_R/D_L [-]."),
         eb: float = typer.Option(1.0, "--eb", help="Real/nominal track ratio E_b [-]."),
         method: str = typer.Option(
             "exact", "--method", help="Odometry update: euler (doc 003), midpoint or exact."
         ),
         seed: int = typer.Option(0, "--seed", help="Seed of the random encoder errors."),
+        gif: bool = typer.Option(True, "--gif/--no-gif", help="Write route.gif."),
         force: bool = typer.Option(False, "--force", help="Overwrite existing files."),
     ) -> None:
         """Drive to goals with document 003's go-to-goal loop; write routes, log, GIF, metrics."""
-        from wheelbase.control.goal import DriveTrain
+        from wheelbase.control.goal import FIGURE8_GOALS, DriveTrain
         from wheelbase.odometry.error_model import OdometryErrors
         from wheelbase.sim import run_go_to_goal
 
-        goals = _goals(goal, list(ctx.args), unit)
+        goals = [tuple(g) for g in goal] if goal else list(FIGURE8_GOALS)
         seed = integer("seed", seed, minimum=0, maximum=2**63 - 1)  # the engine's int64 seeds
         drive = DriveTrain(errors=OdometryErrors(ed, eb), odometry_method=method)
-        paths = _prepare(out, GOTO_FILES, force)
+        names = GOTO_FILES if gif else tuple(n for n in GOTO_FILES if n != "route.gif")
+        paths = _prepare(out, names, force)
         log = run_go_to_goal(goals, drive=drive, seed=seed)  # every goal, one robot each
         _plot_routes(log, paths["routes.png"])
         log.to_csv(paths["log.csv"], overwrite=True)
-        _animate(log, paths["route.gif"], overwrite=True)
+        if gif:
+            _animate(log, paths["route.gif"], overwrite=True)
         metrics = {
             "goals": [
                 {
@@ -232,7 +209,9 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def calibrate(
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("calibrate", ", ".join(CALIBRATE_FILES))
+        ] = "wheelbase-calibrate",
         ed: float = typer.Option(1.005, "--ed", help="Injected wheel-diameter ratio E_d [-]."),
         eb: float = typer.Option(1.02, "--eb", help="Injected track ratio E_b [-]."),
         side: float = typer.Option(4.0, "--side", help="Side of the square [m]."),
@@ -249,7 +228,7 @@ def register(app: typer.Typer) -> None:
             ed, eb, side=side, runs=runs, slip_std=slip, iterations=iterations, seed=seed
         )
         paths = _prepare(out, CALIBRATE_FILES, force)
-        _plot_calibration(cal, paths["before_after.png"])
+        plot_calibration(cal, paths["before_after.png"])
         corr = cal.correction
         metrics = {
             "e_max_syst_before_m": cal.before.e_max_syst,

@@ -1,15 +1,17 @@
 """``wheelbase plan``: Hybrid A* on a map file or a bundled map.
 
-``wheelbase plan MAP --start X Y DEG --goal X Y DEG --turning-radius R --footprint L W
+``wheelbase plan MAP --start X,Y,DEG --goal X,Y,DEG --turning-radius R --footprint L W
 [--rear-axle-to-center C] [--no-reverse] --out DIR`` plans with
 :class:`~wheelbase.planning.HybridAStar` and writes ``path.csv``, ``path.png`` (map, footprints
 along the path, start/goal arrows) and ``metrics.json`` (``success``, ``length_m``, ``cusps``,
 ``planning_time_s``, ``expanded_nodes``, ``min_clearance_m``), and prints the metrics. MAP is a
 ROS ``map_server`` YAML, a Moving AI ``.map`` (1 m cells), a polygon world (YAML or GeoJSON, see
 :mod:`wheelbase.planning.world_io`: collision and ``min_clearance_m`` exact on the polygons, the
-figure draws them) or a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
-``warehouse``, ``parallel_120``, ``perpendicular_bay``, …). Headings are in degrees unless
-written with ``rad`` (``1.57rad``); ``90deg`` is accepted too.
+figure draws them), a bundled map name (``parking_lot``, ``corridor_uturn``, ``maze``,
+``warehouse``, ``parallel_120``, ``perpendicular_bay``, …) or ``empty`` (open ground around
+the start and goal, as in scenarios). Headings are in degrees unless
+written with ``rad`` (``1.57rad``), as everywhere on the command line
+(:mod:`wheelbase.commands.options`).
 
 The search's resolution is the planner's default unless ``--headings``, ``--xy-resolution``,
 ``--collision-step``, ``--time-limit`` or ``--moves-to-contact`` say otherwise (tight parking
@@ -28,7 +30,8 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from wheelbase._validate import finite, parse_angle
+from wheelbase.commands.options import out_option, pose_option
+from wheelbase.commands.output import console, plural
 from wheelbase.errors import ConfigError
 
 __all__ = ["PLAN_FILES", "plan_to_files", "register"]
@@ -36,27 +39,11 @@ __all__ = ["PLAN_FILES", "plan_to_files", "register"]
 PLAN_FILES: tuple[str, ...] = ("path.csv", "path.png", "metrics.json")
 
 
-def _heading_deg(text: str, name: str) -> float:
-    """Heading text → radians; a bare number is in degrees (the unit of --start/--goal)."""
-    return parse_angle(text, f"{name} heading", default_unit="deg")
-
-
-def _pose(values: tuple[str, str, str], name: str) -> np.ndarray:
-    x_text, y_text, heading = values
-    coords = []
-    for text in (x_text, y_text):
-        try:
-            coords.append(finite(name, float(text), "m"))
-        except ValueError:
-            raise ConfigError(f"{name} must be X Y DEG (got {values!r})") from None
-    return np.array([coords[0], coords[1], _heading_deg(heading, name)])
-
-
 def _query(
     case: str | None,
     map_name: str | None,
-    start: tuple[str, str, str] | None,
-    goal: tuple[str, str, str] | None,
+    start: np.ndarray | None,
+    goal: np.ndarray | None,
 ) -> dict[str, Any]:
     """Map, poses, robot and planner options of the command: a bundled case's, with the flags
     given beside it in their place, or the flags alone (then MAP, --start and --goal are
@@ -86,9 +73,9 @@ def _query(
         raise ConfigError("give MAP (a map file or bundled map name) or --case")
     for name, values in (("start", start), ("goal", goal)):
         if values is not None:
-            poses[name] = _pose(values, name)
+            poses[name] = values
         elif poses[name] is None:
-            raise ConfigError(f"give --{name} X Y DEG (or --case)")
+            raise ConfigError(f"give --{name} X,Y,HEADING (or --case)")
     return {"map": map_name, **poses, "robot": robot, "options": options}
 
 
@@ -104,13 +91,15 @@ def plan_to_files(
     reverse: bool = True,
     force: bool = False,
     planner_options: dict[str, Any] | None = None,
+    map_resolution: float | None = None,
 ) -> dict[str, Any]:
     """Plan and write ``path.csv``, ``path.png`` and ``metrics.json`` into ``out``.
 
     Parameters
     ----------
     map_name : str
-        Map file or bundled map name.
+        Map file, bundled map name, or ``"empty"`` (open ground 3 m around the start and goal,
+        as a scenario's ``map: empty``).
     start : numpy.ndarray
         Start pose ``(x, y, θ)`` [m, m, rad].
     goal : numpy.ndarray
@@ -130,6 +119,9 @@ def plan_to_files(
     planner_options : dict or None
         Further :class:`~wheelbase.planning.HybridAStar` keywords (``headings``,
         ``xy_resolution``, ``collision_step``, ``time_limit``, ``moves_to_contact``, …).
+    map_resolution : float or None
+        Cell side [m/pixel] of a bare image map (required there; see
+        :func:`wheelbase.planning.load_map`).
 
     Returns
     -------
@@ -150,7 +142,12 @@ def plan_to_files(
     existing = [str(p) for p in paths.values() if p.exists()]
     if existing and not force:
         raise FileExistsError(f"{', '.join(existing)} exists; pass --force to overwrite")
-    grid = load_map(map_name)
+    if map_name == "empty":  # as in scenarios and `wheelbase control --map empty`
+        from wheelbase.scenario import empty_map
+
+        grid = empty_map([start, goal])
+    else:
+        grid = load_map(map_name, resolution=map_resolution)
     planner = HybridAStar(
         grid,
         footprint,
@@ -182,7 +179,7 @@ def plan_to_files(
     ax = plot_path(path, grid=grid, footprint=planner.footprint, start=start, goal=goal)
     ax.set_title(
         f"Hybrid A*: {metrics['message']}"
-        + (f", {path.length:.2f} m, {path.cusps} cusps" if path.success else "")
+        + (f", {path.length:.2f} m, {plural(path.cusps, 'cusp')}" if path.success else "")
     )
     ax.figure.savefig(paths["path.png"], dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
@@ -201,26 +198,18 @@ def register(app: typer.Typer) -> None:
 
     @app.command("plan")
     def plan(
-        out: Annotated[
-            Path, typer.Option(help="Output folder for path.csv, path.png, metrics.json.")
-        ],
+        out: Annotated[Path, out_option("plan", ", ".join(PLAN_FILES))] = "wheelbase-plan",
         map_name: Annotated[
             str | None,
             typer.Argument(
                 metavar="MAP",
-                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), or "
-                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ... "
-                "(optional with --case).",
+                help="ROS map YAML, Moving AI .map, a polygon world (.yaml or .geojson), "
+                "a bundled map: parking_lot, corridor_uturn, maze, warehouse, parallel_120, ..., "
+                "or 'empty' (open ground around the start and goal; optional with --case).",
             ),
         ] = None,
-        start: Annotated[
-            tuple[str, str, str] | None,
-            typer.Option(help="Start pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
-        ] = None,
-        goal: Annotated[
-            tuple[str, str, str] | None,
-            typer.Option(help="Goal pose X [m] Y [m] heading [deg, or e.g. 1.57rad]."),
-        ] = None,
+        start: Annotated[np.ndarray | None, pose_option("--start", "Start pose")] = None,
+        goal: Annotated[np.ndarray | None, pose_option("--goal", "Goal pose")] = None,
         case: Annotated[
             str | None,
             typer.Option(
@@ -260,6 +249,13 @@ def register(app: typer.Typer) -> None:
         time_limit: Annotated[
             float | None, typer.Option(help="Search time limit [s] (default 5).")
         ] = None,
+        resolution: Annotated[
+            float | None,
+            typer.Option(
+                help="Cell side of a bare image MAP [m/pixel] (required for one: an image "
+                "carries no scale; other maps carry their own)."
+            ),
+        ] = None,
         moves_to_contact: Annotated[
             bool | None,
             typer.Option(
@@ -294,8 +290,8 @@ def register(app: typer.Typer) -> None:
             reverse=reverse,
             force=force,
             planner_options=options,
+            map_resolution=resolution,
         )
-        from rich.console import Console
         from rich.table import Table
 
         table = Table(title=f"wheelbase plan → {out}")
@@ -304,4 +300,4 @@ def register(app: typer.Typer) -> None:
         for key, value in metrics.items():
             text = f"{value:.4g}" if isinstance(value, float) else str(value)
             table.add_row(key, text)
-        Console().print(table)
+        console().print(table)

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 from wheelbase._lazy import attach
 
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
+    from wheelbase.control.adaptive import AdaptiveComputedTorque
     from wheelbase.control.base import (
         STEERING_COMMAND,
         VELOCITY_COMMAND,
@@ -20,6 +21,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         velocity_to_steering,
         velocity_to_wheel_speeds,
     )
+    from wheelbase.control.dwa import DWA, DWA_BACKENDS, DWACritics, DWAPlan
     from wheelbase.control.goal import (
         FIGURE8_GOALS,
         DriveTrain,
@@ -45,6 +47,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         ViaPoint,
         make_pose_law,
     )
+    from wheelbase.control.schedule import ModelSchedule
     from wheelbase.control.torque import (
         ComputedTorquePID,
         InverseDynamicsTorques,
@@ -52,8 +55,12 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         TwistTorqueLoop,
     )
     from wheelbase.control.tracking import Kanayama, LinearTracker
+    from wheelbase.control.traction import TractionControl
 
 _EXPORTS = {
+    "AdaptiveComputedTorque": "wheelbase.control.adaptive",
+    "ModelSchedule": "wheelbase.control.schedule",
+    "TractionControl": "wheelbase.control.traction",
     "STEERING_COMMAND": "wheelbase.control.base",
     "VELOCITY_COMMAND": "wheelbase.control.base",
     "Controller": "wheelbase.control.base",
@@ -66,6 +73,10 @@ _EXPORTS = {
     "steering_to_velocity": "wheelbase.control.base",
     "velocity_to_steering": "wheelbase.control.base",
     "velocity_to_wheel_speeds": "wheelbase.control.base",
+    "DWA": "wheelbase.control.dwa",
+    "DWA_BACKENDS": "wheelbase.control.dwa",
+    "DWACritics": "wheelbase.control.dwa",
+    "DWAPlan": "wheelbase.control.dwa",
     "FIGURE8_GOALS": "wheelbase.control.goal",
     "DriveTrain": "wheelbase.control.goal",
     "GoToGoal": "wheelbase.control.goal",
@@ -100,6 +111,8 @@ __getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 __all__: list[str] = [
     "ANTI_WINDUP",
+    "DWA",
+    "DWA_BACKENDS",
     "FIGURE8_GOALS",
     "MPPI",
     "MPPI_BACKENDS",
@@ -107,9 +120,12 @@ __all__: list[str] = [
     "POSE_LAWS",
     "STEERING_COMMAND",
     "VELOCITY_COMMAND",
+    "AdaptiveComputedTorque",
     "Aicardi",
     "ComputedTorquePID",
     "Controller",
+    "DWACritics",
+    "DWAPlan",
     "DriveTrain",
     "GoToGoal",
     "GoToPoint",
@@ -120,6 +136,7 @@ __all__: list[str] = [
     "LinearTracker",
     "MPPICritics",
     "MPPIPlan",
+    "ModelSchedule",
     "PathFollower",
     "PolarPose",
     "PurePursuit",
@@ -128,6 +145,7 @@ __all__: list[str] = [
     "Stanley",
     "SteeringLimits",
     "TorqueGains",
+    "TractionControl",
     "TwistTorqueLoop",
     "VelocityLimits",
     "ViaDirection",

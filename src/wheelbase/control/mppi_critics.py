@@ -4,28 +4,35 @@ Every critic adds a non-negative cost to each sampled rollout; :class:`~wheelbas
 turns the costs into weights exp(−(S − S_min)/λ). With T the horizon steps, p_t the rollout pose
 after step t, u_t the sampled command and dt the step:
 
-==================  ==============================================================  ============
-critic (weight)     cost of one rollout                                              weight unit
-==================  ==============================================================  ============
-``path``            mean over checked steps of d, d = distance from p_t to the       1/m
-                    nearest point of the local path window (every ``path_stride``)
-``path_align``      mean over the same steps of wrap(θ_t − θ_path)², θ_path the      1/rad²
-                    travel heading of the robot at that nearest window point
-``follow``          path length left in the window past the window point nearest     1/m
-                    p_T (progress along the path, without cutting corners)
-``goal``            mean over t of |p_t − goal| once the section end is near         1/m
-``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
-``obstacle``        mean over t of (r_infl − c)² for 0 < c < r_infl, c the           1/m²
-                    footprint's clearance: the least over its disks of distance
-                    field − disk radius − √2·cell; off within ``near_goal_distance``
-                    of the goal
-(lethal)            ``collision_cost`` once if any c <= 0 or a disk leaves the map    —
-``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
-``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
-``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
-                    command sent
-``twirl``           mean over t of |ω_t|/ω̄ (velocity commands only)                  —
-==================  ==============================================================  ============
+====================  ==============================================================  ===========
+critic (weight)       cost of one rollout                                             weight unit
+====================  ==============================================================  ===========
+``path``              mean over checked steps of d, d = distance from p_t to the      1/m
+                      nearest point of the local path window (every ``path_stride``)
+``path_align``        mean over the same steps of wrap(θ_t − θ_path)², θ_path the     1/rad²
+                      travel heading of the robot at that nearest window point
+``follow``            path length left in the window past the window point nearest    1/m
+                      p_T (progress along the path, without cutting corners)
+``goal``              mean over t of |p_t − goal| once the section end is near        1/m
+``goal_heading``      |wrap(θ_T − θ_goal)| once the section end is near               1/rad
+``obstacle``          mean over t of (r_infl − c)² for 0 < c < r_infl, c the          1/m²
+                      footprint's clearance: the least over its disks of distance
+                      field − disk radius − √2·cell; off within
+                      ``near_goal_distance`` of the goal
+(lethal)              ``collision_cost`` once if any c <= 0 or a disk leaves the      —
+                      map, or the costmap or a track is hit (below)
+``costmap``           mean over t of c_t/252, c_t the costmap cost under the robot    —
+                      (Nav2's CostCritic; off within ``near_goal_distance``)
+``dynamic_obstacle``  Σ over t (and the held final pose) of Σ_tracks (r_dyn + κσ_t −  1/m²
+                      d)² / T, d the footprint's distance to the track predicted at
+                      step t
+``prefer_forward``    Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path         1/m
+                      section
+``effort``            mean over t of Σ_j (u_tj/ū_j)², ū the command limits            —
+``rate``              mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last   —
+                      command sent
+``twirl``             mean over t of |ω_t|/ω̄ (velocity commands only)                 —
+====================  ==============================================================  ===========
 
 While the end of the current path section (the goal, or a cusp) is closer than
 ``goal_distance``, ``follow`` is off and ``goal``/``goal_heading`` on, as Nav2's critics do
@@ -39,21 +46,26 @@ point ahead, which would pull the rollouts across the inside of bends. Also as i
 must not pull the robot onto them (``follow`` still asks for progress). A user critic
 (``extra``) is a vectorised function ``extra(poses (N, T + 1, 3), commands (N, T, 2)) -> (N,)``
 added to the costs.
+
+The ``costmap`` and ``dynamic_obstacle`` critics score what the robot perceives (a
+``perception=`` view: a costmap and tracks of moving obstacles); they are defined, with the
+collision rules and the tracks' prediction, in :mod:`wheelbase.control.obstacle_critics`, which
+DWA shares.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import finite, positive
+from wheelbase._validate import finite, nonnegative, positive
+from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME
 from wheelbase.errors import ConfigError
-from wheelbase.limits import MAX_PATH_POINTS
 
-__all__ = ["MPPICritics"]
+__all__ = ["MPPICritics", "critics_from_mapping", "split_critic_gains"]
 
 
 @dataclass(frozen=True)
@@ -64,8 +76,29 @@ class MPPICritics:
     ----------
     path, path_align, follow, goal, goal_heading, obstacle, prefer_forward, effort, rate, twirl
         Critic weights, >= 0 (0 switches a critic off).
+    costmap : float
+        Weight of the costmap critic, >= 0 (default 3.81: Nav2's ``CostCritic.cost_weight``,
+        whose cost is also the mean over the trajectory of the cell cost / 254).
+    dynamic_obstacle : float
+        Weight [1/m²] of the dynamic-obstacle critic, >= 0 (default 30: three times
+        ``obstacle``, since a walker's position is less certain than a wall's and it can
+        close in on the robot; a robot that keeps 0.5 m off the path for the whole horizon pays
+        the path critic 10, inside r_dyn of a track all along 7.5).
     inflation : float
         Clearance r_infl [m] below which the obstacle critic starts to cost, > 0.
+    dynamic_inflation : float
+        r_dyn [m], > 0: distance past a track's contact and its uncertainty κσ within which the
+        dynamic-obstacle critic costs (default 0.5 m: the social zone the crowd-navigation
+        literature scores as discomfort is 0.2 m; more leaves room for the prediction's error).
+    dynamic_sigma_scale : float
+        κ, >= 0: how many σ of the prediction the dynamic-obstacle critic keeps clear.
+    dynamic_acceleration_noise : float
+        q [m²/s³], >= 0: the tracks' white-acceleration prediction noise
+        (:data:`~wheelbase.control.obstacle_critics.ACCELERATION_NOISE`).
+    dynamic_hold_time : float
+        Time [s], >= 0, the rollout's final pose is held against the tracks, soft cost only
+        (:data:`~wheelbase.control.obstacle_critics.HOLD_TIME` = 5 s: a rollout should not end
+        in the way of a walker; 0 switches the check off).
     collision_cost : float
         Cost added to a rollout that collides or leaves the map, > 0 (finite: no NaN ever).
     near_goal_distance : float
@@ -95,8 +128,14 @@ class MPPICritics:
     effort: float = 0.1
     rate: float = 0.1
     twirl: float = 0.0
+    costmap: float = 3.81
+    dynamic_obstacle: float = 30.0
     inflation: float = 0.4
     collision_cost: float = 1.0e6
+    dynamic_inflation: float = 0.5
+    dynamic_sigma_scale: float = 1.0
+    dynamic_acceleration_noise: float = ACCELERATION_NOISE
+    dynamic_hold_time: float = HOLD_TIME
     goal_distance: float = 0.5
     near_goal_distance: float = 1.0
     path_stride: int = 4
@@ -113,7 +152,11 @@ class MPPICritics:
         "effort",
         "rate",
         "twirl",
+        "costmap",
+        "dynamic_obstacle",
     )
+    VECTOR = (*WEIGHTS[:10], "inflation", "collision_cost", "costmap", "dynamic_obstacle",
+              "dynamic_inflation")  # fmt: skip
 
     def __post_init__(self) -> None:
         for name in self.WEIGHTS:
@@ -123,6 +166,22 @@ class MPPICritics:
             object.__setattr__(self, name, value)
         object.__setattr__(self, "inflation", positive("inflation", self.inflation, "m"))
         object.__setattr__(self, "collision_cost", positive("collision_cost", self.collision_cost))
+        object.__setattr__(
+            self, "dynamic_inflation", positive("dynamic_inflation", self.dynamic_inflation, "m")
+        )
+        object.__setattr__(
+            self,
+            "dynamic_sigma_scale",
+            nonnegative("dynamic_sigma_scale", self.dynamic_sigma_scale),
+        )
+        object.__setattr__(
+            self,
+            "dynamic_acceleration_noise",
+            nonnegative("dynamic_acceleration_noise", self.dynamic_acceleration_noise, "m²/s³"),
+        )
+        object.__setattr__(
+            self, "dynamic_hold_time", nonnegative("dynamic_hold_time", self.dynamic_hold_time, "s")
+        )
         object.__setattr__(
             self, "goal_distance", positive("goal_distance", self.goal_distance, "m")
         )
@@ -149,78 +208,66 @@ class MPPICritics:
         -------
         MPPICritics
         """
-        if values is None:
-            return cls()
-        if isinstance(values, cls):
-            return values
-        if not isinstance(values, dict):
-            raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ConfigError(f"unknown critic {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
-        return cls(**values)
+        return critics_from_mapping(cls, values, "critic")
 
     def vector(self) -> np.ndarray:
-        """The weights in the order of :attr:`WEIGHTS` plus (inflation, collision_cost), float64."""
-        values = [getattr(self, name) for name in self.WEIGHTS]
-        return np.array([*values, self.inflation, self.collision_cost], dtype=np.float64)
+        """The weights and shape parameters the kernels read, in the order of :attr:`VECTOR`,
+        float64."""
+        return np.array([getattr(self, name) for name in self.VECTOR], dtype=np.float64)
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(angle), np.cos(angle))
+def critics_from_mapping(cls: type, values: Any, label: str) -> Any:
+    """Critics of dataclass ``cls`` from a mapping of plain keyword values (a scenario file), as
+    given when already one, the defaults for ``None``.
 
+    Parameters
+    ----------
+    cls : type
+        The critics' dataclass (:class:`MPPICritics`, :class:`~wheelbase.control.DWACritics`).
+    values : dict, cls or None
+        Values by name.
+    label : str
+        What an unknown name is called in the error (``"critic"``, ``"DWA critic"``).
 
-class PathTables:
-    """A reference path densified every ``spacing`` metres, with its sections (private helper).
-
-    Attributes: ``xy`` (P, 2), ``heading`` (P,) robot heading when travelling the path there
-    (the chord's, or ``end_heading`` at the last point),
-    ``direction`` (P,), ``arc`` (P,), ``section`` (P,) index of the direction run of each point.
+    Returns
+    -------
+    cls
     """
+    if values is None:
+        return cls()
+    if isinstance(values, cls):
+        return values
+    if not isinstance(values, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {type(values).__name__})")
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(f"unknown {label} {unknown[0]!r}; allowed: {', '.join(sorted(known))}")
+    return cls(**values)
 
-    def __init__(
-        self,
-        points: np.ndarray,
-        directions: np.ndarray,
-        spacing: float,
-        end_heading: float | None = None,
-    ) -> None:
-        xy, heading, direction, arc, section = [points[:1]], [], [], [0.0], []
-        seg = np.diff(points, axis=0)
-        length = np.hypot(seg[:, 0], seg[:, 1])
-        needed = float(np.sum(np.maximum(1.0, np.ceil(length / spacing - 1e-9))))
-        if not needed <= MAX_PATH_POINTS:
-            raise ConfigError(
-                f"the reference path ({length.sum():.3g} m) at path_spacing = {spacing:g} m "
-                f"needs {needed:.3g} points: more than {MAX_PATH_POINTS:.0e} "
-                "(wheelbase.limits.MAX_PATH_POINTS); use a larger path_spacing"
-            )
-        seg_heading = np.arctan2(seg[:, 1], seg[:, 0])
-        run = 0
-        for i in range(seg.shape[0]):
-            if i > 0 and directions[i] != directions[i - 1]:
-                run += 1
-            count = max(1, math.ceil(length[i] / spacing - 1e-9))
-            frac = np.arange(1, count + 1) / count
-            xy.append(points[i] + frac[:, None] * seg[i])
-            robot_heading = seg_heading[i] if directions[i] > 0 else seg_heading[i] + math.pi
-            heading.extend([robot_heading] * count)
-            direction.extend([directions[i]] * count)
-            arc.extend(list(arc[-1] + frac * length[i]))
-            section.extend([run] * count)
-        # The first point takes the values of the first segment.
-        self.xy = np.concatenate(xy)
-        self.heading = _wrap(np.array([heading[0], *heading]))
-        self.direction = np.array([direction[0], *direction], dtype=np.float64)
-        self.arc = np.array(arc)
-        self.section = np.array([section[0], *section], dtype=np.int64)
-        if end_heading is not None:
-            # The goal's heading (a planned path knows it): the last chord's direction differs
-            # from it by half the turn of the last segment.
-            self.heading[-1] = _wrap(np.array([end_heading]))[0]
-        # A cusp point belongs to the section that ends there.
-        self.n_sections = run + 1
-        self.section_end = np.array(
-            [np.flatnonzero(self.section == k)[-1] for k in range(self.n_sections)]
-        )
+
+def split_critic_gains(gains: dict, cls: type) -> tuple[dict, dict]:
+    """Split a scenario's flat gains into the critics' (by field name of ``cls``, merged over a
+    ``critics={...}`` entry) and the others.
+
+    Parameters
+    ----------
+    gains : dict
+        The gains as given.
+    cls : type
+        The critics' dataclass.
+
+    Returns
+    -------
+    critics, options : dict
+    """
+    options = dict(gains)
+    names = {f.name for f in fields(cls)}
+    critics = options.pop("critics", None) or {}
+    if not isinstance(critics, dict):
+        raise ConfigError(f"critics must be a mapping of weights (got {critics!r})")
+    critics = dict(critics)
+    for name in list(options):
+        if name in names:
+            critics[name] = options.pop(name)
+    return critics, options

@@ -1,22 +1,153 @@
-"""The JAX backend of :class:`wheelbase.control.MPPI` (private; extra ``wheelbase[jax]``)."""
+"""The JAX backend of :class:`wheelbase.control.MPPI` (private; extra ``wheelbase[jax]``).
+
+``jax.jit`` + ``lax.scan`` over the horizon; float32 by default, float64 with
+``jax_float64=True``. On a GPU the sampled commands stay on the device and the weighted mean is
+taken there (:func:`weighted_mean`). It does not score perception (costmap, tracks): the
+controller refuses a view on this backend.
+"""
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
-from wheelbase._jax import import_jax
-from wheelbase.control.mppi_numba import KIND_FRONT, KIND_HOLONOMIC, KIND_REAR, KIND_VELOCITY
+from wheelbase._jax import X64, import_jax
+from wheelbase.control.mppi_bounds import KIND_FRONT, KIND_HOLONOMIC, KIND_REAR, KIND_VELOCITY
+
+__all__ = ["KEPT_DEVICE_SAMPLES", "host_samples", "jax_costs", "jax_function", "weighted_mean"]
 
 _JAX_CACHE: dict = {}
+
+KEPT_DEVICE_SAMPLES = 256
+"""With the jax backend, :attr:`MPPIPlan.samples` holds the first this many samples (enough for a
+fan of rollouts); the others never leave the device."""
+
+
+def jax_costs(mppi: Any, pose, mean, lo, hi, scale, window, info, last, w, noise, mp):
+    """Costs and sampled commands from the JAX backend; with ``noise=None`` the noise is drawn
+    on the device from a key folded from (seed, call).
+
+    Parameters
+    ----------
+    mppi : MPPI
+        The controller (its map on the device is cached on it).
+    pose, mean, lo, hi, scale, window, info, last, w, noise, mp : numpy.ndarray
+        As for :func:`wheelbase.control.mppi_numpy.numpy_costs` (no perception here).
+
+    Returns
+    -------
+    costs : numpy.ndarray, shape (K,)
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        On the device where that is a GPU.
+    """
+    jax, jnp = import_jax()
+    if noise is None and jax.default_backend() == "cpu":
+        # NumPy draws normals about twice as fast as XLA's threefry on a CPU; on a GPU the
+        # draw stays on the device (no (K, T, m) transfer at every call).
+        noise = mppi._rng.standard_normal((mppi.samples, mppi.horizon_steps, mppi.nu))
+        noise *= mppi.noise_std
+    draw = noise is None
+    function = jax_function(
+        mppi.horizon_steps, int(mppi.critics.path_stride), mppi._kind, mppi.jax_float64,
+        mppi.samples if draw else None,
+    )  # fmt: skip
+    dtype = np.float64 if mppi.jax_float64 else np.float32
+    with X64(jax, mppi.jax_float64):
+        if mppi._jax_map is None or mppi._jax_map[0] != dtype:
+            # The map goes to the device once, not at every call (its origin relative to
+            # the robot, four numbers, at every call).
+            arrays = (mppi._field.distance_field, mppi._field.circles)
+            mppi._jax_map = (dtype, *(jnp.asarray(a, dtype=dtype) for a in arrays))
+        _, df, circles = mppi._jax_map
+        if draw:
+            noise = jax.random.fold_in(jax.random.PRNGKey(mppi.seed), mppi._calls)
+        else:
+            noise = np.asarray(noise, dtype)
+        extra = np.array([0.0, mppi.dt, mppi._wheel_base, *mppi.noise_std])
+        small = (np.asarray(v, dtype) for v in (pose, mean, lo, hi, scale, window, info, last))
+        costs, controls = function(*small, noise, np.asarray(w, dtype), df,
+                                   np.asarray(mp, dtype), circles,
+                                   np.asarray(extra, dtype))  # fmt: skip
+        if jax.default_backend() == "cpu":  # host and device are one: NumPy is quicker
+            return np.asarray(costs, np.float64), np.asarray(controls, np.float64)
+        # On a GPU the sampled commands stay there: (K, T, m) is 0.9 GB at a million
+        # samples in float64; the weighted mean is taken there (see weighted_mean).
+        return np.asarray(costs, np.float64), controls
+
+
+def weighted_mean(weights: np.ndarray, controls: Any, float64: bool) -> np.ndarray:
+    """Σ_i w_i V_i, shape (T, m): on the host for NumPy arrays, on the device for JAX arrays
+    (only K weights go there and T·m numbers come back).
+
+    Parameters
+    ----------
+    weights : numpy.ndarray, shape (K,)
+        Softmin weights.
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        Sampled sequences.
+    float64 : bool
+        Reduce in float64 on the device.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    if isinstance(controls, np.ndarray):
+        return np.tensordot(weights, controls, axes=1)
+    jax, jnp = import_jax()
+    with X64(jax, float64):
+        device_weights = jnp.asarray(weights, dtype=controls.dtype)
+        return np.asarray(jnp.tensordot(device_weights, controls, axes=1), np.float64)
+
+
+def host_samples(controls: Any, float64: bool) -> np.ndarray:
+    """The first :data:`KEPT_DEVICE_SAMPLES` sampled sequences on the host (all of a NumPy
+    array).
+
+    Parameters
+    ----------
+    controls : numpy.ndarray or jax.Array, shape (K, T, m)
+        Sampled sequences.
+    float64 : bool
+        Copy them in float64.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    if isinstance(controls, np.ndarray):
+        return controls
+    jax, _jnp = import_jax()
+    with X64(jax, float64):
+        return np.asarray(controls[:KEPT_DEVICE_SAMPLES], np.float64)
 
 
 def jax_function(steps: int, stride: int, kind: int, float64: bool, samples: int | None):
     """The jit-compiled JAX iteration: a ``lax.scan`` rolls the samples out, then the critics
     score all steps at once (on a CPU this beat a per-step fusion of rollout and critics:
-    5.8 against 7.5 ms at 2,000 × 56). ``samples``: draw that many noise sequences inside from a
-    PRNG key; ``None``: take the noise as an argument."""
+    5.8 against 7.5 ms at 2,000 × 56).
+
+    Parameters
+    ----------
+    steps : int
+        Horizon steps T.
+    stride : int
+        The path critics' stride.
+    kind : int
+        The command kind (:mod:`wheelbase.control.mppi_bounds`).
+    float64 : bool
+        Compute in float64.
+    samples : int or None
+        Draw that many noise sequences inside from a PRNG key; ``None``: take the noise as an
+        argument.
+
+    Returns
+    -------
+    callable
+        The jitted function (cached per arguments).
+    """
     key = (steps, stride, kind, float64, samples)
     if key in _JAX_CACHE:
         return _JAX_CACHE[key]

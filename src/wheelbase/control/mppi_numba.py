@@ -13,9 +13,46 @@ import numba
 import numpy as np
 from scipy.special import ndtri
 
-# twist kinds of the compiled backends: (v, ω); rear-driven (v, δ); front-driven (v, α);
-# holonomic (v_x, v_y, ω)
-KIND_VELOCITY, KIND_REAR, KIND_FRONT, KIND_HOLONOMIC = 0, 1, 2, 3
+from wheelbase.control.footprint_field import clearance_at
+from wheelbase.control.obstacle_critics import (
+    HOLD_STEP,
+    costmap_cost_at,
+    disk_reach,
+    track_cost_at,
+)
+
+__all__ = ["NORMAL_TABLE", "SERIAL_SAMPLE_STEPS", "mppi_kernel", "run_kernel"]
+
+SERIAL_SAMPLE_STEPS = 65536
+"""Below this many samples × steps a parallel kernel runs on the calling thread: waking Numba's
+thread pool costs about 15 ms on a busy machine (as for the lidar's rays,
+:mod:`wheelbase.sensors.raycast`; measured here at a load of 10 on 2 cores: DWA's 400 × 34
+scored at 31 calls/s on two threads, 402 on one)."""
+
+
+def run_kernel(kernel, work: int, *args) -> None:
+    """Call a parallel kernel, on the calling thread alone when ``work`` (samples × steps) is
+    below :data:`SERIAL_SAMPLE_STEPS`.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        The kernel.
+    work : int
+        Samples × steps of this call.
+    *args
+        The kernel's arguments.
+    """
+    threads = numba.get_num_threads()
+    serial = work < SERIAL_SAMPLE_STEPS and threads > 1
+    if serial:
+        numba.set_num_threads(1)
+    try:
+        kernel(*args)
+    finally:
+        if serial:
+            numba.set_num_threads(threads)
+
 
 # Inverse normal CDF at the midpoints of 2,048 equal-probability bins: the numba backend draws
 # a normal as Φ⁻¹(u), linearly interpolated in this table (tails truncated at ±3.5σ, where the
@@ -58,11 +95,6 @@ def _wrap_scalar(a):
     return math.pi if w <= -math.pi else w
 
 
-FAR = 1.0e300
-"""A finite 'nothing yet' for the kernel's running minima: with ``fastmath`` the compiler may
-assume no value is ever inf, so a comparison with an inf sentinel would be undefined."""
-
-
 @numba.njit(cache=True, inline="always", fastmath=True)
 def _nearest(x, y, window):
     """Squared distance [m²] from (x, y) to the nearest window point and its index."""
@@ -78,17 +110,21 @@ def _nearest(x, y, window):
 
 @numba.njit(cache=True, parallel=True, fastmath=True)
 def mppi_kernel(
-    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, sigma, seed, call, kind,
-    wheel_base, dt, w, df, mp, circles, stride, table, costs, controls,
+    pose, mean, lo, hi, scale, window, info, last, noise, has_noise, held_from, sigma, seed, call,
+    kind,
+    wheel_base, dt, w, df, mp, circles, stride, table, cost_map, near, cgeo, polygon, tracks,
+    relief, disks, costs, controls,
 ):  # fmt: skip
     """Draw, roll out and score every sample in one pass (the numba backend).
 
-    The same costs as ``MPPI._costs_numpy`` (to rounding: ``fastmath`` lets the compiler
-    reorder the sums), one sample per iteration of the parallel loop."""
+    Samples ``held_from`` and after hold their first perturbation over the whole horizon.
+    The same costs as :func:`wheelbase.control.mppi_numpy.numpy_costs` (to rounding:
+    ``fastmath`` lets the compiler reorder the sums), one sample per iteration of the parallel
+    loop. ``cost_map`` … ``disks`` are the fields of
+    :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`."""
     n, steps = controls.shape[0], controls.shape[1]
     m = window.shape[0]
     goal_mode = info[0] > 0.5
-    rows, cols = df.shape[0], df.shape[1]
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     inv_res = 1.0 / res
     n_checked = max((steps - stride) // stride + 1, 1) if steps >= stride else 1
@@ -102,7 +138,10 @@ def mppi_kernel(
     w_effort, w_rate = w[7] / steps, w[8] / steps
     w_twirl = w[9] / steps * (a2 if holonomic else a1)
     inflation, direction = w[10], info[4]
-    n_circles = circles.shape[0]
+    has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
+    w_costmap, w_dynamic, dynamic_inflation = w[12] / steps, w[13] / steps, w[14]
+    reach = disk_reach(disks)
+    hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
         c, s = math.cos(th), math.sin(th)
@@ -111,19 +150,21 @@ def mppi_kernel(
         cost = 0.0
         collided = False
         next_check = stride - 1
+        held = i >= held_from  # this sample holds its first perturbation all along
         for t in range(steps):
             e2 = 0.0
+            draw = 0 if held else t
             if has_noise:
-                e0, e1 = noise[i, t, 0], noise[i, t, 1]
+                e0, e1 = noise[i, draw, 0], noise[i, draw, 1]
                 if holonomic:
-                    e2 = noise[i, t, 2]
+                    e2 = noise[i, draw, 2]
             else:
-                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(t), table)
+                e0, e1 = _normal_pair(seed, call, np.uint64(i), np.uint64(draw), table)
                 e0 *= sigma[0]
                 e1 *= sigma[1]
                 if holonomic:  # a third draw from the counters of a step past the horizon
                     e2, _unused = _normal_pair(
-                        seed, call, np.uint64(i), np.uint64(t + steps), table
+                        seed, call, np.uint64(i), np.uint64(draw + steps), table
                     )
                     e2 *= sigma[2]
             u0 = min(max(mean[t, 0] + e0, lo[0]), hi[0])
@@ -164,24 +205,22 @@ def mppi_kernel(
                 cost += w_path * math.sqrt(best) + w_align * err * err
             if goal_mode:
                 cost += w_goal * math.hypot(x - info[1], y - info[2])
-            if has_map:
-                clearance = FAR  # the footprint's: the least over its disks
-                for k in range(n_circles):
-                    px = x + c * circles[k, 0] - s * circles[k, 1]
-                    py = y + s * circles[k, 0] + c * circles[k, 1]
-                    col = math.floor((px - x0) * inv_res)
-                    row = math.floor((py - y0) * inv_res)
-                    if row < 0 or row >= rows or col < 0 or col >= cols:
-                        collided = True
-                        clearance = 0.0
-                        continue
-                    clear = df[row, col] - circles[k, 2] - margin
-                    if clear <= 0.0:
-                        collided = True
-                    clearance = min(clearance, clear)
+            if has_map:  # the footprint's clearance: the least over its disks
+                clearance, hit = clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin)
+                collided = collided or hit
                 if 0.0 < clearance < inflation:
                     gap = inflation - clearance
                     cost += w_obstacle * gap * gap
+            if has_costmap:
+                soft, hit = costmap_cost_at(x, y, c, s, cost_map, near, cgeo, polygon)
+                cost += w_costmap * soft
+                collided = collided or hit
+            if has_tracks:
+                soft, hit = track_cost_at(
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
+                )
+                cost += w_dynamic * soft
+                collided = collided or hit
             cost += w_forward * max(-direction * u0, 0.0)
             q0, q1, q2 = u0 * a0, u1 * a1, u2 * a2
             r0, r1, r2 = (u0 - p0) * a0, (u1 - p1) * a1, (u2 - p2) * a2
@@ -192,6 +231,13 @@ def mppi_kernel(
             elif kind == 3:
                 cost += w_twirl * abs(u2)
             p0, p1, p2 = u0, u1, u2
+        if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
+            for t in range(steps, tracks.shape[0]):
+                soft, hit = track_cost_at(
+                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
+                )
+                cost += w_dynamic * hold_weight * soft
+                collided = collided or hit
         if goal_mode:
             cost += w[4] * abs(_wrap_scalar(th - info[3]))
         else:

@@ -524,7 +524,19 @@ class TwistTorqueLoop:
         """Whether the law needs one copy per robot (MPPI), as the engine asks."""
         return bool(getattr(self.law, "per_robot", False))
 
-    def __call__(self, t: float, state: ArrayLike, reference: object) -> np.ndarray:
+    def summary(self) -> dict:
+        """The law's account of its run (a navigator's replans and recoveries), if any."""
+        summary = getattr(self.law, "summary", None)
+        return summary() if callable(summary) else {}
+
+    @property
+    def uses_perception(self) -> bool:
+        """Whether the law reads the robot's perception (a navigator, MPPI among obstacles)."""
+        return bool(getattr(self.law, "uses_perception", False))
+
+    def __call__(
+        self, t: float, state: ArrayLike, reference: object, perception: object = None
+    ) -> np.ndarray:
         """Wheel torques (left, right) [N·m] for one robot or a batch.
 
         Parameters
@@ -535,13 +547,18 @@ class TwistTorqueLoop:
             Estimated (x [m], y [m], θ [rad], u [m/s], v [m/s], r [rad/s]).
         reference : object
             Passed to the law unchanged.
+        perception : LocalView, optional
+            Passed to a law that reads it (``uses_perception``).
 
         Returns
         -------
         numpy.ndarray, shape (..., 2)
         """
         state = as_float_array("state", state, 6)
-        command = np.asarray(self.law(t, state[..., :3].copy(), reference), dtype=np.float64)
+        extra = {"perception": perception} if self.uses_perception else {}
+        command = np.asarray(
+            self.law(t, state[..., :3].copy(), reference, **extra), dtype=np.float64
+        )
         command = command.reshape((*state.shape[:-1], 2))
         gains = (self.bandwidth, self.bandwidth)
         return velocity_torques(self.model, state, command, gains, self.max_torque)

@@ -11,7 +11,9 @@ Importing this package registers ``wheelbase/Navigate-v0`` (entry point
     envs = gymnasium.make_vec("wheelbase/Navigate-v0", num_envs=256,
                               vectorization_mode="vector_entry_point")
 
-The task (observation, action, reward, termination) is documented in
+Episodes end after ``max_episode_steps`` (300 unless ``gymnasium.make(...,
+max_episode_steps=N)`` or ``make_vec(..., max_episode_steps=N)`` says otherwise). The task
+(observation, action, reward, termination) is documented in
 :mod:`wheelbase.gym.task`. Needs the optional extra ``wheelbase[gym]`` (Gymnasium).
 """
 
@@ -25,7 +27,7 @@ except ImportError as _error:
     ) from None
 
 from wheelbase.gym.env import NavigateEnv
-from wheelbase.gym.task import NavigateTask, RewardWeights
+from wheelbase.gym.task import EPISODE_STEPS, NavigateTask, RewardWeights
 from wheelbase.gym.vector import NavigateVectorEnv
 
 __all__ = ["ENV_ID", "NavigateEnv", "NavigateTask", "NavigateVectorEnv", "RewardWeights"]
@@ -38,4 +40,5 @@ if ENV_ID not in gymnasium.registry:
         id=ENV_ID,
         entry_point="wheelbase.gym.env:NavigateEnv",
         vector_entry_point="wheelbase.gym.vector:NavigateVectorEnv",
+        max_episode_steps=EPISODE_STEPS,  # make's TimeLimit; make(..., max_episode_steps=N)
     )

@@ -48,9 +48,14 @@ class NavigateEnv(gymnasium.Env):
     ----------
     render_mode : {None, "rgb_array", "human"}
         ``rgb_array``: :meth:`render` returns an image; ``human``: a matplotlib window.
+    max_episode_steps : int or None
+        Steps after which the environment itself truncates an episode; None (the default):
+        never, as Gymnasium's environments do: ``gymnasium.make`` wraps it in a ``TimeLimit``
+        of ``make(..., max_episode_steps=N)``, or of the registered
+        :data:`~wheelbase.gym.task.EPISODE_STEPS` (300).
     **task : dict
         Keyword arguments of :class:`~wheelbase.gym.task.NavigateTask` (``map``, ``robot``,
-        ``lidar``, ``dt``, ``max_episode_steps``, ``max_speed``, ``max_yaw_rate``,
+        ``lidar``, ``dt``, ``max_speed``, ``max_yaw_rate``,
         ``goal_tolerance``, ``stop_at_goal``, ``min_goal_distance``, ``clearance``,
         ``rewards``).
 
@@ -65,7 +70,9 @@ class NavigateEnv(gymnasium.Env):
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array", "human"], "render_fps": 10}  # noqa: RUF012
 
-    def __init__(self, render_mode: str | None = None, **task: Any) -> None:
+    def __init__(
+        self, render_mode: str | None = None, max_episode_steps: int | None = None, **task: Any
+    ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             from wheelbase.errors import ConfigError
 
@@ -73,7 +80,7 @@ class NavigateEnv(gymnasium.Env):
                 f"render_mode must be None, 'rgb_array' or 'human' (got {render_mode!r})"
             )
         self.render_mode = render_mode
-        self.task = NavigateTask(1, **task)
+        self.task = NavigateTask(1, max_episode_steps=max_episode_steps, **task)
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
         self.observation_space = spaces.Box(*self.task.observation_bounds(), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)

@@ -8,6 +8,12 @@ moves the robots (its command hook), and the new poses are judged by the engine'
 objects: :class:`~wheelbase.sim.Arrival` (the one arrival rule) and the footprint collision
 check; then the lidar (:class:`~wheelbase.sensors.Lidar`) scans all N new poses in one call.
 
+With ``world=`` (a scenario's ``world`` section, :func:`wheelbase.world.world_from_spec`) every
+robot has a world of its own, seeded by its episode: obstacles off the map and agents that
+move as the robot does, that the lidar sees (:meth:`wheelbase.world.World.cast`) and that the
+robot collides with. The policy sees them through the lidar only; agents never spawn on the
+episode's start or goal.
+
 Observation (float32, flat, length ``beams + 5``)
     ``ranges / max_range`` (``beams`` values in [0, 1]; NaN readings below ``min_range`` read
     0), ``distance to goal / goal_scale`` (in [0, 1]; ``goal_scale`` is the map's diagonal),
@@ -23,7 +29,8 @@ Reward (:class:`RewardWeights`)
 Termination
     ``terminated`` on arrival (within ``goal_tolerance`` of the goal by the arrival rule;
     with ``stop_at_goal`` also at rest) or on a collision of the footprint; ``truncated`` after
-    ``max_episode_steps``.
+    ``max_episode_steps`` (``gymnasium.make`` and ``make_vec`` take it: :data:`EPISODE_STEPS`
+    unless ``max_episode_steps=`` says otherwise).
 """
 
 from __future__ import annotations
@@ -42,7 +49,11 @@ from wheelbase.planning import Footprint, OccupancyGrid
 from wheelbase.sensors import Lidar
 from wheelbase.sim import Arrival, Engine, EngineState, KinematicPlant
 
-__all__ = ["ROOM_SIZE", "NavigateTask", "RewardWeights"]
+__all__ = ["EPISODE_STEPS", "ROOM_SIZE", "NavigateTask", "RewardWeights"]
+
+EPISODE_STEPS = 300
+"""Steps of an episode of ``wheelbase/Navigate-v0`` unless ``max_episode_steps`` says otherwise
+(the registered spec's limit; 30 s at the default 0.1 s step)."""
 
 ROOM_SIZE = 10.0
 """Side [m] of the walled empty room of ``map="empty"``."""
@@ -140,8 +151,9 @@ class NavigateTask:
         The sensor (default: 60 beams over 360°, 5 m range, no noise).
     dt : float
         Control step [s].
-    max_episode_steps : int
-        Steps before an episode is truncated.
+    max_episode_steps : int or None
+        Steps before an episode is truncated; None: never (a wrapper such as Gymnasium's
+        ``TimeLimit`` cuts it).
     max_speed : float
         Speed at action a₀ = ±1 [m/s].
     max_yaw_rate : float
@@ -157,6 +169,9 @@ class NavigateTask:
         Extra distance [m] between a sampled pose's footprint circle and obstacles.
     rewards : RewardWeights, optional
         Weights of the reward terms.
+    world : dict, optional
+        A scenario's ``world`` section: obstacles off the map and agents, one world per
+        robot (module docstring).
     """
 
     def __init__(
@@ -166,7 +181,7 @@ class NavigateTask:
         robot: Any = None,
         lidar: Lidar | None = None,
         dt: float = 0.1,
-        max_episode_steps: int = 300,
+        max_episode_steps: int | None = EPISODE_STEPS,
         max_speed: float = 1.0,
         max_yaw_rate: float = 2.0,
         goal_tolerance: float = 0.3,
@@ -174,6 +189,7 @@ class NavigateTask:
         min_goal_distance: float = 1.0,
         clearance: float = 0.1,
         rewards: RewardWeights | None = None,
+        world: Any = None,
     ) -> None:
         self.n = integer("num_envs", n, minimum=1)
         self.grid = _grid(map)
@@ -182,7 +198,11 @@ class NavigateTask:
         if not isinstance(self.lidar, Lidar):
             raise ConfigError(f"lidar must be a wheelbase.sensors.Lidar (got {self.lidar!r})")
         self.dt = positive("dt", dt, "s")
-        self.max_episode_steps = integer("max_episode_steps", max_episode_steps, minimum=1)
+        self.max_episode_steps = (
+            None
+            if max_episode_steps is None
+            else integer("max_episode_steps", max_episode_steps, minimum=1)
+        )
         self.max_speed = positive("max_speed", max_speed, "m/s")
         self.goal_tolerance = positive("goal_tolerance", goal_tolerance, "m")
         self.min_goal_distance = nonnegative("min_goal_distance", min_goal_distance, "m")
@@ -228,6 +248,12 @@ class NavigateTask:
         rows, cols = self.grid.shape
         self.goal_scale = float(math.hypot(rows, cols) * self.grid.resolution)
         self.observation_size = self.lidar.beams + 5
+        self.world = None
+        if world is not None:
+            from wheelbase.world import world_from_spec
+
+            self.world = world_from_spec(world, self.grid)
+        self.world_state: Any = None
         self.state: EngineState | None = None
         self.goal = np.zeros((self.n, 3))
         self.elapsed = np.zeros(self.n, dtype=np.int64)
@@ -282,6 +308,8 @@ class NavigateTask:
         hit = self.grid.in_collision(self.footprint, start) | ~self.grid.contains(start[:, :2])
         if hit.any():
             raise InputError(f"start pose {start[np.argmax(hit)].tolist()} is in collision")
+        if self.world is not None:
+            self._restart_worlds(index, start, goal)
         fresh = self.engine.reset(start)
         if self.state is None:
             if index.size != self.n:
@@ -300,8 +328,45 @@ class NavigateTask:
         self.distance[index] = np.hypot(*(goal[:, :2] - start[:, :2]).T)
         self.ranges[index] = self._scan(start)
 
+    def _restart_worlds(self, index: np.ndarray, start, goal) -> None:
+        """New worlds for robots ``index``: agents placed clear of their start and goal, the
+        world's seed drawn from where the episode starts (reproducible with the episode)."""
+        from dataclasses import replace
+
+        keep = np.stack(
+            [np.column_stack([start[:, :2], np.full(len(start), self.footprint.max_radius + 0.1)]),
+             np.column_stack([goal[:, :2], np.full(len(goal), self.footprint.max_radius + 0.1)])],
+            axis=1,
+        )  # fmt: skip
+        seeds = np.abs(np.round(start[:, :2] * 1e6).astype(np.int64)).sum(axis=1) % (2**62)
+        fresh = self.world.start(seeds, keep, ("the start", "the goal"))
+        touching = self.world.collisions(
+            start, self.footprint, np.arange(len(start)), fresh, None, None
+        )
+        if touching.any():
+            raise InputError(
+                f"start pose {start[np.argmax(touching)].tolist()} touches an obstacle of the world"
+            )
+        if self.world_state is None:
+            if index.size != self.n:
+                raise InputError("the first reset starts every robot")
+            self.world_state = fresh
+            return
+        arrays = {}
+        for item in fields(fresh):
+            value = np.array(getattr(self.world_state, item.name))
+            value[index] = getattr(fresh, item.name)
+            arrays[item.name] = value
+        self.world_state = replace(self.world_state, **arrays)
+
     def _scan(self, poses: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
-        ranges = self.lidar.scan(self.grid, poses, rng, noise=rng is not None)
+        if self.world is not None and self.world_state is not None and len(poses) == self.n:
+            sensor = self.lidar.sensor_poses(poses)
+            true = self.world.cast(sensor, self.lidar.beam_angles, self.lidar.max_range,
+                                   np.arange(self.n), self.world_state)  # fmt: skip
+            ranges = self.lidar.readings(true, rng, noise=rng is not None)
+        else:
+            ranges = self.lidar.scan(self.grid, poses, rng, noise=rng is not None)
         return np.nan_to_num(ranges, nan=0.0).reshape(-1, self.lidar.beams)
 
     def step(
@@ -312,7 +377,7 @@ class NavigateTask:
         Parameters
         ----------
         action : numpy.ndarray, shape (N, 2)
-            Actions in [−1, 1] (checked by :func:`check_actions`).
+            Actions in [−1, 1] (checked by ``check_actions``).
         rng : numpy.random.Generator
             Randomness of the lidar noise.
 
@@ -326,6 +391,16 @@ class NavigateTask:
         state, _ = self.engine.step(self.state, action * self.action_scale)
         pose = state.pose
         collided = self.grid.in_collision(self.footprint, pose)
+        if self.world is not None:
+            from wheelbase.world import RobotBodies
+
+            c, s = np.cos(self.state.pose[:, 2]), np.sin(self.state.pose[:, 2])
+            velocity = np.column_stack([c * self.state.twist[:, 0], s * self.state.twist[:, 0]])
+            bodies = RobotBodies(self.state.pose[:, None], velocity[:, None], self.footprint)
+            self.world_state = self.world.step(self.world_state, self.dt, bodies)
+            collided |= self.world.collisions(
+                pose, self.footprint, np.arange(self.n), self.world_state, None, None
+            )
         arrived = self.arrival.within(pose, self.goal) & self.arrival.at_rest(state.twist)
         arrived &= ~collided
         distance = np.hypot(pose[:, 0] - self.goal[:, 0], pose[:, 1] - self.goal[:, 1])
@@ -334,7 +409,12 @@ class NavigateTask:
         reward += w.arrival * arrived - w.collision * collided
         self.state, self.distance = state, distance
         self.elapsed += 1
-        truncated = (self.elapsed >= self.max_episode_steps) & ~(arrived | collided)
+        limit = self.max_episode_steps
+        truncated = (
+            np.zeros(self.n, dtype=bool)
+            if limit is None
+            else (self.elapsed >= limit) & ~(arrived | collided)
+        )
         noisy = self.lidar.range_std > 0.0 or self.lidar.beam_model.z_hit < 1.0
         self.ranges = self._scan(pose, rng if noisy else None)
         return reward, arrived, collided, truncated

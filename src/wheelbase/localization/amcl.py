@@ -117,7 +117,7 @@ GLOBAL_LOCALIZATION: dict[str, object] = {
 docstring): ``AMCL(grid=..., lidar=..., **GLOBAL_LOCALIZATION)``. On the maze with a 30 m,
 360-beam lidar, 20 of 20 wandering robots were within 0.2 m for good within 10 m of travel
 (``benchmarks/sensors.py``), and 80 of 80 on other seeds (100–139, 200–239); kidnapped robots
-(:func:`~wheelbase.localization.kidnapped_run`) recovered within 30 s in 10 of 10 runs
+(``kidnapped_run`` of ``benchmarks/amcl_trials.py``) recovered within 30 s in 10 of 10 runs
 (2.8–11.1 s), and 20 of 20 on seeds 10–29.
 
 What makes the maze hard are its near twins: a corridor 8 m away that differs by 0.3 m of
@@ -172,8 +172,9 @@ class AMCLInfo:
     beams_used : int
         Lidar readings that weighted the particles.
     beams_skipped : int
-        NaN or negative readings skipped (max-range readings are not counted: they carry no
-        return).
+        Beams of the ``max_beams`` chosen that were not used: NaN or negative readings, and
+        for the likelihood field max-range readings (no return); used + skipped = the beams
+        chosen.
     landmarks_used : int
         Landmark measurements that weighted the particles.
     landmarks_skipped : int
@@ -206,7 +207,8 @@ class PoseEstimate:
     clusters : list of Cluster
         Every cluster, heaviest first, weights summing to 1.
     ambiguous : bool
-        True when a second cluster holds at least ``ambiguity_weight`` of the weight.
+        True when the clusters other than the heaviest hold at least ``ambiguity_weight`` of
+        the weight together (one rival, or the weight spread over many small ones).
     """
 
     pose: np.ndarray
@@ -256,6 +258,10 @@ class AMCL:
         How the likelihood field combines beams: the book's product or Nav2's 1 + Σ p³.
     z_short : float
         Weight of short readings in the beam model (Nav2 0.05).
+    z_max : float
+        Weight of missed returns in the beam model (Nav2 0.05): a reading at ``max_range``
+        scores z_max, plus z_hit where the particle expects nothing within range (Nav2's
+        ``z_max`` term; the likelihood field skips such readings, as Nav2's does).
     lambda_short : float
         Rate of short readings in the beam model [1/m] (Nav2 0.1).
     min_ess : float
@@ -296,6 +302,7 @@ class AMCL:
     sensor_model: str = "likelihood_field"
     beam_combination: str = "product"
     z_short: float = 0.05
+    z_max: float = 0.05
     lambda_short: float = 0.1
     min_ess: float = 0.0
     landmark_range_std: float = 0.1
@@ -360,7 +367,7 @@ class AMCL:
             variance = checked[name] * checked[name]  # type: ignore[operator]
             if not 0.0 < variance < math.inf:  # Gaussians divide by it
                 raise ConfigError(f"{name} must be in [1e-150, 1e150] (got {checked[name]:g})")
-        for name in ("z_rand", "z_short", "update_min_d", "update_min_a"):
+        for name in ("z_rand", "z_short", "z_max", "update_min_d", "update_min_a"):
             checked[name] = nonnegative(name, getattr(self, name))
         for name, value in checked.items():
             object.__setattr__(self, name, value)
@@ -395,11 +402,11 @@ class AMCL:
 
     @cached_property
     def _beam_model(self) -> BeamModel:
-        total = self.z_hit + self.z_short + self.z_rand
+        total = self.z_hit + self.z_short + self.z_max + self.z_rand
         return BeamModel(
             z_hit=self.z_hit / total,
             z_short=self.z_short / total,
-            z_max=0.0,
+            z_max=self.z_max / total,
             z_rand=self.z_rand / total,
             lambda_short=self.lambda_short,
         )
@@ -653,24 +660,30 @@ class AMCL:
             ) from None
         if ranges.size != self.lidar.beams:
             raise InputError(f"scan must have {self.lidar.beams} ranges (got {ranges.size})")
-        bad = ~np.isfinite(ranges) & ~np.isposinf(ranges) | (ranges < 0.0)
         chosen = self._beam_index
         r = ranges[chosen]
-        keep = np.isfinite(r) & (r >= 0.0) & (r < self.lidar.max_range)
+        limit = self.lidar.max_range
+        keep = np.isfinite(r) & (r >= 0.0)  # NaN (blind zone) and negative: no reading
+        if self.sensor_model != "beam":
+            keep &= r < limit  # the likelihood field skips max-range readings (no return)
+        skipped = int(chosen.size - keep.sum())  # of the beams chosen, those never used
         if not keep.any():
-            return np.zeros(particles.shape[0]), 0, int(bad.sum())
+            return np.zeros(particles.shape[0]), 0, skipped
         angles = self.lidar.beam_angles[chosen][keep]
         if self.sensor_model == "beam":
             sensor = compose(particles, np.asarray(self.lidar.mount))
-            expected = scan_rays(
-                self.grid, sensor[:, :2], sensor[:, 2], angles, self.lidar.max_range
-            )
-            # a beam that expects no return (z* = max range) is scored as if at the limit
-            expected = np.minimum(expected, np.nextafter(self.lidar.max_range, 0.0))
-            density = self._beam_model.pdf(
-                np.broadcast_to(r[keep], expected.shape), expected, self.sigma_hit,
-                self.lidar.max_range,
-            )  # fmt: skip
+            expected = scan_rays(self.grid, sensor[:, :2], sensor[:, 2], angles, limit)
+            no_return = expected >= limit  # the particle expects nothing within range
+            # a return where none is expected is scored as if the wall were at the limit
+            expected = np.minimum(expected, np.nextafter(limit, 0.0))
+            reading = np.broadcast_to(np.minimum(r[keep], limit), expected.shape)
+            model = self._beam_model
+            density = model.pdf(reading, expected, self.sigma_hit, limit)
+            # a max-range reading: the probability of exactly z_max, a missed return (z_max)
+            # or a hit with nothing to hit (Nav2 adds z_max·1 for such a reading)
+            at_max = reading >= limit
+            mass = model.z_max + model.z_hit * no_return
+            density = np.where(at_max, mass, density)
             log_p = np.log(np.maximum(density, 1e-300)).sum(axis=1)
         else:
             product = self.beam_combination == "product"
@@ -679,7 +692,7 @@ class AMCL:
                 np.asarray(self.lidar.mount), r[keep], angles,
                 math.log(max(self._outside, 2.2e-308)) if product else self._outside, product,
             )  # fmt: skip
-        return log_p, int(keep.sum()), int(bad.sum())
+        return log_p, int(keep.sum()), skipped
 
     def _landmark_likelihood(
         self, particles: np.ndarray, ids: ArrayLike | None, z: ArrayLike | None
@@ -739,7 +752,8 @@ class AMCL:
         state : AMCLState
             The belief.
         ambiguity_weight : float
-            Weight a second cluster must hold for the estimate to be ambiguous, in (0, 0.5].
+            Weight the clusters besides the heaviest must hold together for the estimate to be
+            ambiguous, in (0, 0.5].
 
         Returns
         -------
@@ -748,7 +762,7 @@ class AMCL:
         share = positive("ambiguity_weight", ambiguity_weight)
         found = clusters(state.particles, state.weights, self.bin_size)
         best = found[0]
-        ambiguous = len(found) > 1 and found[1].weight >= share
+        ambiguous = len(found) > 1 and 1.0 - best.weight >= share
         return PoseEstimate(best.mean.copy(), best.cov.copy(), found, ambiguous)
 
 

@@ -262,7 +262,12 @@ class KalmanFilter:
         return means, covs
 
     def update(
-        self, mean: ArrayLike, cov: ArrayLike, ids: ArrayLike, z: ArrayLike
+        self,
+        mean: ArrayLike,
+        cov: ArrayLike,
+        ids: ArrayLike,
+        z: ArrayLike,
+        noise_scale: ArrayLike | None = None,
     ) -> tuple[np.ndarray, np.ndarray, UpdateInfo]:
         """Correct the belief with range–bearing measurements of known landmarks.
 
@@ -276,6 +281,10 @@ class KalmanFilter:
             Landmark identity of each measurement; −1 marks an empty slot.
         z : array_like, shape (M, 2) or (N, M, 2)
             (range [m], bearing [rad]) of each measurement.
+        noise_scale : array_like, shape (M,) or (N, M), optional
+            Factor > 0 on each measurement's noise covariance R (default 1): how much less
+            a measurement is worth, e.g. one whose error is correlated with earlier ones
+            (:func:`wheelbase.localization.mrclam.correlated_inflation`).
 
         Returns
         -------
@@ -301,6 +310,16 @@ class KalmanFilter:
                 f"ids must have shape (N, M) with N = {mean_b.shape[0]} robots (got {ids.shape})"
             )
         shape = ids.shape
+        scale = np.ones(shape)
+        if noise_scale is not None:
+            try:
+                scale = np.broadcast_to(np.asarray(noise_scale, dtype=np.float64), shape)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"noise_scale must have the shape of ids {shape} (got {np.shape(noise_scale)})"
+                ) from None
+            if not np.all(np.isfinite(scale) & (scale > 0.0)):
+                raise InputError("noise_scale must be finite factors > 0")
         accepted = np.zeros(shape, bool)
         gated = np.zeros(shape, bool)
         nis_all = np.full(shape, np.nan)
@@ -318,7 +337,9 @@ class KalmanFilter:
             if rows.size == 0:
                 continue
             with np.errstate(all="ignore"):  # an overflow shows as a non-finite belief
-                nis, ok = self._correct(mean_b, cov_b, rows, ids[rows, m], z[rows, m], gate)
+                nis, ok = self._correct(
+                    mean_b, cov_b, rows, ids[rows, m], z[rows, m], gate, scale[rows, m]
+                )
             nis_all[rows, m] = nis
             accepted[rows[ok], m] = True
             gated[rows[~ok], m] = True
@@ -338,12 +359,13 @@ class KalmanFilter:
         ids: np.ndarray,
         z: np.ndarray,
         gate: float,
+        scale: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Gate and apply one measurement per robot of ``rows`` to ``mean``/``cov`` in place;
-        return their NIS and which passed the gate."""
+        """Gate and apply one measurement per robot of ``rows`` to ``mean``/``cov`` in place,
+        its R times ``scale``; return their NIS and which passed the gate."""
         mu, p = mean[rows], cov[rows]
         marks = self.landmarks[ids]
-        r_mat = self._noise(mu, marks)
+        r_mat = self._noise(mu, marks) * scale[:, None, None]
         z_hat, h, s = self._moments(mu, p, marks, r_mat)
         nu = z - z_hat
         nu[:, 1] = wrap_angle(nu[:, 1])

@@ -1,6 +1,6 @@
 """Numba kernels for footprint collision and clearance in a world of cells and convex pieces.
 
-A world reaches the kernels as one tuple (see :func:`_world_tuple`): an occupancy raster with its
+A world reaches the kernels as one tuple (see ``_world_tuple``): an occupancy raster with its
 distance field, the exact occupied cells (an :class:`~wheelbase.planning.OccupancyGrid`'s own,
 or none), and exact convex pieces (the triangles of polygons and the discs of a
 :class:`~wheelbase.planning.PolygonWorld`) filed in a uniform grid of buckets (the broad phase).
@@ -11,9 +11,9 @@ clear cases; a row-band scan with per-row prefix sums decides the cells exactly,
 axes (triangles) or a point-to-polygon distance (discs) decide the pieces found in the buckets
 under the footprint's bounding box. The clearance is the exact polygon-to-square and
 polygon-to-piece distance. The public entry points are the worlds' ``in_collision`` and
-``footprint_clearance``; Hybrid A* calls :func:`_collides_one` inside its compiled search.
+``footprint_clearance``; Hybrid A* calls ``_collides_one`` inside its compiled search.
 
-The per-pose kernels (:func:`_circles_clearance`, :func:`_collides_one` and what it calls) are
+The per-pose kernels (``_circles_clearance``, ``_collides_one`` and what it calls) are
 compiled without Numba's reference counting (``_nrt=False``): they allocate nothing (the caller
 passes scratch buffers) and keep no array, while with it every call took and released a
 reference, with an atomic instruction, to each array of the world tuple and each array
@@ -58,7 +58,7 @@ def _place_polygon(poly, x, y, th, out):
 @numba.njit(cache=True, inline="always")
 def _bounds(wp):
     """``(xmin, xmax, ymin, ymax)`` [m] of the vertices ``wp`` (loops, not ``wp[:, 0].min()``:
-    the exact check runs without reference counting, see :func:`_collides_one`)."""
+    the exact check runs without reference counting, see ``_collides_one``)."""
     xmin = xmax = wp[0, 0]
     ymin = ymax = wp[0, 1]
     for k in range(1, wp.shape[0]):
@@ -377,7 +377,7 @@ def _polygon_hits_pieces(world, wp, near):
 
 @numba.njit(cache=True)
 def _scratch(world, poly):
-    """Scratch buffers for :func:`_collides_one`: a placed polygon and the broad phase's list."""
+    """Scratch buffers for ``_collides_one``: a placed polygon and the broad phase's list."""
     return np.empty_like(poly), np.empty(world[_PIECES].shape[0], dtype=np.int64)
 
 
@@ -508,7 +508,7 @@ def _clearance_one(world, poly, circles, radius, x, y, th, wp, near):
 class FootprintChecks:
     """Footprint collision and clearance queries shared by every kind of world.
 
-    A world provides ``_kernel_world`` (its arrays packed by :func:`_world_tuple`) and
+    A world provides ``_kernel_world`` (its arrays packed by ``_world_tuple``) and
     ``is_occupied(xy)`` (exact point test); these methods do the rest.
     """
 

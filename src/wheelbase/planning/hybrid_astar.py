@@ -18,7 +18,7 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
   penalty, here 2 m);
-* heuristic (admissible: see :meth:`HybridAStar._holonomic_heuristic`): max(Reeds–Shepp
+* heuristic (admissible: see ``HybridAStar._holonomic_heuristic``): max(Reeds–Shepp
   length — Dubins without reverse, Euclidean distance for turning in place — ignoring
   obstacles, a lower bound on the distance around the obstacles for the reference point)
   plus the least cost of turning to the goal's heading (``turn_in_place_cost`` per radian, or
@@ -1043,7 +1043,7 @@ def _free_prefix(
     kernels (see :mod:`wheelbase.planning.collision`): inlined, it took and released a
     reference to each of its 15 array arguments at every call. ``sweep`` bounds how far a
     covering circle moves along the whole primitive and ``clear0`` is the clearance of the
-    circles at the pose (see :func:`_circles_clearance`; ``dist``, ``res``, ``x0``, ``y0``
+    circles at the pose (see ``_circles_clearance``; ``dist``, ``res``, ``x0``, ``y0``
     are the world's distance field and raster geometry; ``wp``, ``near``: scratch)."""
     c = math.cos(th)
     s = math.sin(th)
@@ -1085,7 +1085,7 @@ def _cheap_heuristic(x, y, th, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost
 @numba.njit(cache=True)
 def _heuristic(x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost):
     """Admissible cost-to-go: max(curve length without obstacles, holonomic cost-to-go with
-    them) + ``turn_cost`` × |heading change| (see :meth:`HybridAStar._holonomic_heuristic`)."""
+    them) + ``turn_cost`` × |heading change| (see ``HybridAStar._holonomic_heuristic``)."""
     j = math.floor((x - x0) / hres)
     i = math.floor((y - y0) / hres)
     if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:

@@ -216,7 +216,7 @@ class OccupancyGrid(FootprintChecks):
 
         ``.``, ``G`` and ``S`` are passable; every other terrain (``@``, ``O``, ``T``, ``W``) is
         blocked. The file's first row (Moving AI y = 0) becomes the highest grid row, so Moving
-        AI cell ``(x, y)`` is grid cell ``(height − 1 − y, x)``: see :meth:`movingai_cell`.
+        AI cell ``(x, y)`` is grid cell ``(height − 1 − y, x)``.
 
         Parameters
         ----------

@@ -40,7 +40,14 @@ from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.errors import InputError
 from wheelbase.planning import OccupancyGrid, PolygonWorld
 
-__all__ = ["RAY_METHODS", "cast_rays", "gap_field", "scan_rays"]
+__all__ = [
+    "RAY_METHODS",
+    "cast_rays",
+    "gap_field",
+    "scan_rays",
+    "traversal_start",
+    "traversal_step",
+]
 
 RAY_METHODS: tuple[str, ...] = ("fast", "exact", "numpy")
 """Names of the ray-casting methods (see the module docstring)."""
@@ -85,13 +92,27 @@ def gap_field(grid: OccupancyGrid) -> np.ndarray:
 
 # ---------------------------------------------------------------------- Numba kernels
 @numba.njit(cache=True)
-def _exact_ray(occ, px, py, ux, uy, max_cells):
-    """Range [cells] of one ray from ``(px, py)`` [cells] along the unit vector ``(ux, uy)``."""
-    rows, cols = occ.shape
+def traversal_start(px, py, ux, uy):
+    """The Amanatides–Woo traversal of a ray, started (a Numba function).
+
+    Parameters
+    ----------
+    px, py : float
+        Ray origin in cells of the grid (``(x − x0)/r``, ``(y − y0)/r``).
+    ux, uy : float
+        Unit direction of the ray.
+
+    Returns
+    -------
+    tuple
+        ``(i, j, si, sj, tx, ty, dtx, dty)``: the cell ``(row i, col j)`` holding the origin,
+        the steps ``si, sj`` (−1, 0 or 1) of the row and column, the distances [cells] along
+        the ray at which it next crosses a column boundary (``tx``) and a row boundary
+        (``ty``), and the distances between successive crossings (``dtx``, ``dty``; ``inf``
+        for a zero component).
+    """
     j = math.floor(px)
     i = math.floor(py)
-    if i < 0 or i >= rows or j < 0 or j >= cols or occ[i, j]:
-        return 0.0
     inf = math.inf
     if ux > 0.0:
         sj, tx, dtx = 1, (j + 1 - px) / ux, 1.0 / ux
@@ -105,15 +126,47 @@ def _exact_ray(occ, px, py, ux, uy, max_cells):
         si, ty, dty = -1, (i - py) / uy, -1.0 / uy
     else:
         si, ty, dty = 0, inf, inf
+    return i, j, si, sj, tx, ty, dtx, dty
+
+
+@numba.njit(cache=True)
+def traversal_step(i, j, si, sj, tx, ty, dtx, dty):
+    """One step of the traversal of :func:`traversal_start` (a Numba function): into the next
+    cell the ray enters, along y first at a corner.
+
+    Parameters
+    ----------
+    i, j, si, sj, tx, ty, dtx, dty
+        The traversal's state (:func:`traversal_start`).
+
+    Returns
+    -------
+    tuple
+        ``(i, j, tx, ty, t)``: the new cell, the next crossings, and the distance ``t``
+        [cells] along the ray at which it enters the new cell.
+    """
+    # written as selects, not branches: which boundary comes first is unpredictable and a
+    # mispredicted branch per cell cost more than the step (5 ns against 2 ns per cell)
+    along_x = tx < ty
+    t = min(tx, ty)
+    return (
+        i + (0 if along_x else si),
+        j + (sj if along_x else 0),
+        tx + dtx if along_x else tx,
+        ty if along_x else ty + dty,
+        t,
+    )
+
+
+@numba.njit(cache=True)
+def _exact_ray(occ, px, py, ux, uy, max_cells):
+    """Range [cells] of one ray from ``(px, py)`` [cells] along the unit vector ``(ux, uy)``."""
+    rows, cols = occ.shape
+    i, j, si, sj, tx, ty, dtx, dty = traversal_start(px, py, ux, uy)
+    if i < 0 or i >= rows or j < 0 or j >= cols or occ[i, j]:
+        return 0.0
     while True:
-        if tx < ty:
-            t = tx
-            j += sj
-            tx += dtx
-        else:
-            t = ty
-            i += si
-            ty += dty
+        i, j, tx, ty, t = traversal_step(i, j, si, sj, tx, ty, dtx, dty)
         if t >= max_cells:
             return max_cells
         if i < 0 or i >= rows or j < 0 or j >= cols or occ[i, j]:

@@ -35,8 +35,13 @@ from wheelbase.sim.engine import Arrival, Engine
 from wheelbase.sim.log import Log
 from wheelbase.sim.plants import WheelAxle
 from wheelbase.sim.sensing import EncoderOdometry
+from wheelbase.sim.streams import counter_stream
 
-__all__ = ["DriveTrainPlant", "DriveTrainState", "run_go_to_goal"]
+__all__ = ["SLIP_STREAM", "DriveTrainPlant", "DriveTrainState", "run_go_to_goal"]
+
+SLIP_STREAM = 4
+"""Stream of a robot's wheel slip (:func:`~wheelbase.sim.streams.counter_stream`; counter: the
+control period)."""
 
 _RPM = 60.0 / (2.0 * math.pi)
 
@@ -59,8 +64,10 @@ class DriveTrainState:
         Wheel-speed set-points in force [RPM].
     read_angle : numpy.ndarray, shape (N, 2)
         Wheel angles at the speed loop's last reading [rad].
-    generators : list of numpy.random.Generator
-        Each robot's source of wheel slip.
+    seeds : numpy.ndarray of int64, shape (N,)
+        Each robot's seed of its wheel slip (stream :data:`SLIP_STREAM`).
+    periods : numpy.ndarray of int64, shape (N,)
+        Control periods each robot has driven (the counter of its slip's random stream).
     """
 
     motors: np.ndarray
@@ -69,7 +76,8 @@ class DriveTrainState:
     measured_rpm: np.ndarray
     setpoint_rpm: np.ndarray
     read_angle: np.ndarray
-    generators: list
+    seeds: np.ndarray
+    periods: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -153,7 +161,8 @@ class DriveTrainPlant:
             measured_rpm=zeros.copy(),
             setpoint_rpm=zeros.copy(),
             read_angle=zeros.copy(),
-            generators=[np.random.default_rng([int(seed), 1]) for seed in seeds],
+            seeds=np.array(seeds, dtype=np.int64),
+            periods=np.zeros(n, dtype=np.int64),
         )
 
     def signals(self, state: DriveTrainState) -> dict[str, np.ndarray]:
@@ -222,6 +231,9 @@ class DriveTrainPlant:
         measured, read = state.measured_rpm[index].copy(), state.read_angle[index].copy()
         start_angle = motors[:, :, 2].copy()
         pose = pose.copy()
+        slips = []  # one counter-based generator per robot for the period's substeps
+        if errors.slip_std > 0:
+            slips = [counter_stream(state.seeds[i], SLIP_STREAM, state.periods[i]) for i in index]
         for _ in range(loops):
             ticks = encoder.count(motors[:, :, 2]) - encoder.count(read)
             read = motors[:, :, 2].copy()
@@ -233,8 +245,8 @@ class DriveTrainPlant:
                 turned = motors[:, :, 2] - before
                 if errors.slip_std > 0:
                     moves = [
-                        errors.ground_increments(radius, half, turned[k], state.generators[i])
-                        for k, i in enumerate(index)
+                        errors.ground_increments(radius, half, turned[k], slips[k])
+                        for k in range(len(index))
                     ]
                     distance = np.array([m[0] for m in moves])
                     rotation = np.array([m[1] for m in moves])
@@ -250,7 +262,9 @@ class DriveTrainPlant:
             measured_rpm=state.measured_rpm.copy(),
             setpoint_rpm=state.setpoint_rpm.copy(),
             read_angle=state.read_angle.copy(),
+            periods=state.periods.copy(),
         )
+        new.periods[index] += 1
         new.motors[index], new.integral[index], new.duty[index] = motors, integral, duty
         new.measured_rpm[index], new.setpoint_rpm[index] = measured, setpoint
         new.read_angle[index] = read

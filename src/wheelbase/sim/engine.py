@@ -14,6 +14,7 @@ code. Each :meth:`Engine.step`, for every robot still running:
 4. *the rules* (on the state at time t): collision of the footprint → ``collision``; after
    the reference has ended, at rest and with the *estimate* within tolerance of the goal, the
    robot stops → ``arrived`` if the *true* pose is within tolerance too, else ``missed_goal``;
+   with a ``stuck`` rule, commanded to move and not moving for its time → ``stuck``;
    the time limit → ``timeout``;
 5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
 6. *encoders and sensors*: the wheel angles' change becomes tick differences, and the sensors
@@ -36,7 +37,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -73,6 +74,10 @@ class Arrival:
         Planar speed [m/s] below which a robot is at rest.
     rest_yaw_rate : float
         Yaw rate [rad/s] below which a robot is at rest (turning on the spot is moving).
+    judge_at_limit : bool
+        At the time limit, a robot still running is judged instead of timing out: its true
+        pose within tolerance of the goal → ``arrived``, else ``missed_goal``. For tracking a
+        timed reference, whose end is the arrival (the robot need not have come to rest).
     """
 
     goal: Any
@@ -81,6 +86,7 @@ class Arrival:
     settle_time: float = math.inf
     rest_speed: float = 0.01
     rest_yaw_rate: float = 0.1
+    judge_at_limit: bool = False
 
     def __post_init__(self) -> None:
         goal = as_float_array("goal", self.goal, 3, min_ndim=1, max_ndim=2)
@@ -153,7 +159,7 @@ class EngineState:
     controllers : list
         One controller copy per robot for a ``per_robot`` controller, else one shared.
     encoders : EncoderReadings or None
-        The per-robot random streams of the encoders.
+        The encoders and their robots' seeds (counter-based random errors).
     plant : object or None
         What a plant keeps between steps besides pose and twist (a drive train's motor
         currents and speed-loop integrals), from ``plant.start``.
@@ -161,7 +167,20 @@ class EngineState:
         What an estimator keeps besides the estimate (a covariance, particles), from
         ``estimator.start``.
     sensors : SensorStreams or None
-        The per-robot random streams of the sensors.
+        The robots' seeds of the sensors' counter-based random streams.
+    held : numpy.ndarray, shape (N, k), or None
+        The last controller commands, held between controller calls (``control_every``).
+    held_status : list or None
+        The controllers' statuses of that call.
+    world : object or None
+        The world's evolving truth (agents), from ``surroundings.start``.
+    perception : object or None
+        What each robot has made of its sensors (costmap, tracks), from ``perception.start``.
+    still : numpy.ndarray, shape (N,), or None
+        Seconds each robot has stood still while commanded to move (the ``stuck`` rule).
+    track_scores : numpy.ndarray, shape (N, 3), or None
+        For the metrics only (nothing that decides reads it): each robot's running sums of
+        squared track position and velocity errors against the true agents, and of matches.
     """
 
     step: int
@@ -179,6 +198,12 @@ class EngineState:
     plant: Any = None
     estimator: Any = None
     sensors: Any = None
+    held: np.ndarray | None = None
+    held_status: list | None = None
+    world: Any = None
+    perception: Any = None
+    still: np.ndarray | None = None
+    track_scores: np.ndarray | None = None
 
     @property
     def running(self) -> np.ndarray:
@@ -202,6 +227,7 @@ class _Row:
     signals: dict[str, np.ndarray]
     scan: np.ndarray | None = None  # read after the step, at the next row's true poses
     scan_index: np.ndarray | None = None
+    agents: np.ndarray | None = None  # (B, A, 4) every world's agents at the row
 
 
 @dataclass(frozen=True)
@@ -248,6 +274,23 @@ class Engine:
     record_sensors : bool
         Keep the lidar scans and, every ``fan_every`` steps, the particles of a particle
         filter in the log (for drawing); off for batches that only want metrics.
+    control_every : int
+        The controller is called every this many steps (its rate 1 / (control_every·dt));
+        the command is held in between.
+    surroundings : Surroundings, optional
+        The world beyond the map (:class:`~wheelbase.sim.Surroundings`: obstacles, agents, the
+        other robots of a fleet): it steps with the plant, the lidar sees it and touching it is
+        a collision. Nothing that decides (controller, estimator) reads it.
+    perception : PerceptionSuite, optional
+        Turns each robot's scans into a costmap and tracks
+        (:class:`~wheelbase.sim.PerceptionSuite`); a controller with ``uses_perception`` is
+        called with ``perception=`` its robot's view.
+    references : tuple, optional
+        One reference per robot of a world (a fleet's plans): robot i follows
+        ``references[i % len(references)]`` (per-robot controllers only).
+    stuck : Stuck, optional
+        The ``stuck`` rule (:class:`~wheelbase.sim.stuck.Stuck`): a robot commanded to move
+        that does not move for its time ends ``stuck``.
     """
 
     plant: Any
@@ -265,6 +308,11 @@ class Engine:
     max_steps: int = MAX_STEPS
     sensors: Any = None
     record_sensors: bool = True
+    control_every: int = 1
+    surroundings: Any = None
+    perception: Any = None
+    references: tuple | None = None
+    stuck: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -278,6 +326,9 @@ class Engine:
             )
         if not callable(self.controller):
             raise ConfigError(f"controller must be callable (got {type(self.controller).__name__})")
+        integer("control_every", self.control_every, minimum=1)
+        if self.references is not None and not getattr(self.controller, "per_robot", False):
+            raise ConfigError("references (one per robot) need a per-robot controller")
         names = tuple(getattr(self.controller, "command_names", ("v", "omega")))
         object.__setattr__(self, "_names", self.plant.command_names(names))
         if self.estimator.encoder is not None and getattr(self.plant, "axle", None) is None:
@@ -310,7 +361,9 @@ class Engine:
         seeds: ArrayLike | int | None = None,
         twists: ArrayLike | None = None,
     ) -> EngineState:
-        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact.
+        """The state at t = 0: robots at ``poses``, at rest (or moving), estimates exact
+        (or, for an estimator with ``first_estimate(state)``, such as a global localisation,
+        what it estimates without the start).
 
         Parameters
         ----------
@@ -339,12 +392,13 @@ class Engine:
         start[:, 2] = wrap_angle(start[:, 2])
         goal = None
         if self.arrival is not None:
-            goal = self.arrival.goal
-            if goal.ndim == 2 and goal.shape[0] not in (1, n):
+            goal = self.arrival.goal.reshape(-1, 3)
+            if n % goal.shape[0]:
                 raise InputError(
-                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,) or ({n}, 3)"
+                    f"arrival.goal has {goal.shape[0]} rows for {n} robots; give (3,), ({n}, 3) "
+                    "or one row per robot of a world whose robots make up the batch"
                 )
-            goal = np.broadcast_to(goal.reshape(-1, 3), (n, 3)).copy()
+            goal = np.tile(goal, (n // goal.shape[0], 1))  # a fleet's goals in every world
         reset = getattr(self.controller, "reset", None)
         if reset is not None:
             reset()
@@ -354,11 +408,14 @@ class Engine:
         else:
             controllers = [self.controller]
         encoder = self.estimator.encoder
+        estimator_state = self.estimator.start(start, seeds)
+        first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
+        estimate = start.copy() if first is None else np.array(first(estimator_state), float)
         return EngineState(
             step=0,
             pose=start,
             twist=twist,
-            estimate=start.copy(),
+            estimate=estimate,
             estimated_twist=twist.copy(),
             wheel_angle=np.zeros((n, 2)),
             ticks=np.zeros((n, 2), dtype=np.int64),
@@ -368,8 +425,22 @@ class Engine:
             controllers=controllers,
             encoders=None if encoder is None else EncoderReadings(encoder, seeds),
             plant=self.plant.start(n, seeds),
-            estimator=self.estimator.start(start, seeds),
+            estimator=estimator_state,
             sensors=None if self.sensors is None else self.sensors.start(seeds),
+            world=None if self.surroundings is None else self.surroundings.start(seeds, start),
+            perception=None if self.perception is None else self.perception.start(start),
+            still=None if self.stuck is None else np.zeros(n),
+            track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
+        )
+
+    @property
+    def _scores_tracks(self) -> bool:
+        """Whether the log scores the robots' tracks against the world's agents."""
+        return (
+            self.surroundings is not None
+            and self.perception is not None
+            and getattr(self.perception, "tracker", None) is not None
+            and getattr(self.surroundings, "has_agents", False)
         )
 
     def command(self, state: EngineState) -> tuple[np.ndarray, list[str | None]]:
@@ -394,9 +465,14 @@ class Engine:
             return command, [reported if isinstance(reported, str) else None] * n
         command = np.zeros((n, width))
         statuses: list[str | None] = [None] * n
+        references = self.references
         for i in np.flatnonzero(state.running):
             law = controllers[i]
-            raw = np.asarray(law(t, measured[i].copy(), self.reference), dtype=np.float64)
+            reference = self.reference if references is None else references[i % len(references)]
+            extra = {}
+            if self.perception is not None and getattr(law, "uses_perception", False):
+                extra["perception"] = self.perception.view(state.perception, int(i), t)
+            raw = np.asarray(law(t, measured[i].copy(), reference, **extra), dtype=np.float64)
             command[i] = _shaped(raw, 1, width, self.command_names)[0]
             reported = getattr(law, "status", None)
             statuses[i] = reported if isinstance(reported, str) else None
@@ -410,7 +486,12 @@ class Engine:
         Parameters
         ----------
         state : EngineState
-            The state at time ``state.step·dt``; it is not changed.
+            The state at time ``state.step·dt``; it is not changed, and the result is a
+            function of it: the random streams are counter-based
+            (:mod:`wheelbase.sim.streams`), so stepping one state twice gives equal states.
+            (A controller that keeps memory between calls, such as a path follower's progress
+            or MPPI's warm start, is an object in ``state.controllers`` that the call
+            advances: :func:`copy.deepcopy` the state to branch with one.)
         command : array_like, shape (N, k), optional
             Commands to apply instead of asking the controller (a learning agent's action).
 
@@ -424,8 +505,12 @@ class Engine:
         t = state.step * self.dt
         running = state.running
         n = running.size
-        if command is None:
+        held = state.held_status
+        if command is None and state.held is not None and state.step % self.control_every:
+            command, controller_status = state.held, held
+        elif command is None:
             command, controller_status = self.command(state)
+            held = controller_status
         else:
             command = _shaped(
                 np.asarray(command, dtype=np.float64), n, len(self.command_names),
@@ -437,18 +522,38 @@ class Engine:
         status[running & ~finite] = DIVERGED
         command = np.where(finite[:, None], command, 0.0)
         command[~running] = 0.0
+        held_command = command
+        gave_up = np.array([name == "blocked" for name in controller_status], dtype=bool)
+        if gave_up.any():  # the controller found no way on and stopped the robot
+            status[running & finite & gave_up] = BLOCKED
+            command = np.where(gave_up[:, None], 0.0, command)
         moved, rates = self.plant.motion(state.twist, command, self.command_names, state.plant)
         reference = self._reference_pose(t, n, state.goal)
         signals = self.plant.signals(state.plant) if state.plant is not None else {}
         estimator_signals = getattr(self.estimator, "signals", None)
         if estimator_signals is not None and state.estimator is not None:
             signals = {**signals, **estimator_signals(state.estimator)}
+        agents = None
+        if state.track_scores is not None:
+            signals = {**signals, "track_position_sq_sum": state.track_scores[:, 0],
+                       "track_velocity_sq_sum": state.track_scores[:, 1],
+                       "track_matches": state.track_scores[:, 2]}  # fmt: skip
+        if self.surroundings is not None:
+            signals = {**signals, **self.surroundings.signals(state.world, state.pose, state.twist)}
+            if self.record_sensors:
+                agents = self.surroundings.agents(state.world)
         scan = scan_index = None
 
         active = status == RUNNING
         if self.collides is not None and active.any():
             hit = np.zeros(n, dtype=bool)
             hit[active] = np.asarray(self.collides(state.pose[active]), dtype=bool)
+            status[hit] = COLLISION
+            active &= ~hit
+        if self.surroundings is not None and active.any():
+            hit = np.zeros(n, dtype=bool)
+            index = np.flatnonzero(active)
+            hit[index] = self.surroundings.collides(state.world, state.pose, index)
             status[hit] = COLLISION
             active &= ~hit
         limit = self.duration
@@ -465,14 +570,27 @@ class Engine:
                     status[stopped & truly] = ARRIVED
                     status[stopped & ~truly] = MISSED_GOAL
                     active &= ~stopped
+        still = state.still
+        if self.stuck is not None and still is not None:
+            still, stuck = self.stuck.update(still, state.pose, moved, reference, self.dt)
+            status[active & stuck] = STUCK
+            active &= ~stuck
         if state.step >= self.steps or t >= limit - 1e-12:
-            status[active] = TIMEOUT
+            if self.arrival is not None and self.arrival.judge_at_limit:
+                truly = self.arrival.within(state.pose, state.goal)
+                status[active & truly] = ARRIVED
+                status[active & ~truly] = MISSED_GOAL
+            else:
+                status[active] = TIMEOUT
             active[:] = False
 
         pose, twist = state.pose.copy(), state.twist.copy()
         wheel_angle, ticks = state.wheel_angle.copy(), state.ticks.copy()
         estimate, estimated_twist = state.estimate.copy(), state.estimated_twist.copy()
         plant_state = state.plant
+        world_state = state.world
+        perception_state = state.perception
+        track_scores = state.track_scores
         if active.any():
             index = np.flatnonzero(active)
             new_pose, new_twist, turned, plant_state = self.plant.step(
@@ -487,14 +605,20 @@ class Engine:
                 before = state.wheel_angle.copy()
                 after = before.copy()
                 after[moving] = new_angle
-                delta = state.encoders.tick_deltas(before, after)[moving]
+                delta = state.encoders.tick_deltas(before, after, state.step)[moving]
                 ticks[moving] = state.ticks[moving] + delta
             else:
                 delta = None
             pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
             extra = {}
+            cast = None
+            if self.surroundings is not None:  # the agents move with the robots, from time t
+                world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
+                cast = self.surroundings.caster(world_state, pose)
             if self.sensors is not None:
-                readings = self.sensors.read(state.step, self.dt, new_pose, state.sensors, moving)
+                readings = self.sensors.read(
+                    state.step, self.dt, new_pose, state.sensors, moving, cast=cast
+                )
                 extra["readings"] = readings
                 if readings.scan is not None and self.record_sensors:
                     scan, scan_index = readings.scan, moving
@@ -510,10 +634,22 @@ class Engine:
                 est[lost] = state.estimate[moving[lost]]
                 est_twist[lost] = state.estimated_twist[moving[lost]]
             estimate[moving], estimated_twist[moving] = est, est_twist
+            if self.perception is not None and extra and extra["readings"].scan is not None:
+                perception_state = self.perception.update(
+                    state.perception, t + self.dt, extra["readings"], estimate[moving], moving
+                )
+                if track_scores is not None:  # evaluation against the truth, for the log
+                    tracks = [self.perception.tracks(perception_state, int(i)) for i in moving]
+                    track_scores = track_scores.copy()
+                    track_scores[moving] += self.surroundings.track_scores(
+                        world_state, tracks, moving
+                    )
         else:
             estimator_state = state.estimator
+            if self.surroundings is not None:  # the world goes on around robots that stopped
+                world_state = self.surroundings.step(state.world, self.dt, state.pose, state.twist)
         row = _Row(t, state.pose, state.estimate, reference, moved, command, rates,
-                   state.ticks, controller_status, signals, scan, scan_index)  # fmt: skip
+                   state.ticks, controller_status, signals, scan, scan_index, agents)  # fmt: skip
         new_state = EngineState(
             step=state.step + 1,
             pose=pose,
@@ -530,6 +666,12 @@ class Engine:
             plant=plant_state,
             estimator=estimator_state,
             sensors=state.sensors,
+            held=held_command,
+            held_status=held,
+            world=world_state,
+            perception=perception_state,
+            still=still,
+            track_scores=track_scores,
         )
         return new_state, row
 
@@ -562,6 +704,7 @@ class Engine:
         fans: dict[tuple[int, int], np.ndarray] = {}
         particles: dict[tuple[int, int], np.ndarray] = {}
         particles_of = getattr(self.estimator, "particles_of", None)
+        perceived: dict[tuple[int, int], dict] = {}
         status_names: list[str] = []
         while True:
             was_running = state.running
@@ -570,6 +713,11 @@ class Engine:
                 for i in np.flatnonzero(was_running):  # the belief of this row's estimate
                     cloud = particles_of(state.estimator, int(i))
                     particles[(int(i), len(rows))] = np.asarray(cloud, dtype=np.float32)
+            if fan_now and self.perception is not None and self.record_sensors:
+                for i in np.flatnonzero(was_running):  # what this row's controller saw
+                    perceived[(int(i), len(rows))] = self.perception.snapshot(
+                        state.perception, int(i)
+                    )
             state, row = self.step(state)
             rows.append(row)
             if fan_now:  # the plans the controllers just made for this row's poses
@@ -584,13 +732,21 @@ class Engine:
                 break
         if self.progress is not None:
             self.progress(rows[-1].t)
-        return self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        log = self._log(rows, last_row, state, fans, tuple(status_names), particles)
+        if perceived:
+            log = replace(log, perceived=perceived)
+        summaries = [getattr(law, "summary", None) for law in state.controllers]
+        if len(state.controllers) == n and any(callable(s) for s in summaries):
+            log = replace(log, summaries=tuple(s() if callable(s) else {} for s in summaries))
+        return log
 
     # ------------------------------------------------------------------ helpers
     def _reference_pose(self, t: float, n: int, goal: np.ndarray | None) -> np.ndarray:
         if self.reference_pose is not None:
-            value = np.asarray(self.reference_pose(t), dtype=np.float64)
-            return np.broadcast_to(value.reshape(-1, 3), (n, 3))
+            value = np.asarray(self.reference_pose(t), dtype=np.float64).reshape(-1, 3)
+            if len(value) > 1 and n % len(value) == 0:  # one per robot of each world
+                return np.tile(value, (n // len(value), 1))
+            return np.broadcast_to(value, (n, 3))
         if goal is not None:
             return goal
         return np.full((n, 3), np.nan)
@@ -658,6 +814,7 @@ class Engine:
             rollout_fans=fans,
             scans=scans,
             particles=particles,
+            agents=None if rows[0].agents is None else np.stack([r.agents for r in rows], axis=1),
         )
 
 

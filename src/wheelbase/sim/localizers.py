@@ -17,9 +17,21 @@ Both follow the estimator protocol of :mod:`wheelbase.sim.sensing` (``encoder``,
     mean of the heaviest cluster) fixes the correction map ← odom. Between updates the
     estimate is that correction composed with the odometry pose, so the controller sees a
     smooth pose that jumps only by the corrections.
+    With ``global_start`` the filter knows nothing of the start pose: the odometry frame
+    starts at the origin, the particles spread over the free space, and the first estimate
+    (the one the controller sees before any update) is the heaviest cluster of that spread,
+    flagged not converged (signal ``loc_converged`` 0) until the clusters besides the heaviest
+    hold less than a tenth of the weight (``PoseEstimate.ambiguous`` false). The engine asks
+    the estimator for that first estimate (``first_estimate``) instead of handing the
+    controller the true start.
+    Each update is given the robot's time (its steps × dt), so that a
+    :class:`~wheelbase.localization.VelocityMotion`'s per-second noise grows over the time
+    between updates.
 
-Random numbers: robot i's particle filter draws from ``default_rng([seed_i, 3])``, so robot i
-of a batch equals the single run with seed i.
+Random numbers are counter-based (:mod:`wheelbase.sim.streams`): robot i's particle filter
+draws its start from (seed_i, :data:`PARTICLE_STREAM`, 0) and its update after step k from
+(seed_i, :data:`PARTICLE_STREAM`, k), so robot i of a batch equals the single run with seed i
+and updating one state twice gives the same belief.
 
 Failures: nothing a robot does raises. A filter that fails for a robot (an
 :class:`~wheelbase.errors.EstimationError`: a covariance that stops being positive definite,
@@ -32,7 +44,7 @@ signals of the log (``loc_*`` columns) and the run's metrics.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -41,6 +53,7 @@ from wheelbase._validate import as_float_array, nonnegative
 from wheelbase.errors import ConfigError, EstimationError, InputError
 from wheelbase.geometry import compose, inverse_pose, wrap_angle
 from wheelbase.sim.sensing import EncoderOdometry
+from wheelbase.sim.streams import counter_stream
 
 __all__ = [
     "COUNTS",
@@ -53,7 +66,7 @@ __all__ = [
 ]
 
 PARTICLE_STREAM = 3
-"""Second word of the seed of a robot's particle filter: ``default_rng([seed, 3])``."""
+"""Stream of a robot's particle filter (:func:`~wheelbase.sim.streams.counter_stream`)."""
 
 COUNTS: tuple[str, ...] = (
     "loc_updates",
@@ -65,7 +78,8 @@ COUNTS: tuple[str, ...] = (
 )
 """Cumulative counts per robot in the estimators' signals: filter corrections, landmark
 measurements applied, rejected by the χ² gate, skipped (NaN or negative range, NaN bearing,
-unknown identity), lidar beams used and skipped (NaN or negative readings)."""
+unknown identity), lidar beams used and skipped (of the beams the filter chose, those not
+used: NaN or negative readings, and max-range ones under the likelihood field)."""
 
 _COV_NAMES = (("xx", 0, 0), ("xy", 0, 1), ("xtheta", 0, 2), ("yy", 1, 1), ("ytheta", 1, 2),
               ("thetatheta", 2, 2))  # fmt: skip
@@ -117,7 +131,8 @@ class _FusesOdometry:
         return self.odometry.encoder
 
     def signals(self, state: Any) -> dict[str, np.ndarray]:
-        """Every robot's covariance and cumulative counts (and particles held), for the log.
+        """Every robot's covariance, odometry pose (``odom_pose``, in the odometry frame) and
+        cumulative counts (and particles held), for the log.
 
         Parameters
         ----------
@@ -125,8 +140,10 @@ class _FusesOdometry:
             The filter's state.
         """
         out = covariance_signals(state.cov)
+        out["odom_pose"] = state.odom.copy()
         if hasattr(state, "particles"):
             out["loc_particles"] = state.particles.copy()
+            out["loc_converged"] = state.converged.astype(np.int64)
         out.update({name: state.counts[:, k].copy() for k, name in enumerate(COUNTS)})
         return out
 
@@ -142,10 +159,14 @@ class KalmanState:
         Pose covariances.
     counts : numpy.ndarray of int64, shape (N, len(COUNTS))
         Cumulative counts (:data:`COUNTS`).
+    odom : numpy.ndarray, shape (N, 3)
+        The wheel odometry dead-reckoned alone in the odometry frame (which starts at the
+        start pose): with the mean, it gives the correction map ← odom (REP 105).
     """
 
     cov: np.ndarray
     counts: np.ndarray
+    odom: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,7 +206,8 @@ class KalmanLocalizer(_FusesOdometry):
         """
         n = poses.shape[0]
         _, cov = _initial_cov(self.initial_std, n)
-        return KalmanState(cov.copy(), np.zeros((n, len(COUNTS)), dtype=np.int64))
+        counts = np.zeros((n, len(COUNTS)), dtype=np.int64)
+        return KalmanState(cov.copy(), counts, poses.copy())
 
     def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
         """Predict with the step's odometry; correct with landmark readings when there are any.
@@ -215,7 +237,9 @@ class KalmanLocalizer(_FusesOdometry):
             The odometry's twist over the step.
         state : KalmanState
         """
-        _, odo_twist, _ = self.odometry.update(estimate, ticks, dt, pose, twist)
+        odom_now, odo_twist, _ = self.odometry.update(state.odom[index], ticks, dt, pose, twist)
+        odom = state.odom.copy()
+        odom[index] = odom_now
         control = odo_twist[:, [0, 2]]
         ids = z = None
         if readings is not None and readings.landmark_ids is not None:
@@ -238,7 +262,7 @@ class KalmanLocalizer(_FusesOdometry):
                     counts[i] += found[0]
                 except (EstimationError, InputError):
                     mean[row] = np.nan
-        return mean, odo_twist, KalmanState(cov, counts)
+        return mean, odo_twist, KalmanState(cov, counts, odom)
 
     def _step(self, mean, cov, control, dt, ids, z):
         found = np.zeros((mean.shape[0], len(COUNTS)), dtype=np.int64)
@@ -261,8 +285,8 @@ class ParticleState:
     ----------
     filters : list of AMCLState
         Each robot's particles.
-    generators : list of numpy.random.Generator
-        Each robot's random stream.
+    seeds : numpy.ndarray of int64, shape (N,)
+        Each robot's seed (of its filter's random stream).
     odom : numpy.ndarray, shape (N, 3)
         Dead-reckoned poses in the odometry frame (which starts at the start pose).
     correction : numpy.ndarray, shape (N, 3)
@@ -273,15 +297,24 @@ class ParticleState:
         Particles each filter holds.
     counts : numpy.ndarray of int64, shape (N, len(COUNTS))
         Cumulative counts (:data:`COUNTS`).
+    converged : numpy.ndarray of bool, shape (N,)
+        Whether each filter's belief is one cluster (not ambiguous) at its last update (or
+        at the start: true around a known start pose, false for a global start).
+    steps : numpy.ndarray of int64, shape (N,)
+        Steps of odometry each robot has taken: its time is ``steps·dt``, handed to
+        :meth:`~wheelbase.localization.AMCL.update` (a :class:`VelocityMotion`'s per-second
+        noise grows with the time between updates).
     """
 
     filters: list
-    generators: list
+    seeds: np.ndarray
     odom: np.ndarray
     correction: np.ndarray
     cov: np.ndarray
     particles: np.ndarray
     counts: np.ndarray
+    converged: np.ndarray
+    steps: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -300,7 +333,8 @@ class ParticleLocalizer(_FusesOdometry):
         pose, >= 0.
     global_start : bool
         Spread the particles over the map's free space instead (global localisation: the
-        start pose is unknown to the filter).
+        start pose is unknown to the filter, and its first estimate is its heaviest cluster,
+        not converged).
     """
 
     amcl: Any
@@ -320,7 +354,9 @@ class ParticleLocalizer(_FusesOdometry):
             self.amcl.random_poses(1, 0)  # a map without free space fails here, at set-up
 
     def start(self, poses: np.ndarray, seeds: np.ndarray) -> ParticleState:
-        """Particles around each start pose (or over the free space), odometry at the start.
+        """Particles around each start pose, odometry at the start; or, with
+        ``global_start``, particles over the free space and the odometry frame at the origin
+        (the start poses are not looked at).
 
         Parameters
         ----------
@@ -330,23 +366,49 @@ class ParticleLocalizer(_FusesOdometry):
             The robots' seeds (their particle filters' random streams).
         """
         n = poses.shape[0]
-        generators = [np.random.default_rng([int(s), PARTICLE_STREAM]) for s in seeds]
+        generators = [counter_stream(s, PARTICLE_STREAM, 0) for s in seeds]
         _, cov = _initial_cov(self.initial_std, 1)
+        covs = np.broadcast_to(cov, (n, 3, 3)).copy()
+        correction = np.zeros((n, 3))
         filters = []
-        for i in range(n):
-            if self.global_start:
-                filters.append(self.amcl.global_state(poses[i], generators[i]))
-            else:
-                filters.append(self.amcl.initial_state(poses[i], cov[0], poses[i], generators[i]))
+        if self.global_start:  # nothing of the truth: the first estimate is the filter's
+            odom = np.zeros((n, 3))
+            for i in range(n):
+                belief = self.amcl.global_state(odom[i], generators[i])
+                found = self.amcl.estimate(belief)
+                correction[i], covs[i] = found.pose, found.cov
+                filters.append(replace(belief, time=0.0))
+            converged = np.zeros(n, dtype=bool)
+        else:
+            odom = poses.copy()
+            for i in range(n):
+                belief = self.amcl.initial_state(poses[i], cov[0], poses[i], generators[i])
+                filters.append(replace(belief, time=0.0))  # stamped: the first update's time
+            converged = np.ones(n, dtype=bool)
         return ParticleState(
             filters=filters,
-            generators=generators,
-            odom=poses.copy(),
-            correction=np.zeros((n, 3)),
-            cov=np.broadcast_to(cov, (n, 3, 3)).copy(),
+            seeds=np.array(seeds, dtype=np.int64),
+            odom=odom,
+            correction=correction,
+            cov=covs,
             particles=np.array([f.particles.shape[0] for f in filters], dtype=np.int64),
             counts=np.zeros((n, len(COUNTS)), dtype=np.int64),
+            converged=converged,
+            steps=np.zeros(n, dtype=np.int64),
         )
+
+    def first_estimate(self, state: ParticleState) -> np.ndarray:
+        """The estimate ``(N, 3)`` the controller sees at t = 0: correction ∘ odometry (the
+        start pose given, or the heaviest cluster of a global start).
+
+        Parameters
+        ----------
+        state : ParticleState
+            :meth:`start`'s state.
+        """
+        estimate = compose(state.correction, state.odom)
+        estimate[:, 2] = wrap_angle(estimate[:, 2])
+        return estimate
 
     def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
         """Dead-reckon the odometry; run the filters of robots with readings that moved enough.
@@ -383,6 +445,8 @@ class ParticleLocalizer(_FusesOdometry):
         filters = list(state.filters)
         correction, cov = state.correction.copy(), state.cov.copy()
         particles, counts = state.particles.copy(), state.counts.copy()
+        converged, steps = state.converged.copy(), state.steps.copy()
+        steps[index] += 1
         failed = np.zeros(index.size, dtype=bool)
         if readings is not None and not readings.empty:
             amcl = self.amcl
@@ -393,10 +457,12 @@ class ParticleLocalizer(_FusesOdometry):
                     continue
                 try:
                     new, info = amcl.update(
-                        filters[i], odom_now[row], state.generators[i], force=True,
+                        filters[i], odom_now[row],
+                        counter_stream(state.seeds[i], PARTICLE_STREAM, steps[i]), force=True,
                         scan=readings.scan[row] if use_scan else None,
                         landmark_ids=readings.landmark_ids[row] if use_marks else None,
                         landmark_z=readings.landmark_z[row] if use_marks else None,
+                        time=float(steps[i]) * dt,
                     )  # fmt: skip
                     found = amcl.estimate(new)
                 except (EstimationError, InputError):
@@ -405,6 +471,7 @@ class ParticleLocalizer(_FusesOdometry):
                 filters[i] = new
                 correction[i] = compose(found.pose, inverse_pose(odom_now[row]))
                 cov[i] = found.cov
+                converged[i] = not found.ambiguous
                 particles[i] = info.particles
                 counts[i] += (1, info.landmarks_used, 0, info.landmarks_skipped,
                               info.beams_used, info.beams_skipped)  # fmt: skip
@@ -414,7 +481,9 @@ class ParticleLocalizer(_FusesOdometry):
         return (
             new_estimate,
             odo_twist,
-            ParticleState(filters, state.generators, odom, correction, cov, particles, counts),
+            ParticleState(
+                filters, state.seeds, odom, correction, cov, particles, counts, converged, steps
+            ),
         )
 
     def particles_of(self, state: ParticleState, robot: int) -> np.ndarray:

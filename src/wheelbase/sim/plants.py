@@ -36,7 +36,7 @@ from wheelbase.errors import ConfigError
 from wheelbase.integrate import METHODS, integrate_step
 from wheelbase.models.base import KinematicModel
 
-__all__ = ["DynamicPlant", "KinematicPlant", "WheelAxle"]
+__all__ = ["DynamicPlant", "KinematicPlant", "TerrainPlant", "TerrainState", "WheelAxle"]
 
 _WHEEL_DRIVEN = (VELOCITY_COMMAND, ("omega_left", "omega_right"))
 
@@ -109,6 +109,16 @@ class WheelAxle:
         return np.stack(
             [0.5 * (left + right), np.zeros_like(left), 0.5 * (right - left) / half], -1
         )
+
+
+def _torque_names(controller_names: tuple[str, ...]) -> tuple[str, ...]:
+    """The command names of a torque-driven plant, or ConfigError for another controller."""
+    if len(controller_names) != 2 or not all(name.startswith("tau") for name in controller_names):
+        raise ConfigError(
+            f"a dynamic plant takes wheel torques (tau_left, tau_right); this controller "
+            f"gives {tuple(controller_names)}: wrap it in control.TwistTorqueLoop"
+        )
+    return tuple(controller_names)
 
 
 class _PoseAndTwistOnly:
@@ -268,14 +278,7 @@ class DynamicPlant(_PoseAndTwistOnly):
         controller_names : tuple of str
             The controller's command names.
         """
-        if len(controller_names) != 2 or not all(
-            name.startswith("tau") for name in controller_names
-        ):
-            raise ConfigError(
-                f"a dynamic plant takes wheel torques (tau_left, tau_right); this controller "
-                f"gives {tuple(controller_names)}: wrap it in control.TwistTorqueLoop"
-            )
-        return tuple(controller_names)
+        return _torque_names(controller_names)
 
     def motion(
         self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
@@ -326,3 +329,190 @@ class DynamicPlant(_PoseAndTwistOnly):
         new_twist = full[:, 3:]
         turned = 0.5 * (rates + self.axle.wheel_rates(new_twist)) * dt
         return full[:, :3], new_twist, turned, state
+
+
+@dataclass(frozen=True)
+class TerrainState:
+    """What a :class:`TerrainPlant` keeps between steps, one row per robot.
+
+    Attributes
+    ----------
+    aux : numpy.ndarray, shape (N, 13)
+        Wheel rates and angles, energy integrals, the lagged ground force
+        (:data:`wheelbase.terrain.dynamics.AUX_NAMES`).
+    signals : numpy.ndarray, shape (N, 11)
+        Slip, traction, loads, sinkage and surfaces after the last step
+        (:data:`wheelbase.terrain.dynamics.SIGNAL_NAMES`).
+    time : float
+        Simulated time [s] of the next step (for the payload changes).
+    """
+
+    aux: np.ndarray
+    signals: np.ndarray
+    time: float = 0.0
+
+
+@dataclass(frozen=True)
+class TerrainPlant:
+    """A dynamic differential drive on terrain: slip, traction limits, slopes, soil, payloads.
+
+    Each step integrates :class:`wheelbase.terrain.TerrainDynamics` (rigid contact or wheel
+    slip) under the wheel torques held over the step. With slip the encoders count the wheels'
+    own rotation, so a spinning wheel drives the odometry off; with rigid contact they count it
+    as :class:`DynamicPlant` does (the trapezoid of the rolling rates), so that on a surface
+    without resistance, flat, the two plants give the same runs.
+
+    Parameters
+    ----------
+    model : TerrainDynamics
+        The robot on its ground from t = 0.
+    axle : WheelAxle or None
+        The encoder axle (default: the model's wheels, no geometry error).
+    changes : tuple of (float, TerrainDynamics)
+        Later models and the times [s] they take over, increasing (a payload picked up or
+        dropped: the same ground under another body).
+    """
+
+    model: Any
+    axle: WheelAxle | None = None
+    changes: tuple = ()
+
+    state_size: ClassVar[int] = 6
+    dynamic: ClassVar[bool] = True
+
+    def __post_init__(self) -> None:
+        from wheelbase.terrain.dynamics import TerrainDynamics
+
+        models = [self.model] + [model for _, model in self.changes]
+        if not all(isinstance(model, TerrainDynamics) for model in models):
+            raise ConfigError("a terrain plant needs TerrainDynamics models")
+        times = [float(time) for time, _ in self.changes]
+        if any(not np.isfinite(t) or t < 0 for t in times) or times != sorted(times):
+            raise ConfigError(f"the model changes must come at increasing times >= 0 s ({times})")
+        if len({(m.slip, m.dynamics.wheel_radius, m.dynamics.half_track) for m in models}) > 1:
+            raise ConfigError("a payload change keeps the wheels and the contact model")
+        object.__setattr__(self, "changes", tuple(zip(times, models[1:], strict=True)))
+        if self.axle is None:
+            dyn = self.model.dynamics
+            object.__setattr__(self, "axle", WheelAxle(dyn.wheel_radius, dyn.half_track))
+
+    def model_at(self, time: float) -> Any:
+        """The model in force at ``time`` [s].
+
+        Parameters
+        ----------
+        time : float
+            Simulated time [s].
+        """
+        model = self.model
+        for start, later in self.changes:
+            if time >= start - 1e-9:
+                model = later
+        return model
+
+    def command_names(self, controller_names: tuple[str, ...]) -> tuple[str, ...]:
+        """The plant takes wheel torques, as :class:`DynamicPlant`.
+
+        Parameters
+        ----------
+        controller_names : tuple of str
+            The controller's command names.
+        """
+        return _torque_names(controller_names)
+
+    def start(self, n: int, seeds: np.ndarray) -> TerrainState:
+        """Wheels at rest (their rates are set from the first twist at the first step).
+
+        Parameters
+        ----------
+        n : int
+            Number of robots.
+        seeds : numpy.ndarray
+            Their seeds (unused: the plant is deterministic).
+        """
+        from wheelbase.terrain.dynamics import SIGNAL_NAMES
+
+        return TerrainState(self.model.start(n), np.zeros((n, len(SIGNAL_NAMES))), 0.0)
+
+    def signals(self, state: TerrainState) -> dict[str, np.ndarray]:
+        """What the log keeps each row: slip, traction, normal load, sinkage and surface of
+        each drive wheel, and the energy integrals [J] (``energy_*``).
+
+        Parameters
+        ----------
+        state : TerrainState
+            The plant's state.
+        """
+        from wheelbase.terrain.dynamics import AUX_NAMES, SIGNAL_NAMES
+
+        out = {name: state.signals[:, k].copy() for k, name in enumerate(SIGNAL_NAMES[:10])}
+        for k in range(4, 10):
+            out[f"energy_{AUX_NAMES[k]}"] = state.aux[:, k].copy()
+        return out
+
+    def motion(
+        self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
+    ):
+        """The current twist and the drive wheels' rates (their own with slip).
+
+        Parameters
+        ----------
+        twist : numpy.ndarray, shape (N, 3)
+            The current body twist.
+        command : numpy.ndarray, shape (N, 2)
+            Wheel torques [N·m] (unused here).
+        names : tuple of str
+            Their names.
+        state : TerrainState
+            The plant's state.
+        """
+        rolling = self.axle.wheel_rates(twist)
+        if not self.model.slip or state is None:
+            return twist, rolling
+        started = state.aux[:, 12:13] > 0.5
+        return twist, np.where(started, state.aux[:, 0:2], rolling)
+
+    def step(self, pose, twist, command, moved, rates, dt, state, index):
+        """Advance the robots ``index`` by ``dt`` under the wheel torques ``command``.
+
+        Parameters
+        ----------
+        pose, twist : numpy.ndarray, shape (M, 3)
+            The state at the start of the step (the robots still running).
+        command : numpy.ndarray, shape (M, 2)
+            Wheel torques (left, right) [N·m].
+        moved : numpy.ndarray, shape (M, 3)
+            The twist of :meth:`motion` (unused).
+        rates : numpy.ndarray, shape (M, 2)
+            The wheel rates at the start of the step.
+        dt : float
+            Step [s].
+        state : TerrainState
+            The plant's state (all robots).
+        index : numpy.ndarray of int, shape (M,)
+            Which robots the rows are.
+
+        Returns
+        -------
+        pose, twist, wheel_turn, state
+        """
+        from wheelbase.terrain.dynamics import terrain_step
+
+        model = self.model_at(state.time)
+        full = np.concatenate([pose, twist], axis=-1)
+        aux = state.aux[index].copy()
+        before = aux[:, 2:4].copy()
+        signals = np.zeros((len(index), state.signals.shape[1]))
+        torques = np.ascontiguousarray(command, dtype=np.float64)
+        terrain_step(full, aux, torques, dt, *model.kernel_args(), signals)
+        new_twist = full[:, 3:]
+        if model.slip:
+            turned = aux[:, 2:4] - before
+            if self.axle.has_error:  # the true wheels are scaled, their ground travel is not
+                true = np.array(self.axle.radius_scale) * self.axle.wheel_radius
+                turned = turned * model.dynamics.wheel_radius / true
+        else:
+            turned = 0.5 * (rates + self.axle.wheel_rates(new_twist)) * dt
+        all_aux, all_signals = state.aux.copy(), state.signals.copy()
+        all_aux[index], all_signals[index] = aux, signals
+        return full[:, :3], new_twist, turned, TerrainState(all_aux, all_signals, state.time + dt)

@@ -10,14 +10,18 @@ dt, pose, twist, state=..., index=...)`` returning the new estimate ``(M, 3)``, 
 twist ``(M, 3)`` and its new state, for the robots ``index`` still running. When the engine has
 sensors it also passes ``readings=`` (:class:`~wheelbase.sim.sensors.Readings`, rows as
 ``index``); the filters that use them are in :mod:`wheelbase.sim.localizers`. An estimator may
-also have ``signals(state)`` (named per-robot arrays for the log, e.g. a covariance) and
-``particles_of(state, robot)`` (particles for drawing). A non-finite estimate for a robot ends
-that robot ``diverged``.
+also have ``first_estimate(state)`` (the estimate at t = 0 when it does not start from the
+true start pose: a global localisation), ``signals(state)`` (named per-robot arrays for the
+log, e.g. a covariance) and ``particles_of(state, robot)`` (particles for drawing). A
+non-finite estimate for a robot ends that robot ``diverged``.
 
-Random encoder errors are drawn from one generator per robot, seeded by that robot's seed, so
-a robot's run does not depend on which batch it ran in: robot ``i`` of a batch equals the
-single run with seed ``seeds[i]``. Gaussian tick noise is drawn in blocks of steps (one call
-per robot every :data:`NOISE_BLOCK` steps, the same numbers as one draw per step).
+Random encoder errors are counter-based (:mod:`wheelbase.sim.streams`): the errors of robot
+``i`` at step k come from its seed, :data:`ENCODER_STREAM` and k, so a robot's run does not
+depend on which batch it ran in (robot ``i`` of a batch equals the single run with seed
+``seeds[i]``) and reading the ticks of one step twice gives the same ticks. Gaussian tick
+noise is drawn in blocks of :data:`NOISE_BLOCK` steps (one generator per robot and block,
+kept while the steps stay in that block; the numbers of a step depend only on its block and
+its place in it).
 """
 
 from __future__ import annotations
@@ -29,15 +33,27 @@ import numpy as np
 
 from wheelbase.errors import ConfigError
 from wheelbase.geometry import wrap_angle
+from wheelbase.sim.streams import counter_stream
 
-__all__ = ["NOISE_BLOCK", "EncoderOdometry", "EncoderReadings", "PerfectState"]
+__all__ = [
+    "ENCODER_STREAM",
+    "NOISE_BLOCK",
+    "TICK_STREAM",
+    "EncoderOdometry",
+    "EncoderReadings",
+    "PerfectState",
+]
 
 NOISE_BLOCK = 512
 """Steps of Gaussian tick noise drawn per call of a robot's generator."""
+ENCODER_STREAM = 0
+"""Stream of the Gaussian tick noise (counter: the block of :data:`NOISE_BLOCK` steps)."""
+TICK_STREAM = 5
+"""Stream of an encoder with missed or extra ticks (counter: the step)."""
 
 
 class EncoderReadings:
-    """Per-robot random streams of an encoder (the evolving part of the encoders).
+    """The encoders of N robots and their counter-based random errors (module docstring).
 
     Parameters
     ----------
@@ -49,19 +65,35 @@ class EncoderReadings:
 
     def __init__(self, encoder: Any, seeds: np.ndarray) -> None:
         self.encoder = encoder
-        self.generators = [np.random.default_rng(int(seed)) for seed in seeds]
-        self._noise = np.zeros((len(self.generators), 0, 2))
-        self._row = 0
+        self.seeds = np.array(seeds, dtype=np.int64)
+        self.seeds.setflags(write=False)
         self._gaussian_only = encoder.miss_probability == 0 and encoder.extra_probability == 0
+        # the noise of one block of steps, (block, (N, NOISE_BLOCK, 2)): a cache of a function
+        # of the seeds and the block, not a state (whoever reads a step gets the same numbers)
+        self._block: tuple[int, np.ndarray | None] = (-1, None)
 
-    def tick_deltas(self, before: np.ndarray, after: np.ndarray) -> np.ndarray:
-        """Tick differences ``(N, 2)`` counted while the wheels turn from ``before`` to
-        ``after`` [rad], with each robot's random errors.
+    def _block_noise(self, block: int) -> np.ndarray:
+        if self._block[0] != block:
+            std = self.encoder.noise_std
+            noise = np.stack(
+                [
+                    counter_stream(seed, ENCODER_STREAM, block).normal(0.0, std, (NOISE_BLOCK, 2))
+                    for seed in self.seeds
+                ]
+            )
+            self._block = (block, noise)
+        return self._block[1]  # type: ignore[return-value]
+
+    def tick_deltas(self, before: np.ndarray, after: np.ndarray, step: int) -> np.ndarray:
+        """Tick differences ``(N, 2)`` counted during step ``step`` while the wheels turn from
+        ``before`` to ``after`` [rad], with each robot's random errors of that step.
 
         Parameters
         ----------
         before, after : numpy.ndarray, shape (N, 2)
             Cumulative wheel angles [rad].
+        step : int
+            Index of the step (the counter of the random streams), >= 0.
         """
         encoder = self.encoder
         # Encoder.count without its input checks: the engine's angles are finite arrays
@@ -72,21 +104,13 @@ class EncoderReadings:
         if encoder.is_ideal:
             return true
         if self._gaussian_only:
-            if self._row >= self._noise.shape[1]:
-                self._noise = np.stack(
-                    [
-                        g.normal(0.0, encoder.noise_std, size=(NOISE_BLOCK, 2))
-                        for g in self.generators
-                    ]
-                )
-                self._row = 0
-            noise = self._noise[:, self._row]
-            self._row += 1
+            block, row = divmod(int(step), NOISE_BLOCK)
+            noise = self._block_noise(block)[:, row]
             return true + np.round(noise).astype(np.int64)
         return np.stack(
             [
-                encoder.tick_deltas(before[i], after[i], generator)
-                for i, generator in enumerate(self.generators)
+                encoder.tick_deltas(before[i], after[i], counter_stream(seed, TICK_STREAM, step))
+                for i, seed in enumerate(self.seeds)
             ]
         )
 

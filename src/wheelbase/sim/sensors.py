@@ -1,8 +1,8 @@
 """Exteroceptive sensors in the closed loop: a lidar and a landmark sensor read at the true poses.
 
 :class:`SensorSuite` holds the constant part (the sensors, what they see, their rates); the
-engine keeps its evolving part, :class:`SensorStreams` (one random generator per robot and
-sensor), in :attr:`~wheelbase.sim.EngineState.sensors`. After each plant step, a sensor whose
+engine keeps the robots' seeds for their random streams, :class:`SensorStreams`, in
+:attr:`~wheelbase.sim.EngineState.sensors`. After each plant step, a sensor whose
 period has come round is read at the robots' *new true* poses and its :class:`Readings` go to
 the estimator with the step's encoder ticks.
 
@@ -10,9 +10,11 @@ Timing: with rate f [Hz] and step dt [s], the sensor is read after step k (at t 
 when ⌊(k + 1)·dt·f⌋ > ⌊k·dt·f⌋, i.e. once per period, at the first step that reaches it (every
 step when f >= 1/dt). Nothing is read at t = 0.
 
-Randomness: robot i's lidar noise comes from ``default_rng([seed_i, 1])`` and its landmark
-noise (detections, clutter) from ``default_rng([seed_i, 2])``, so robot i of a batch reads
-exactly what the single run with seed i reads. The ray cast itself is one batched call.
+Randomness is counter-based (:mod:`wheelbase.sim.streams`): robot i's lidar noise after step
+k comes from (seed_i, :data:`LIDAR_STREAM`, k) and its landmark noise (detections, clutter)
+from (seed_i, :data:`LANDMARK_STREAM`, k), so robot i of a batch reads exactly what the single
+run with seed i reads, and reading one step twice gives the same readings. The ray cast
+itself is one batched call.
 """
 
 from __future__ import annotations
@@ -25,13 +27,14 @@ import numpy as np
 
 from wheelbase._validate import as_float_array, check_choice, positive
 from wheelbase.errors import ConfigError
+from wheelbase.sim.streams import counter_stream
 
 __all__ = ["LANDMARK_STREAM", "LIDAR_STREAM", "Readings", "SensorStreams", "SensorSuite"]
 
 LIDAR_STREAM = 1
-"""Second word of the seed of a robot's lidar noise: ``default_rng([seed, LIDAR_STREAM])``."""
+"""Stream of a robot's lidar noise (:func:`~wheelbase.sim.streams.counter_stream`)."""
 LANDMARK_STREAM = 2
-"""Second word of the seed of a robot's landmark noise."""
+"""Stream of a robot's landmark noise."""
 
 
 @dataclass(frozen=True)
@@ -76,7 +79,7 @@ class Readings:
 
 
 class SensorStreams:
-    """Per-robot random generators of the sensors (the evolving part of a suite).
+    """The robots' seeds of the sensors' counter-based random streams (module docstring).
 
     Parameters
     ----------
@@ -85,8 +88,22 @@ class SensorStreams:
     """
 
     def __init__(self, seeds: np.ndarray) -> None:
-        self.lidar = [np.random.default_rng([int(s), LIDAR_STREAM]) for s in seeds]
-        self.landmarks = [np.random.default_rng([int(s), LANDMARK_STREAM]) for s in seeds]
+        self.seeds = np.array(seeds, dtype=np.int64)
+        self.seeds.setflags(write=False)
+
+    def generators(self, stream: int, step: int, index: np.ndarray) -> list[np.random.Generator]:
+        """One generator per robot of ``index`` for ``stream`` after step ``step``.
+
+        Parameters
+        ----------
+        stream : int
+            :data:`LIDAR_STREAM` or :data:`LANDMARK_STREAM`.
+        step : int
+            The step just taken.
+        index : numpy.ndarray of int
+            Which robots.
+        """
+        return [counter_stream(self.seeds[i], stream, step) for i in index]
 
 
 def _due(step: int, dt: float, rate: float) -> bool:
@@ -202,6 +219,7 @@ class SensorSuite:
         poses: np.ndarray,
         streams: SensorStreams,
         index: np.ndarray | None = None,
+        cast: Any = None,
     ) -> Readings:
         """Read the sensors that are due after step ``step`` at true ``poses``.
 
@@ -214,9 +232,13 @@ class SensorSuite:
         poses : numpy.ndarray, shape (M, 3)
             True poses of the robots ``index`` [m, m, rad].
         streams : SensorStreams
-            Every robot's generators.
+            Every robot's seed.
         index : numpy.ndarray of int, shape (M,), optional
             Which robots these are (default 0 … M − 1).
+        cast : callable, optional
+            ``cast(sensor_poses (M, 3), beam_angles, max_range, index) -> (M, beams)`` true
+            ranges in a world beyond the map (:meth:`~wheelbase.sim.Surroundings.caster`);
+            default the map alone.
 
         Returns
         -------
@@ -227,12 +249,18 @@ class SensorSuite:
         lidar_due, landmarks_due = self.due(step, dt)
         scan = ids = z = None
         if lidar_due and poses.shape[0]:
-            scan = self.scan(poses, [streams.lidar[i] for i in index])
+            scan = self.scan(poses, streams.generators(LIDAR_STREAM, step, index), cast, index)
         if landmarks_due and poses.shape[0]:
-            ids, z = self.observe(poses, [streams.landmarks[i] for i in index])
+            ids, z = self.observe(poses, streams.generators(LANDMARK_STREAM, step, index))
         return Readings(scan, ids, z)
 
-    def scan(self, poses: np.ndarray, generators: list[np.random.Generator]) -> np.ndarray:
+    def scan(
+        self,
+        poses: np.ndarray,
+        generators: list[np.random.Generator],
+        cast: Any = None,
+        index: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Lidar scans ``(M, beams)`` at ``poses``, robot i's noise from ``generators[i]``.
 
         Parameters
@@ -241,15 +269,23 @@ class SensorSuite:
             True robot poses.
         generators : list of numpy.random.Generator
             One per pose.
+        cast : callable, optional
+            The true ranges in a world beyond the map (see :meth:`read`).
+        index : numpy.ndarray of int, shape (M,), optional
+            Which robots these are (for ``cast``).
         """
         from wheelbase.sensors import scan_rays
 
         lidar = self.lidar
         sensor = lidar.sensor_poses(poses)
-        true = scan_rays(
-            self.world, sensor[:, :2], sensor[:, 2], lidar.beam_angles, lidar.max_range,
-            self.method,
-        )  # fmt: skip
+        if cast is not None:
+            where = np.arange(poses.shape[0]) if index is None else index
+            true = cast(sensor, lidar.beam_angles, lidar.max_range, where)
+        else:
+            true = scan_rays(
+                self.world, sensor[:, :2], sensor[:, 2], lidar.beam_angles, lidar.max_range,
+                self.method,
+            )  # fmt: skip
         return np.stack(
             [lidar.readings(true[i], generator) for i, generator in enumerate(generators)]
         )

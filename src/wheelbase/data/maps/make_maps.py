@@ -10,6 +10,10 @@ deterministic. Each map is drawn with axis-aligned rectangles in world coordinat
 * ``maze``: 20 × 20 m at 0.1 m with 2 m corridors for a differential-drive robot (RM100
   size, turning in place).
 * ``warehouse``: 30 × 20 m at 0.1 m, racks with 2.4 m aisles for a small car-like tug.
+* ``room20``: an empty walled 20 × 20 m room at 0.05 m (the crowd-crossing benchmark's).
+* ``doorway``: 12 × 6 m at 0.05 m, two rooms joined by a 1.2 m door in a 0.2 m wall.
+* ``corridor_bay``: a 1.2 m corridor 16 m long at 0.05 m with one passing bay (2.5 m long,
+  1.4 m deeper on one side) in the middle: two robots 0.7 m wide cannot pass elsewhere.
 
 and the polygon worlds (world YAML, :mod:`wheelbase.planning.world_io`):
 
@@ -142,6 +146,34 @@ def warehouse() -> tuple[np.ndarray, float, list[dict]]:
     return occ, res, scenarios
 
 
+def room20() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.05
+    occ = _canvas(20.0, 20.0, res)
+    robot = {"footprint": [0.66, 0.455], "rear_axle_to_center": 0.0, "turning_radius": 0.0}
+    return occ, res, [{"name": "diagonal", "start": [2.0, 2.0, 45.0], "goal": [18.0, 18.0, 45.0],
+                       **robot}]  # fmt: skip
+
+
+def doorway() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.05
+    occ = _canvas(12.0, 6.0, res)
+    _box(occ, res, 5.9, 0.0, 6.1, 2.4)  # the wall, a 1.2 m door between y 2.4 and 3.6
+    _box(occ, res, 5.9, 3.6, 6.1, 6.0)
+    robot = {"footprint": [0.66, 0.455], "rear_axle_to_center": 0.0, "turning_radius": 0.0}
+    return occ, res, [{"name": "through_the_door", "start": [2.0, 3.0, 0.0],
+                       "goal": [10.0, 3.0, 0.0], **robot}]  # fmt: skip
+
+
+def corridor_bay() -> tuple[np.ndarray, float, list[dict]]:
+    res = 0.05
+    occ = np.ones((round(3.0 / res), round(16.0 / res)), bool)
+    occ[round(0.2 / res) : round(1.4 / res), round(0.2 / res) : round(15.8 / res)] = False
+    occ[round(1.4 / res) : round(2.8 / res), round(6.75 / res) : round(9.25 / res)] = False
+    robot = {"footprint": [0.7, 0.7], "rear_axle_to_center": 0.0, "turning_radius": 0.0}
+    return occ, res, [{"name": "end_to_end", "start": [1.0, 0.8, 0.0],
+                       "goal": [15.0, 0.8, 0.0], **robot}]  # fmt: skip
+
+
 # the tight-manoeuvre car of the planning benchmark: wheelbase 2.8 m, width 1.94 m, overhangs
 # 0.96 m (front) and 0.93 m (rear), steering up to 0.75 rad: R = 2.8 / tan(0.75)
 TIGHT_CAR = {
@@ -258,6 +290,9 @@ MAPS = {
     "corridor_uturn": corridor_uturn,
     "maze": maze,
     "warehouse": warehouse,
+    "room20": room20,
+    "doorway": doorway,
+    "corridor_bay": corridor_bay,
 }
 
 

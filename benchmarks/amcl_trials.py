@@ -1,13 +1,16 @@
-"""Simulated runs for testing localisation without the closed loop: a wandering robot, its
+"""Benchmark harness: localisation trials without the closed loop, a wandering robot, its
 odometry, and a driver that feeds a lidar and :class:`~wheelbase.localization.AMCL`; the
-kidnapped robot (:func:`kidnapped_run`).
+kidnapped robot (:func:`kidnapped_run`). Used by ``benchmarks/sensors.py`` and the AMCL tests
+(``tests/conftest.py`` puts this folder on the path); not part of the library.
 
 :func:`wander` drives a point robot straight ahead at ``step`` metres per tick, turning in place
 away from anything its lidar sees within ``clearance`` in front; the heading takes a small random
-walk so that routes differ between seeds. :func:`noisy_odometry` integrates the true motion with
-multiplicative errors on each tick's distance and turn and an additive turn error, as wheel
-odometry drifts. :func:`run_amcl` replays a route: the filter updates whenever the odometry
-has moved enough, with a scan taken at the true pose, and the error of the estimate is recorded.
+walk so that routes differ between seeds. Where a full turn finds no free heading (a room
+smaller than the clearance), it stops with a :class:`~wheelbase.errors.PlanningError`.
+:func:`noisy_odometry` integrates the true motion with multiplicative errors on each tick's
+distance and turn and an additive turn error, as wheel odometry drifts. :func:`run_amcl`
+replays a route: the filter updates whenever the odometry has moved enough, with a scan taken
+at the true pose, and the error of the estimate is recorded.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_rng, positive
+from wheelbase.errors import MapError, PlanningError
 from wheelbase.geometry import compose, wrap_angle
 from wheelbase.localization.amcl import AMCL, AMCLState
 from wheelbase.planning import OccupancyGrid
@@ -60,19 +64,34 @@ def wander(
     -------
     numpy.ndarray, shape (T, 3)
         One pose per tick.
+
+    Raises
+    ------
+    PlanningError
+        Every heading is blocked: a full turn in place found no way ahead.
     """
     rng = as_rng(rng)
     distance = positive("distance", distance, "m")
+    turn_step = positive("turn_step", turn_step, "rad")
     pose = clear_pose(grid, rng) if start is None else np.array(start, dtype=np.float64)
     probe = Lidar(beams=9, fov=math.radians(60.0), max_range=3.0)
     poses = [pose.copy()]
     travelled, turn = 0.0, 0.0
+    full_turn = math.ceil(2.0 * math.pi / turn_step)  # ticks of turning that see every heading
+    turning = 0
     while travelled < distance:
         if probe.scan(grid, pose, noise=False).min() < clearance:
+            turning += 1
+            if turning > full_turn:
+                raise PlanningError(
+                    f"wander: every heading from ({pose[0]:.2f}, {pose[1]:.2f}) m is blocked "
+                    f"within clearance = {clearance:g} m (a full turn found no way ahead); give "
+                    "a smaller clearance or a larger free space"
+                )
             turn = turn or float(rng.choice([-1.0, 1.0]))
             pose[2] = wrap_angle(pose[2] + turn * turn_step)
         else:
-            turn = 0.0
+            turn, turning = 0.0, 0
             pose[0] += step * math.cos(pose[2])
             pose[1] += step * math.sin(pose[2])
             pose[2] = wrap_angle(pose[2] + rng.normal(0.0, 0.02))
@@ -98,9 +117,18 @@ def clear_pose(
     Returns
     -------
     numpy.ndarray, shape (3,)
+
+    Raises
+    ------
+    MapError
+        No cell is that far from the obstacles.
     """
     rng = as_rng(rng)
     cells = np.argwhere(grid.distance_field > clearance)
+    if cells.size == 0:
+        raise MapError(
+            f"no free cell of the map is more than clearance = {clearance:g} m from an obstacle"
+        )
     pose = np.array([*grid.cell_to_world(cells[rng.integers(len(cells))]), 0.0])
     pose[2] = rng.uniform(-math.pi, math.pi)
     return pose

@@ -1,0 +1,296 @@
+"""Mapping and SLAM (issue 23): pose graphs beside GTSAM, lidar SLAM on the Intel and ACES
+logs without odometry, SLAM in simulation against ground truth, landmark SLAM on MRCLAM.
+
+Sections (one JSON object; ``targets`` says which targets this run met):
+
+``posegraphs``
+    Each graph of ``../shared/data/posegraph``: wheelbase's optimiser from the file's guess
+    (``graph``) and from the chordal initialisation (``chordal``), and GTSAM 4.3's
+    Levenberg–Marquardt from the file's guess (a prior on vertex 0, default parameters),
+    taking turns; χ² in g2o's convention (Σ rᵀΩr = 2 × GTSAM's error), iterations, the best
+    wall time of ``--repeat`` runs.
+``carmen``
+    :class:`~wheelbase.mapping.lidar_slam.LidarSlam` on each corrected log, **without
+    odometry** (the logs' odometry fields repeat the corrected poses); Kümmerle's relative
+    errors against the logs' own poses, which are a SLAM solution, not the benchmark's
+    hand-verified relations. Pairs (:func:`~wheelbase.mapping.evaluation.relation_pairs`):
+    each scan with the first one ≥ 0.5 m further along the reference (local) and each scan
+    with the nearest one ≥ 30 s earlier within 1 m and 30° (loops); reported together and
+    apart. ``processing_time_s`` is wall time on this machine, ``cpu_time_s`` the process's.
+``simulation``
+    A route with a loop on the bundled maze and warehouse, driven under AMCL (so that the
+    robot follows it), with encoders whose wheels are 1 % larger than the odometry believes;
+    the odometry is dead-reckoned from the logged ticks; SLAM with that odometry against the
+    true poses (absolute trajectory RMSE) and the true map (agreement of the cells both call
+    known), for a 60- and a 360-beam lidar; the same without loop closures beside it.
+``landmarks``
+    :func:`~wheelbase.mapping.landmark_slam.landmark_slam` on MRCLAM data set 6 robot 1, EKF
+    and smoothing, landmark positions unknown.
+``occupancy_speed``
+    CPU time of one 360-beam, 8 m scan into a 0.05 m grid.
+
+Usage: ``python benchmarks/slam.py [--quick] [--sections posegraphs,carmen,...]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def _gtsam_lm(graph):
+    import gtsam
+
+    factors, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+    for k, (i, j) in enumerate(graph.edges):
+        factors.add(gtsam.BetweenFactorPose2(
+            int(i), int(j), gtsam.Pose2(*graph.measurements[k]),
+            gtsam.noiseModel.Gaussian.Information(graph.information[k])))  # fmt: skip
+    for v, pose in enumerate(graph.poses):
+        values.insert(v, gtsam.Pose2(*pose))
+    factors.add(gtsam.PriorFactorPose2(0, gtsam.Pose2(*graph.poses[0]),
+                                       gtsam.noiseModel.Isotropic.Sigma(3, 1e-6)))  # fmt: skip
+    start = time.perf_counter()
+    optimizer = gtsam.LevenbergMarquardtOptimizer(factors, values, gtsam.LevenbergMarquardtParams())
+    result = optimizer.optimize()
+    elapsed = time.perf_counter() - start
+    poses = np.array([[result.atPose2(v).x(), result.atPose2(v).y(), result.atPose2(v).theta()]
+                      for v in range(graph.n_vertices)])  # fmt: skip
+    return poses, int(optimizer.iterations()), elapsed
+
+
+def posegraphs(repeat: int) -> dict:
+    from wheelbase.datasets import read_g2o
+    from wheelbase.mapping import graph_chi2, optimize_pose_graph
+
+    out = {}
+    for name in ("intel", "MIT", "CSAIL", "manhattan"):
+        path = DATA / "posegraph" / f"{name}.g2o"
+        if not path.is_file():
+            continue
+        graph = read_g2o(path)
+        row: dict = {"vertices": graph.n_vertices, "edges": graph.n_edges,
+                     "chi2_initial": graph_chi2(graph)}  # fmt: skip
+        times: dict = {"graph": [], "chordal": [], "gtsam": []}
+        for _ in range(repeat):
+            for init in ("graph", "chordal"):
+                result = optimize_pose_graph(graph, initial=init)
+                times[init].append(result.solve_time_s)
+                row[init] = {"chi2": result.chi2, "iterations": result.iterations,
+                             "converged": result.converged}  # fmt: skip
+            try:
+                poses, iterations, elapsed = _gtsam_lm(graph)
+            except ImportError:
+                row["gtsam"] = None
+                continue
+            times["gtsam"].append(elapsed)
+            row["gtsam"] = {"chi2": graph_chi2(graph, poses), "iterations": iterations}
+        for key, values in times.items():
+            if values and row.get(key):
+                row[key]["time_s"] = min(values)
+        out[name] = row
+    return out
+
+
+def carmen(quick: bool) -> dict:
+    from wheelbase.datasets import read_carmen
+    from wheelbase.mapping import LidarSlam
+    from wheelbase.mapping.evaluation import lidar_metrics
+
+    out = {}
+    for name in ("intel", "aces"):
+        path = DATA / "carmen" / f"{name}-corrected.log.gz"
+        if not path.is_file():
+            continue
+        log = read_carmen(path)
+        if quick:
+            log = log.subset(slice(12, 80))
+        cpu = time.process_time()
+        result = LidarSlam().run(log)
+        metrics = lidar_metrics(log, result)
+        metrics["cpu_time_s"] = time.process_time() - cpu
+        metrics["cpu_real_time_factor"] = log.duration / metrics["cpu_time_s"]
+        metrics.pop("position_rmse_m", None)  # against a SLAM solution: not a ground truth
+        out[name] = metrics
+    return out
+
+
+ROUTES = {
+    "maze": {"start": [2.0, 2.0, 0.0],
+             "goals": [[18.5, 6.0, 90.0], [2.0, 6.3, 180.0], [2.0, 2.0, -90.0]]},
+    "warehouse": {"start": [3.0, 2.0, 0.0],
+                  "goals": [[6.4, 12.0, 90.0], [17.2, 14.0, -90.0], [3.0, 2.0, 180.0]]},
+}  # fmt: skip
+
+
+def simulated_log(world: str, beams: int, quick: bool):
+    """A looped route on a bundled map driven under AMCL, its scans as a ScanLog whose
+    odometry is dead-reckoned from the logged encoder ticks (wheels 1 % larger than the
+    odometry believes) and whose reference is the true pose; and the run's status."""
+    import wheelbase
+    from wheelbase.datasets import scans_from_log
+    from wheelbase.dynamics import RM100, RM100_HALF_TRACK
+    from wheelbase.odometry import WheelOdometry, integrate_increments
+    from wheelbase.sensors import Lidar
+
+    scenario = {
+        "name": f"slam_{world}", "map": world,
+        "robot": {"model": "diffdrive", "preset": "rm100"}, "plant": "kinematic",
+        "controller": {"law": "kanayama"},
+        "odometry": {"mode": "encoders", "pulses_per_revolution": 2048,
+                     "wheel_radius_scale": [1.01, 1.01]},
+        "sensors": {"lidar": {"beams": beams, "fov_deg": 360, "max_range": 8.0,
+                              "range_std": 0.01, "rate_hz": 5}},
+        "localization": {"method": "amcl"},
+        "trajectory": {"max_speed": 0.6, "max_acceleration": 0.5, "max_yaw_rate": 1.0},
+        "dt": 0.05, "duration": 400, **ROUTES[world],
+    }  # fmt: skip
+    if quick:
+        scenario["goals"] = scenario["goals"][:1]
+    run = wheelbase.run(scenario)
+    log = scans_from_log(run.log, Lidar(beams=beams, max_range=8.0), source=f"{world}-{beams}")
+    odo = WheelOdometry(RM100.wheel_radius, RM100_HALF_TRACK, 2048)
+    ticks = run.log.ticks[0, : int(run.log.length[0])]
+    distance, rotation = odo.increments(np.diff(ticks, axis=0))
+    poses = integrate_increments(run.log.true_pose[0, 0], distance, rotation)
+    rows = np.array(sorted(row for (r, row) in run.log.scans if r == 0))
+    log = type(log)(log.t, log.ranges, log.angles, log.max_range, poses[rows], log.reference,
+                    log.mount, log.invalid_readings, log.source)  # fmt: skip
+    return log, run.metrics.get("status")
+
+
+def simulation_slam(world: str, log) -> dict:
+    """SLAM with odometry, and without loop closures, against the truth of a simulated log."""
+    from wheelbase.mapping import LidarSlam, OccupancyMapper, map_agreement
+    from wheelbase.mapping.evaluation import absolute_trajectory_error
+    from wheelbase.planning import load_map
+
+    truth = load_map(world)
+    steps = np.hypot(*np.diff(log.reference[:, :2], axis=0).T)
+    row: dict = {
+        "scans": log.n_scans,
+        "distance_m": float(steps.sum()),
+        "odometry_rmse_m": absolute_trajectory_error(log.odometry, log.reference),
+    }
+    variants = {
+        "slam": LidarSlam(use_odometry=True),
+        "no_loop_closure": LidarSlam(use_odometry=True, loop_every=10**9),
+    }
+    for label, slam in variants.items():
+        result = slam.run(log)
+        grid = (
+            OccupancyMapper(resolution=truth.resolution)
+            .build(result.poses, log.ranges, log.angles, sensor_max_range=log.max_range)
+            .to_grid()
+        )
+        agreement, cells = map_agreement(grid, truth)
+        error = result.poses[:, :2] - log.reference[:, :2]
+        row[label] = {
+            "position_rmse_m": absolute_trajectory_error(result.poses, log.reference),
+            "position_rmse_unaligned_m": float(np.sqrt(np.mean(np.sum(error**2, 1)))),
+            "map_agreement": agreement, "cells_compared": cells,
+            "loop_closures": len(result.loops),
+            "processing_time_s": result.processing_time_s,
+        }  # fmt: skip
+    return row
+
+
+def simulation(quick: bool) -> dict:
+    out = {}
+    for world in ROUTES:
+        for beams in (60,) if quick else (60, 360):
+            log, status = simulated_log(world, beams, quick)
+            out[f"{world}_{beams}"] = {"status": status, **simulation_slam(world, log)}
+    return out
+
+
+def landmarks() -> dict:
+    from wheelbase.mapping import landmark_slam
+
+    if not (DATA / "mrclam" / "Dataset6_Robot1_Measurement.dat").is_file():
+        return {}
+    return {m: landmark_slam(DATA / "mrclam", 1, m).metrics() for m in ("ekf", "smoothing")}
+
+
+def occupancy_speed(quick: bool) -> dict:
+    from wheelbase.mapping import OccupancyMapper
+
+    mapper = OccupancyMapper(resolution=0.05, max_range=8.0)
+    grid = mapper.empty_map((-10, 10, -10, 10))
+    rng = np.random.default_rng(0)
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    ranges = rng.uniform(1.0, 8.0, 360)
+    mapper.integrate(grid, [0, 0, 0], ranges, angles)  # compile / load the cache
+    n = 200 if quick else 5000
+    start, wall = time.process_time(), time.perf_counter()
+    for k in range(n):
+        mapper.integrate(grid, [0.01 * (k % 50), 0.0, 0.1 * k], ranges, angles)
+    return {"cpu_ms_per_scan": (time.process_time() - start) / n * 1e3,
+            "wall_ms_per_scan": (time.perf_counter() - wall) / n * 1e3,
+            "beams": 360, "max_range_m": 8.0, "resolution_m": 0.05}  # fmt: skip
+
+
+def targets(report: dict) -> dict:
+    out: dict = {}
+    for name, row in report.get("posegraphs", {}).items():
+        if row.get("gtsam"):
+            ours = min(row["graph"]["chi2"], row["chordal"]["chi2"])
+            out[f"posegraph_{name}_chi2_le_gtsam"] = ours <= row["gtsam"]["chi2"] * (1 + 1e-6)
+            out[f"posegraph_{name}_time_le_gtsam"] = (
+                row["chordal"]["time_s"] <= row["gtsam"]["time_s"]
+            )
+    carmen = report.get("carmen", {})
+    if "intel" in carmen:
+        out["intel_translation_le_0.03m"] = carmen["intel"]["relative_translation_error_m"] <= 0.03
+        out["intel_rotation_le_0.5deg"] = carmen["intel"]["relative_rotation_error_deg"] <= 0.5
+        out["intel_faster_than_15x"] = carmen["intel"]["real_time_factor"] >= 15
+    if "aces" in carmen:
+        out["aces_translation_le_0.04m"] = carmen["aces"]["relative_translation_error_m"] <= 0.04
+        out["aces_faster_than_15x"] = carmen["aces"]["real_time_factor"] >= 15
+    for name, row in report.get("simulation", {}).items():
+        out[f"sim_{name}_ate_le_0.05m"] = row["slam"]["position_rmse_m"] <= 0.05
+        out[f"sim_{name}_map_agreement_ge_0.98"] = row["slam"]["map_agreement"] >= 0.98
+    lm = report.get("landmarks", {}).get("smoothing")
+    if lm:
+        out["mrclam_robot_rmse_le_0.15m"] = lm["position_rmse_m"] <= 0.15
+        out["mrclam_landmark_rmse_le_0.15m"] = lm["landmark_rmse_m"] <= 0.15
+    speed = report.get("occupancy_speed")
+    if speed:
+        out["occupancy_scan_le_0.2ms_cpu"] = speed["cpu_ms_per_scan"] <= 0.2
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small subsets: a smoke run")
+    parser.add_argument("--repeat", type=int, default=3, help="timings per pose graph")
+    parser.add_argument("--sections", default="posegraphs,carmen,simulation,landmarks,"
+                        "occupancy_speed", help="comma-separated sections")  # fmt: skip
+    args = parser.parse_args()
+    chosen = args.sections.split(",")
+    report: dict = {}
+    if "occupancy_speed" in chosen:
+        report["occupancy_speed"] = occupancy_speed(args.quick)
+    if "posegraphs" in chosen:
+        report["posegraphs"] = posegraphs(1 if args.quick else args.repeat)
+    if "landmarks" in chosen and not args.quick:
+        report["landmarks"] = landmarks()
+    if "carmen" in chosen:
+        report["carmen"] = carmen(args.quick)
+    if "simulation" in chosen:
+        report["simulation"] = simulation(args.quick)
+    report["targets"] = targets(report)
+    json.dump(report, sys.stdout, indent=2, default=float)
+    print()
+
+
+if __name__ == "__main__":
+    main()

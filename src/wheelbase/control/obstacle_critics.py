@@ -1,0 +1,807 @@
+"""What a local controller sees of its perception, scored: the costmap critic and the
+dynamic-obstacle critic shared by MPPI and DWA (one implementation, a Numba and a NumPy twin).
+
+The perception is any object with the attributes of :class:`wheelbase.perception.LocalView`
+(duck typed, so that ``control`` does not depend on how it was made):
+``costmap.cost`` (uint8 (rows, cols)), ``costmap.resolution`` [m], ``costmap.origin`` (x0, y0)
+[m] on the grid geometry of :class:`~wheelbase.planning.OccupancyGrid` (row 0 the lowest y,
+column 0 the lowest x, origin the lower-left corner of cell (0, 0)); ``tracks.position`` (J, 2)
+[m], ``tracks.velocity`` (J, 2) [m/s], ``tracks.covariance`` (J, 4, 4) of (x, y, v_x, v_y) or
+``None``, ``tracks.radius`` (J,) [m] and, if present, ``tracks.confirmed`` (J,) (only confirmed
+tracks are predicted: a tentative one may be a spurious cluster, and the costmap marks it
+anyway); ``time`` [s], when the view was taken. Either part may be ``None``.
+
+**Costmap critic** (after Nav2's ``CostCritic``; costs 0 free, 1–252 inflated, 253 inscribed,
+254 lethal, 255 unknown). At every rollout step, with c the cost of the cell under the robot's
+reference point:
+
+- the soft cost is c/252 (1 for 253–255: unknown space is passable but dear, as Nav2 scores it
+  when it tracks unknown space), 0 off the costmap (a rolling window knows nothing there; the
+  static map's critic guards the map's edge);
+- the step collides when c = 254, or c = 253 (the footprint's inscribed circle touches an
+  obstacle: the costmap's inscribed radius must be the robot's, as in Nav2), or when any cell
+  that the footprint's outline passes through is lethal. The outline is traversed exactly (every
+  cell an edge enters, through the crossings of the grid lines) only where a lethal cell lies
+  within the footprint's circumscribed radius + a cell diagonal of the centre cell (the *gate*,
+  from the lethal cells' distance transform), so a free rollout costs one look-up a step. A
+  lethal cell gets inside the outline only by crossing it, which a step shorter than a cell does
+  not skip.
+
+When the robot already stands on a 253 cell without its outline touching a lethal one (the
+inscribed rule is conservative for a non-round footprint), the inscribed rule is off for that
+call, so the robot can drive out; an outline that truly overlaps a lethal cell keeps every
+rollout lethal: a safe stop.
+
+**Dynamic-obstacle critic.** Each track is predicted at constant velocity, its uncertainty
+growing with the horizon: at τ seconds past the view's time the mean is p + v·τ and the position
+covariance is the constant-velocity propagation of the track's covariance plus white
+acceleration noise of spectral density q (Bar-Shalom, Li & Kirubarajan, *Estimation with
+Applications to Tracking and Navigation*, 2001, §6.2.2):
+
+    P_pp(τ) = P_pp + τ·(P_pv + P_vp) + τ²·P_vv + (q·τ³/3)·I,     σ(τ) = √λ_max(P_pp(τ)),
+
+q = :data:`ACCELERATION_NOISE` = 0.03 m²/s³ by default (a walker's unmodelled acceleration: σ
+grows to 0.18 m in 1.5 s, 0.52 m in 3 s and 1.05 m in 4.8 s, of the order of the displacement
+errors of constant-velocity pedestrian prediction, about 1 m after 4.8 s on the ETH/UCY data:
+Schöller, Aravantinos, Lay & Knoll, IEEE RA-L 5(2), 2020). Rollout step k (the pose after
+k + 1 steps of dt, τ_k = (t − view time) + (k + 1)·dt) is compared with the prediction at
+τ_k — time-indexed, so a walker that crosses the path before the robot gets there costs
+nothing. With d the least over the
+footprint's covering disks of |disk centre − mean| − disk radius − track radius:
+
+- the step collides at contact, d <= 0 (with a relief as for the costmap: a track already in
+  contact now collides only where it gets 1 cm deeper);
+- the soft cost is Σ_tracks (r_dyn + κ·σ(τ_k) − d)² for d < r_dyn + κ·σ: zero beyond the
+  inflation distance r_dyn past the uncertainty, and still growing inside it, so that a rollout
+  nearer the predicted path of a track always pays more, however uncertain the prediction.
+  κ (``sigma_scale``) = 1 by default.
+
+A horizon of a few seconds is myopic about a walker coming straight at the robot: a rollout
+that slows down pushes the contact past its end and looks safe, and the robot stops in the
+walker's way (measured: a disc coming head-on at 0.5 m/s then runs into a stopped robot). So the
+rollout's final pose is also *held* (the robot stopped there) for ``hold_time`` seconds more
+(:data:`HOLD_TIME` = 5 s, checked every :data:`HOLD_STEP` = 0.25 s: a walker at 0.5 m/s
+moves 0.125 m between checks) and scored against the
+predictions at those times, with the soft cost only (each check weighted as the HOLD_STEP/dt
+rollout steps it stands for): standing in the predicted way of a track
+costs (the idea of the braking inevitable-collision-state test of Fraichard & Asama, "Inevitable
+collision states", Advanced Robotics 18(10), 2004), but is not lethal, since the robot need not
+stay there (a lethal hold stopped DWA in the walker's way: its arcs could not leave the line
+within one window). There the soft distance is not clamped at contact (d < 0 costs more than
+d = 0), so a held pose deeper in a track's way always pays more.
+
+Tracks that cannot come within reach of the robot over the horizon (its top speed × τ + the
+footprint's radius) are dropped before the kernels run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+
+from wheelbase.errors import InputError
+from wheelbase.limits import MAX_COORDINATE
+
+__all__ = [
+    "ACCELERATION_NOISE",
+    "HOLD_STEP",
+    "HOLD_TIME",
+    "INSCRIBED",
+    "LETHAL",
+    "MAX_INFLATED",
+    "MAX_PATH_OCCUPANCY",
+    "UNKNOWN",
+    "PerceptionArrays",
+    "PerceptionInputs",
+    "costmap_check",
+    "costmap_cost_at",
+    "costmap_costs",
+    "disk_reach",
+    "path_blocked",
+    "predict_tracks",
+    "read_costmap",
+    "read_tracks",
+    "track_cost_at",
+    "track_costs",
+]
+
+MAX_INFLATED, INSCRIBED, LETHAL, UNKNOWN = 252, 253, 254, 255
+"""Nav2's cell costs: the highest inflated cost, inscribed, lethal, unknown (0 is free)."""
+
+ACCELERATION_NOISE = 0.03
+"""Default q [m²/s³] of the tracks' white-acceleration prediction noise (module docstring)."""
+
+HOLD_TIME = 5.0
+"""Default time [s] a rollout's final pose is held against the predicted tracks."""
+
+HOLD_STEP = 0.25
+"""Spacing [s] of the checks of the held final pose."""
+
+MAX_VIEW_AGE = 3600.0
+"""Most seconds a view may be older than the call (the prediction is then meaningless)."""
+
+MAX_TRACK_SPEED = 1000.0
+"""Largest track speed component [m/s] a view may give."""
+
+CONTACT_RELIEF = 0.01
+"""How much deeper [m] a rollout must get into what it already touches to count as colliding."""
+
+
+# --------------------------------------------------------------------------- reading the view
+def read_costmap(costmap: Any) -> tuple[np.ndarray, float, np.ndarray]:
+    """The cost array, resolution and origin of a costmap-like object, checked.
+
+    Parameters
+    ----------
+    costmap : object
+        With ``cost`` (uint8 (rows, cols)), ``resolution`` [m] and ``origin`` (x0, y0) [m].
+
+    Returns
+    -------
+    cost : numpy.ndarray of uint8, shape (rows, cols), C-contiguous
+    resolution : float
+    origin : numpy.ndarray, shape (2,)
+    """
+    try:
+        cost, resolution, origin = costmap.cost, costmap.resolution, costmap.origin
+    except AttributeError as error:
+        raise InputError(
+            f"perception.costmap needs cost, resolution and origin (got {type(costmap).__name__}"
+            f" without {error.name!r})"
+        ) from None
+    array = np.asarray(cost)
+    if array.ndim != 2 or array.size == 0 or array.dtype != np.uint8:
+        raise InputError(
+            "perception.costmap.cost must be a non-empty uint8 array (rows, cols) of costs 0-255 "
+            f"(got dtype {array.dtype}, shape {array.shape})"
+        )
+    try:
+        res = float(resolution)
+    except (TypeError, ValueError):
+        res = math.nan
+    if not (math.isfinite(res) and res > 0.0):
+        raise InputError(f"perception.costmap.resolution must be > 0 m (got {resolution!r})")
+    try:
+        xy = np.asarray(origin, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        xy = np.zeros(0)
+    if xy.size < 2 or not np.all(np.abs(xy[:2]) <= MAX_COORDINATE):
+        raise InputError(
+            f"perception.costmap.origin must be (x0, y0) [m] within ±{MAX_COORDINATE:g} m (got "
+            f"{origin!r})"
+        )
+    return np.ascontiguousarray(array), res, xy[:2].copy()
+
+
+def read_tracks(tracks: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity, covariance and radius of the (confirmed) tracks, checked.
+
+    Parameters
+    ----------
+    tracks : object
+        With ``position`` (J, 2) [m], ``velocity`` (J, 2) [m/s], ``covariance`` (J, 4, 4) or
+        ``None``, ``radius`` (J,) [m] and optionally ``confirmed`` (J,).
+
+    Returns
+    -------
+    position, velocity : numpy.ndarray, shape (J', 2)
+    covariance : numpy.ndarray, shape (J', 4, 4)
+        Zero where the tracks give none.
+    radius : numpy.ndarray, shape (J',)
+        J' = the confirmed tracks.
+    """
+    try:
+        position, velocity, radius = tracks.position, tracks.velocity, tracks.radius
+    except AttributeError as error:
+        raise InputError(
+            f"perception.tracks needs position, velocity and radius (got "
+            f"{type(tracks).__name__} without {error.name!r})"
+        ) from None
+    position = _finite_array("perception.tracks.position", position, (-1, 2))
+    count = position.shape[0]
+    velocity = _finite_array("perception.tracks.velocity", velocity, (count, 2), MAX_TRACK_SPEED)
+    radius = _finite_array("perception.tracks.radius", radius, (count,))
+    if np.any(radius < 0.0):
+        raise InputError(f"perception.tracks.radius must be >= 0 m (got {radius.min():g})")
+    covariance = getattr(tracks, "covariance", None)
+    if covariance is None:
+        covariance = np.zeros((count, 4, 4))
+    else:
+        covariance = _finite_array("perception.tracks.covariance", covariance, (count, 4, 4))
+    confirmed = getattr(tracks, "confirmed", None)
+    if confirmed is not None:
+        keep = np.asarray(confirmed, dtype=bool).reshape(-1)
+        if keep.shape != (count,):
+            raise InputError(
+                f"perception.tracks.confirmed must have shape ({count},) (got {keep.shape})"
+            )
+        position, velocity, covariance, radius = (
+            position[keep],
+            velocity[keep],
+            covariance[keep],
+            radius[keep],
+        )
+    return position, velocity, covariance, radius
+
+
+def _finite_array(
+    name: str, value: Any, shape: tuple[int, ...], limit: float = MAX_COORDINATE
+) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be numeric (got {type(value).__name__})") from None
+    if array.size == 0 and shape[0] in (-1, 0):
+        array = array.reshape((0, *shape[1:]))
+    wanted = tuple(array.shape[0] if s == -1 else s for s in shape) if array.ndim else shape
+    if array.shape != wanted:
+        text = ", ".join("J" if s == -1 else str(s) for s in shape)
+        raise InputError(f"{name} must have shape ({text}) (got {array.shape})")
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} must be finite (got NaN or inf)")
+    if not np.all(np.abs(array) <= limit):
+        raise InputError(f"{name} must be within ±{limit:g} (got {np.max(np.abs(array)):.3g})")
+    return array
+
+
+# --------------------------------------------------------------------------- prediction
+def predict_tracks(
+    position: np.ndarray,
+    velocity: np.ndarray,
+    covariance: np.ndarray,
+    times: np.ndarray,
+    acceleration_noise: float = ACCELERATION_NOISE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Constant-velocity prediction of tracks with growing uncertainty (module docstring).
+
+    Parameters
+    ----------
+    position, velocity : numpy.ndarray, shape (J, 2)
+        Track positions [m] and velocities [m/s] at the view's time.
+    covariance : numpy.ndarray, shape (J, 4, 4)
+        Covariance of (x, y, v_x, v_y) [m², m²/s, m²/s²].
+    times : numpy.ndarray, shape (T,)
+        τ [s] past the view's time, >= 0.
+    acceleration_noise : float
+        q [m²/s³], >= 0.
+
+    Returns
+    -------
+    mean : numpy.ndarray, shape (T, J, 2)
+        Predicted positions [m].
+    sigma : numpy.ndarray, shape (T, J)
+        √λ_max of the predicted position covariance [m].
+
+    Examples
+    --------
+    >>> mean, sigma = predict_tracks(np.zeros((1, 2)), np.array([[1.0, 0.0]]),
+    ...                              np.zeros((1, 4, 4)), np.array([0.0, 3.0]), 0.03)
+    >>> mean[1, 0].tolist(), round(float(sigma[1, 0]), 3)
+    ([3.0, 0.0], 0.52)
+    """
+    tau = np.asarray(times, dtype=np.float64)[:, None]  # (T, 1)
+    mean = position[None] + tau[..., None] * velocity[None]
+    pp, pv, vv = covariance[:, :2, :2], covariance[:, :2, 2:], covariance[:, 2:, 2:]
+    cross = pv + np.swapaxes(pv, -1, -2)
+    cov = (
+        pp[None]
+        + tau[..., None, None] * cross[None]
+        + (tau**2)[..., None, None] * vv[None]
+        + (acceleration_noise * tau**3 / 3.0)[..., None, None] * np.eye(2)
+    )  # (T, J, 2, 2)
+    a, b, d = cov[..., 0, 0], 0.5 * (cov[..., 0, 1] + cov[..., 1, 0]), cov[..., 1, 1]
+    top = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b * b, 0.0))
+    return mean, np.sqrt(np.maximum(top, 0.0))
+
+
+# --------------------------------------------------------------------------- per-call arrays
+@dataclass(frozen=True)
+class PerceptionArrays:
+    """The kernels' inputs for one call, positions relative to the robot.
+
+    Attributes
+    ----------
+    cost : numpy.ndarray of uint8, shape (rows, cols)
+        The costmap ((1, 1) zeros without one).
+    near : numpy.ndarray of uint8, shape (rows, cols)
+        The outline gate: 1 where a lethal cell lies within reach of the footprint's outline.
+    geometry : numpy.ndarray, shape (5,)
+        (x0 [m], y0 [m] of the costmap's origin relative to the robot, resolution [m],
+        costmap on 0/1, inscribed rule on 0/1).
+    polygon : numpy.ndarray, shape (V, 2)
+        The footprint's outline [m] in the body frame ((0, 2) for a point robot).
+    table : numpy.ndarray, shape (T + H, J, 4)
+        Per rollout step (then per check of the held final pose) and track: predicted (x, y)
+        [m] relative to the robot, track radius [m], κ·σ [m].
+    relief : numpy.ndarray, shape (J,)
+        Contact threshold [m] of each track (0, or deeper than now for one already touched).
+    disks : numpy.ndarray, shape (D, 3)
+        The footprint's covering disks (x, y, radius) [m] for the tracks.
+    """
+
+    cost: np.ndarray
+    near: np.ndarray
+    geometry: np.ndarray
+    polygon: np.ndarray
+    table: np.ndarray
+    relief: np.ndarray
+    disks: np.ndarray
+
+    @property
+    def has_costmap(self) -> bool:
+        """Whether a costmap is scored."""
+        return bool(self.geometry[3] > 0.5)
+
+    @property
+    def has_tracks(self) -> bool:
+        """Whether any track is scored."""
+        return self.table.shape[1] > 0
+
+
+class PerceptionInputs:
+    """Turns a perception view into :class:`PerceptionArrays` for one controller.
+
+    Holds the controller's footprint and prediction parameters, and the outline gate of the
+    last costmap seen (recomputed when the costs change).
+
+    Parameters
+    ----------
+    footprint : Footprint or None
+        The robot outline (``None``: a point).
+    disks : numpy.ndarray, shape (D, 3)
+        Covering disks of the footprint (x, y, radius) [m] for the tracks.
+    inflation : float
+        r_dyn [m] of the dynamic-obstacle critic (tracks farther cannot cost).
+    sigma_scale : float
+        κ, >= 0.
+    acceleration_noise : float
+        q [m²/s³], >= 0.
+    hold_time : float
+        Time [s] the final pose is held against the tracks, >= 0.
+    """
+
+    def __init__(
+        self,
+        footprint: Any,
+        disks: np.ndarray,
+        inflation: float,
+        sigma_scale: float,
+        acceleration_noise: float,
+        hold_time: float = HOLD_TIME,
+    ) -> None:
+        if footprint is None:
+            self.polygon = np.zeros((0, 2))
+            self.radius = 0.0
+        else:
+            self.polygon = np.ascontiguousarray(footprint.polygon, dtype=np.float64)
+            self.radius = float(footprint.max_radius)
+        self.disks = np.ascontiguousarray(disks, dtype=np.float64)
+        self.inflation = inflation
+        self.sigma_scale = sigma_scale
+        self.acceleration_noise = acceleration_noise
+        self.hold_checks = math.ceil(hold_time / HOLD_STEP - 1e-9)
+        self._gate: tuple[np.ndarray, float, np.ndarray] | None = None
+
+    def empty(self) -> PerceptionArrays:
+        """The arrays of a call without perception (both critics off)."""
+        zeros = np.zeros((1, 1), np.uint8)
+        return PerceptionArrays(zeros, zeros, np.array([0.0, 0.0, 1.0, 0.0, 0.0]),
+                                self.polygon, np.zeros((1, 0, 4)), np.zeros(0),
+                                self.disks)  # fmt: skip
+
+    def arrays(
+        self, perception: Any, pose: np.ndarray, t: float | None, times: np.ndarray, speed: float
+    ) -> PerceptionArrays:
+        """The arrays for one call.
+
+        Parameters
+        ----------
+        perception : LocalView-like or None
+            See the module docstring.
+        pose : numpy.ndarray, shape (3,)
+            The robot's pose (x [m], y [m], θ [rad]).
+        t : float or None
+            The controller's time [s]; the tracks are predicted from the view's ``time`` to
+            ``t + times`` (``None``: from the view's time).
+        times : numpy.ndarray, shape (T,)
+            Times [s] of the rollout steps after now.
+        speed : float
+            The robot's top speed [m/s] (reach of the rollouts).
+
+        Returns
+        -------
+        PerceptionArrays
+        """
+        if perception is None:
+            return self.empty()
+        empty = self.empty()
+        costmap = getattr(perception, "costmap", None)
+        tracks = getattr(perception, "tracks", None)
+        cost, near, geometry = empty.cost, empty.near, empty.geometry
+        if costmap is not None:
+            cost, res, origin = read_costmap(costmap)
+            near = self._near(cost, res)
+            geometry = np.array([origin[0] - pose[0], origin[1] - pose[1], res, 1.0, 1.0])
+            here = np.array([[0.0, 0.0, pose[2]]])
+            _soft, hit = costmap_check(here, cost, near, geometry, self.polygon)
+            if hit[0]:
+                geometry[4] = 0.0
+                _soft, hit = costmap_check(here, cost, near, geometry, self.polygon)
+                if hit[0]:
+                    geometry[4] = 1.0  # truly overlapping: every rollout collides, a safe stop
+        table, relief = empty.table, empty.relief
+        if tracks is not None:
+            table, relief = self._tracks(perception, tracks, pose, t, times, speed)
+        return PerceptionArrays(cost, near, geometry, self.polygon, table, relief, self.disks)
+
+    def _near(self, cost: np.ndarray, res: float) -> np.ndarray:
+        if self._gate is not None and self._gate[1] == res and np.array_equal(self._gate[0], cost):
+            return self._gate[2]
+        lethal = cost == LETHAL
+        if self.polygon.shape[0] == 0 or not lethal.any():
+            near = np.zeros(cost.shape, np.uint8)
+        else:
+            from scipy.ndimage import distance_transform_edt
+
+            distance = distance_transform_edt(~lethal) * res  # cell centre to lethal centre
+            near = (distance <= self.radius + math.sqrt(2.0) * res).astype(np.uint8)
+        self._gate = (cost.copy(), res, near)
+        return near
+
+    def _tracks(self, perception, tracks, pose, t, times, speed):
+        position, velocity, covariance, radius = read_tracks(tracks)
+        lag = 0.0
+        view_time = getattr(perception, "time", None)
+        if t is not None and view_time is not None:
+            try:
+                stamp = float(view_time)
+            except (TypeError, ValueError):
+                stamp = math.nan
+            if not math.isfinite(stamp):
+                raise InputError(f"perception.time must be a finite time [s] (got {view_time!r})")
+            lag = max(float(t) - stamp, 0.0)
+            if not lag <= MAX_VIEW_AGE:
+                raise InputError(
+                    f"perception.time must be at most {MAX_VIEW_AGE:g} s before the call's t = "
+                    f"{float(t):g} s (got {view_time!r})"
+                )
+        times = np.asarray(times, dtype=np.float64)
+        held = times[-1] + HOLD_STEP * np.arange(1, self.hold_checks + 1)
+        ahead = np.concatenate([[0.0], times, held])
+        mean, sigma = predict_tracks(position, velocity, covariance, lag + ahead,
+                                     self.acceleration_noise)  # fmt: skip
+        mean = mean - pose[:2]
+        sigma = self.sigma_scale * sigma
+        # Drop the tracks that cannot come within reach over the horizon.
+        moved = speed * np.minimum(ahead, times[-1])[:, None]
+        gap = np.hypot(mean[..., 0], mean[..., 1]) - radius[None] - sigma
+        keep = np.any(gap < self.radius + moved + self.inflation, axis=0)
+        mean, sigma, radius = mean[:, keep], sigma[:, keep], radius[keep]
+        table = np.empty((len(ahead) - 1, int(keep.sum()), 4))
+        table[..., :2] = mean[1:]
+        table[..., 2] = radius[None]
+        table[..., 3] = sigma[1:]
+        # Relief: a track touched now collides only where a rollout gets deeper.
+        now = np.empty((1, table.shape[1], 4))
+        now[0, :, :2], now[0, :, 2], now[0, :, 3] = mean[0], radius, 0.0
+        here = np.array([[[0.0, 0.0, pose[2]]]])
+        distance = _track_distances(here, now, self.disks)[0, 0]  # (J,)
+        relief = np.where(distance <= 0.0, distance - CONTACT_RELIEF, 0.0)
+        return np.ascontiguousarray(table), relief
+
+
+MAX_PATH_OCCUPANCY = 0.07
+"""Share of the path window's poses that may collide before the path critics are switched off
+for a call (Nav2 MPPI's ``max_path_occupancy_ratio``)."""
+
+
+def path_blocked(
+    window: np.ndarray, field: Any, geometry: np.ndarray, seen: PerceptionArrays
+) -> bool:
+    """Whether more than :data:`MAX_PATH_OCCUPANCY` of the path window's poses put the footprint
+    in collision with the static map or the costmap: a path that cuts through obstacles must
+    not pull the robot onto them (the controllers then switch their path critics off).
+
+    Parameters
+    ----------
+    window : numpy.ndarray, shape (M, 4)
+        The path window (x, y, heading, arc), relative to the robot.
+    field : FootprintField
+        The static map and footprint disks.
+    geometry : numpy.ndarray, shape (4,)
+        The map's geometry, origin relative to the robot.
+    seen : PerceptionArrays
+        The costmap.
+
+    Returns
+    -------
+    bool
+    """
+    collided = np.zeros(window.shape[0], bool)
+    if field.enabled:
+        collided |= field.clearance(window[:, :3], geometry=geometry)[1]
+    if seen.has_costmap:
+        collided |= costmap_check(window[:, :3], seen.cost, seen.near, seen.geometry,
+                                  seen.polygon)[1]  # fmt: skip
+    return bool(np.mean(collided) > MAX_PATH_OCCUPANCY)
+
+
+# --------------------------------------------------------------------------- Numba twins
+@numba.njit(cache=True, inline="always")
+def _lethal_cell(cost, row, col):
+    rows, cols = cost.shape
+    if row < 0 or row >= rows or col < 0 or col >= cols:
+        return False
+    return cost[row, col] == LETHAL
+
+
+@numba.njit(cache=True, inline="always")
+def _segment_hits_lethal(cost, ax, ay, bx, by):
+    """Whether a segment (in cell units: x = column, y = row) passes through a lethal cell:
+    the cells of its ends and, at every crossing of a grid line, the two cells it separates."""
+    if _lethal_cell(cost, math.floor(ay), math.floor(ax)):
+        return True
+    if _lethal_cell(cost, math.floor(by), math.floor(bx)):
+        return True
+    dx, dy = bx - ax, by - ay
+    if dx != 0.0:
+        for k in range(math.floor(min(ax, bx)) + 1, math.floor(max(ax, bx)) + 1):
+            row = math.floor(ay + (k - ax) / dx * dy)
+            if _lethal_cell(cost, row, k - 1) or _lethal_cell(cost, row, k):
+                return True
+    if dy != 0.0:
+        for k in range(math.floor(min(ay, by)) + 1, math.floor(max(ay, by)) + 1):
+            col = math.floor(ax + (k - ay) / dy * dx)
+            if _lethal_cell(cost, k - 1, col) or _lethal_cell(cost, k, col):
+                return True
+    return False
+
+
+@numba.njit(cache=True, inline="always")
+def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
+    """Soft cost (0–1) and collision of one pose on the costmap (module docstring).
+
+    ``(x, y)`` [m] in the frame of ``geometry``'s origin, ``(c, s)`` = (cos θ, sin θ)."""
+    x0, y0, res = geometry[0], geometry[1], geometry[2]
+    inscribed = geometry[4] > 0.5
+    inv = 1.0 / res
+    fx, fy = (x - x0) * inv, (y - y0) * inv
+    col, row = math.floor(fx), math.floor(fy)
+    rows, cols = cost.shape
+    if row < 0 or row >= rows or col < 0 or col >= cols:
+        return 0.0, False
+    value = cost[row, col]
+    soft = 1.0 if value > MAX_INFLATED else value / MAX_INFLATED
+    hit = value == LETHAL or (inscribed and value == INSCRIBED)
+    n = polygon.shape[0]
+    if not hit and n > 0 and near[row, col]:
+        for i in range(n):
+            j = i + 1 if i + 1 < n else 0
+            ax = fx + (c * polygon[i, 0] - s * polygon[i, 1]) * inv
+            ay = fy + (s * polygon[i, 0] + c * polygon[i, 1]) * inv
+            bx = fx + (c * polygon[j, 0] - s * polygon[j, 1]) * inv
+            by = fy + (s * polygon[j, 0] + c * polygon[j, 1]) * inv
+            if _segment_hits_lethal(cost, ax, ay, bx, by):
+                hit = True
+                break
+    return soft, hit
+
+
+@numba.njit(cache=True, inline="always")
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach):
+    """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
+    predicted tracks (module docstring); a step past the rollout's is a check of the held final
+    pose. ``reach`` [m] bounds the disks' extent from the pose (:func:`disk_reach`): a track
+    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped."""
+    total = 0.0
+    hit = False
+    for j in range(table.shape[1]):
+        mx, my = table[step, j, 0], table[step, j, 1]
+        far = reach + table[step, j, 2] + table[step, j, 3] + inflation
+        if (x - mx) * (x - mx) + (y - my) * (y - my) >= far * far:
+            continue
+        least = 1.0e300
+        for k in range(disks.shape[0]):
+            px = x + c * disks[k, 0] - s * disks[k, 1]
+            py = y + s * disks[k, 0] + c * disks[k, 1]
+            d = math.hypot(px - mx, py - my) - disks[k, 2] - table[step, j, 2]
+            least = min(least, d)
+        if least <= relief[j] and step < held:
+            hit = True
+        beyond = least - table[step, j, 3]
+        if beyond < inflation:
+            gap = inflation - beyond
+            total += gap * gap
+    return total, hit
+
+
+@numba.njit(cache=True)
+def disk_reach(disks):
+    """The largest |centre| + radius [m] of the disks ``(D, 3)``."""
+    reach = 0.0
+    for k in range(disks.shape[0]):
+        reach = max(reach, math.hypot(disks[k, 0], disks[k, 1]) + disks[k, 2])
+    return reach
+
+
+@numba.njit(cache=True)
+def _costmap_poses(poses, cost, near, geometry, polygon, soft, hit):
+    for i in range(poses.shape[0]):
+        c, s = math.cos(poses[i, 2]), math.sin(poses[i, 2])
+        soft[i], hit[i] = costmap_cost_at(poses[i, 0], poses[i, 1], c, s, cost, near, geometry,
+                                          polygon)  # fmt: skip
+
+
+def costmap_check(
+    poses: np.ndarray,
+    cost: np.ndarray,
+    near: np.ndarray,
+    geometry: np.ndarray,
+    polygon: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`costmap_cost_at` over poses ``(P, 3)`` (compiled: a few poses or a path window;
+    :func:`costmap_costs` is the vectorised NumPy twin).
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (P, 3)
+        Poses in the frame of ``geometry``'s origin.
+    cost, near, geometry, polygon : numpy.ndarray
+        As for :func:`costmap_costs`.
+
+    Returns
+    -------
+    soft : numpy.ndarray, shape (P,)
+    collided : numpy.ndarray of bool, shape (P,)
+    """
+    poses = np.ascontiguousarray(poses, dtype=np.float64).reshape(-1, 3)
+    soft, hit = np.empty(poses.shape[0]), np.empty(poses.shape[0], np.bool_)
+    _costmap_poses(poses, cost, near, geometry, polygon, soft, hit)
+    return soft, hit
+
+
+# --------------------------------------------------------------------------- NumPy twins
+def costmap_costs(
+    poses: np.ndarray,
+    cost: np.ndarray,
+    near: np.ndarray,
+    geometry: np.ndarray,
+    polygon: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Soft cost (0–1) and collision of poses on the costmap (vectorised twin of
+    :func:`costmap_cost_at`).
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (..., 3)
+        Poses (x [m], y [m], θ [rad]) in the frame of ``geometry``'s origin.
+    cost, near : numpy.ndarray of uint8, shape (rows, cols)
+        Costs and the outline gate (:class:`PerceptionArrays`).
+    geometry : numpy.ndarray, shape (5,)
+        As :attr:`PerceptionArrays.geometry`.
+    polygon : numpy.ndarray, shape (V, 2)
+        The footprint outline in the body frame ((0, 2): a point).
+
+    Returns
+    -------
+    soft : numpy.ndarray, shape (...)
+    collided : numpy.ndarray of bool, shape (...)
+    """
+    x0, y0, res = geometry[0], geometry[1], geometry[2]
+    inv = 1.0 / res
+    fx, fy = (poses[..., 0] - x0) * inv, (poses[..., 1] - y0) * inv
+    col, row = np.floor(fx).astype(np.int64), np.floor(fy).astype(np.int64)
+    rows, cols = cost.shape
+    inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+    r, q = np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)
+    value = np.where(inside, cost[r, q], 0).astype(np.int64)
+    soft = np.where(value > MAX_INFLATED, 1.0, value / MAX_INFLATED)
+    hit = (value == LETHAL) | ((geometry[4] > 0.5) & (value == INSCRIBED))
+    if polygon.shape[0] == 0:
+        return soft, hit
+    check = inside & ~hit & (near[r, q] > 0)
+    if np.any(check):
+        theta = poses[..., 2][check]
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        px = fx[check][:, None] + (c * polygon[:, 0] - s * polygon[:, 1]) * inv  # (P, V)
+        py = fy[check][:, None] + (s * polygon[:, 0] + c * polygon[:, 1]) * inv
+        ax, ay = px, py
+        bx, by = np.roll(px, -1, axis=1), np.roll(py, -1, axis=1)
+        hit[check] = _segments_hit_lethal(cost, ax, ay, bx, by).any(axis=1)
+    return soft, hit
+
+
+def _segments_hit_lethal(cost, ax, ay, bx, by):
+    """Vectorised :func:`_segment_hits_lethal` over arrays of segments (cell units)."""
+    rows, cols = cost.shape
+
+    def lethal(row, col):
+        inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+        values = cost[np.clip(row, 0, rows - 1), np.clip(col, 0, cols - 1)]
+        return inside & (values == LETHAL)
+
+    hits = lethal(np.floor(ay).astype(np.int64), np.floor(ax).astype(np.int64))
+    hits |= lethal(np.floor(by).astype(np.int64), np.floor(bx).astype(np.int64))
+    for (a, b, c, d), along_x in (((ax, bx, ay, by), True), ((ay, by, ax, bx), False)):
+        delta, other = b - a, d - c
+        first = np.floor(np.minimum(a, b)) + 1.0
+        count = (np.floor(np.maximum(a, b)) + 1.0 - first).astype(np.int64)
+        most = int(count.max(initial=0))
+        for step in range(most):
+            k = first + step
+            valid = (step < count) & (delta != 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cross = np.floor(c + (k - a) / delta * other)
+            cross = np.where(valid, cross, -1).astype(np.int64)
+            line = k.astype(np.int64)
+            if along_x:  # a vertical grid line: column k - 1 | k, at row `cross`
+                found = lethal(cross, line - 1) | lethal(cross, line)
+            else:  # a horizontal one: row k - 1 | k, at column `cross`
+                found = lethal(line - 1, cross) | lethal(line, cross)
+            hits |= valid & found
+    return hits
+
+
+def _track_distances(poses: np.ndarray, table: np.ndarray, disks: np.ndarray) -> np.ndarray:
+    """d (N, T, J) [m]: the least over the disks of |centre − mean| − disk radius − track
+    radius, poses (N, T, 3) against table (T, J, 4)."""
+    c, s = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
+    px = poses[..., 0][..., None] + c * disks[:, 0] - s * disks[:, 1]  # (N, T, D)
+    py = poses[..., 1][..., None] + s * disks[:, 0] + c * disks[:, 1]
+    dx = px[..., :, None] - table[None, :, None, :, 0]  # (N, T, D, J)
+    dy = py[..., :, None] - table[None, :, None, :, 1]
+    d = np.hypot(dx, dy) - disks[:, 2][None, None, :, None] - table[None, :, None, :, 2]
+    return d.min(axis=2) if d.shape[2] else np.full(d.shape[:2] + d.shape[3:], 1e300)
+
+
+def track_costs(
+    poses: np.ndarray,
+    table: np.ndarray,
+    relief: np.ndarray,
+    disks: np.ndarray,
+    inflation: float,
+    hold_weight: float = 1.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Soft cost Σ_j gap² [m²] and contact of rollout poses against the predicted tracks
+    (vectorised twin of :func:`track_cost_at`).
+
+    Parameters
+    ----------
+    poses : numpy.ndarray, shape (N, T, 3)
+        Rollout poses after steps 1..T, relative to the robot's position.
+    table : numpy.ndarray, shape (T + H, J, 4)
+        As :attr:`PerceptionArrays.table`: its last H rows are checked against the final
+        pose, held.
+    relief : numpy.ndarray, shape (J,)
+        Contact thresholds [m].
+    disks : numpy.ndarray, shape (D, 3)
+        The footprint's covering disks.
+    inflation : float
+        r_dyn [m].
+    hold_weight : float
+        Factor of the held checks' soft cost (:data:`HOLD_STEP` / dt: each stands for that
+        many rollout steps).
+
+    Returns
+    -------
+    soft : numpy.ndarray, shape (N, T + H)
+    collided : numpy.ndarray of bool, shape (N, T + H)
+    """
+    if table.shape[1] == 0:
+        zeros = np.zeros((poses.shape[0], table.shape[0]))
+        return zeros, zeros.astype(bool)
+    steps = poses.shape[1]
+    held = table.shape[0] - steps
+    poses = np.concatenate([poses, np.repeat(poses[:, -1:], held, axis=1)], axis=1)
+    d = _track_distances(poses, table, disks)
+    collided = np.any(d <= relief, axis=-1)
+    collided[:, steps:] = False  # the held pose is scored, never lethal
+    beyond = d - table[None, ..., 3]
+    gap = np.where(beyond < inflation, inflation - beyond, 0.0)
+    soft = np.sum(gap * gap, axis=-1)
+    soft[:, steps:] *= hold_weight
+    return soft, collided

@@ -1,0 +1,493 @@
+"""Pose-graph optimisation on SE(2): sparse Gauss–Newton / Levenberg–Marquardt, robust kernels,
+and a chordal initialisation.
+
+The graph's objective is the g2o / GTSAM one (Grisetti, Kümmerle, Stachniss and Burgard, "A
+tutorial on graph-based SLAM", IEEE ITS Magazine 2010, eq. 4):
+
+    χ²(X) = Σ_ij r_ijᵀ Ω_ij r_ij,      r_ij = Log(Z_ij⁻¹ X_i⁻¹ X_j),
+
+the residual of edge (i, j) being the SE(2) logarithm (:mod:`wheelbase.mapping.se2`) of the
+mismatch between the measured relative pose Z_ij and the estimated one, exactly as GTSAM's
+``BetweenFactor<Pose2>`` (2 × its ``error()`` is this χ²; a test checks it to 1e-9). Poses are
+perturbed on the right, X ← X·Exp(δ), so that
+
+    ∂r/∂δ_j = J_r⁻¹(r),      ∂r/∂δ_i = −J_r⁻¹(r)·Ad(X_j⁻¹ X_i).
+
+Each iteration assembles the normal equations H δ = −g (H = Σ JᵀWΩJ, one 3×3 block per vertex
+pair, a sparse matrix), holds the fixed vertices (the first one when the graph fixes none:
+the gauge) and solves with SciPy's SuperLU under a minimum-degree ordering of HᵀH. Steps are
+Gauss–Newton while they lower the cost; where one does not, Levenberg–Marquardt damping
+H + λ·diag(H) grows tenfold until a step does, and shrinks tenfold after each success. It stops
+when the relative decrease of the cost falls below ``tolerance`` (1e-10; GTSAM's default is
+1e-5) or the largest step component below 1e-10.
+
+Robust kernels (Huber, Cauchy, and dynamic covariance scaling, Agarwal et al. ICRA 2013) reweight
+the edges a mask names (the loop closures) by iteratively reweighted least squares on their
+squared Mahalanobis distance s = rᵀΩr: Huber ρ(s) = s for √s ≤ k, 2k√s − k² beyond; Cauchy ρ(s)
+= k² ln(1 + s/k²); DCS scales the residual by min(1, 2Φ/(Φ + s)).
+
+Odometry initial guesses leave long loops far from their optimum, where Gauss–Newton may stop in
+a local minimum. :func:`chordal_initialization` first solves for the rotations alone, relaxed to
+unit-free 2-vectors (a linear least-squares problem, Carlone, Tron, Daniilidis and Dellaert,
+"Initialization techniques for 3D SLAM: a survey on rotation estimation and its use in pose
+graph optimization", ICRA 2015, §IV-B, "chordal relaxation"), normalises them, then the
+translations given the rotations (linear too), and Gauss–Newton starts from there.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import splu
+
+from wheelbase._validate import check_choice, integer, positive
+from wheelbase.datasets.g2o import PoseGraph
+from wheelbase.errors import ConfigError, EstimationError
+from wheelbase.geometry import compose, inverse_pose, wrap_angle
+from wheelbase.mapping.se2 import se2_adjoint, se2_exp_map, se2_log, se2_right_jacobian_inv
+
+__all__ = [
+    "INITIALIZATIONS",
+    "ROBUST_KERNELS",
+    "PoseGraphResult",
+    "chordal_initialization",
+    "edge_chi2",
+    "edge_residuals",
+    "graph_chi2",
+    "optimize_pose_graph",
+]
+
+ROBUST_KERNELS: tuple[str, ...] = ("none", "huber", "cauchy", "dcs")
+"""Robust kernels :func:`optimize_pose_graph` takes (module docstring)."""
+
+INITIALIZATIONS: tuple[str, ...] = ("graph", "chordal")
+"""``graph``: the graph's own poses; ``chordal``: :func:`chordal_initialization`."""
+
+
+@dataclass(frozen=True)
+class PoseGraphResult:
+    """An optimised pose graph.
+
+    Attributes
+    ----------
+    poses : numpy.ndarray, shape (V, 3)
+        Optimised poses; fixed vertices (or the first) where they were.
+    chi2_initial : float
+        χ² at the initial guess of the graph's file (before any initialisation).
+    chi2 : float
+        χ² at ``poses`` (all edges at full weight).
+    iterations : int
+        Linear solves taken (rejected damped steps included).
+    solve_time_s : float
+        Wall time of the optimisation, initialisation included [s].
+    converged : bool
+        The cost stopped decreasing (rather than ``max_iterations`` being reached).
+    edge_weights : numpy.ndarray, shape (E,)
+        Final robust weights (1 for edges outside the robust mask).
+    history : numpy.ndarray
+        Cost after each accepted step, the initial one first.
+    """
+
+    poses: np.ndarray
+    chi2_initial: float
+    chi2: float
+    iterations: int
+    solve_time_s: float
+    converged: bool
+    edge_weights: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    history: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+
+    def metrics(self) -> dict[str, float | int | bool]:
+        """``chi2_initial``, ``chi2``, ``iterations``, ``solve_time_s``, ``converged``."""
+        return {
+            "chi2_initial": self.chi2_initial,
+            "chi2": self.chi2,
+            "iterations": self.iterations,
+            "solve_time_s": self.solve_time_s,
+            "converged": self.converged,
+        }
+
+
+def edge_residuals(graph: PoseGraph, poses: np.ndarray | None = None) -> np.ndarray:
+    """Residuals r_ij = Log(Z_ij⁻¹ X_i⁻¹ X_j) of every edge, shape ``(E, 3)``.
+
+    Parameters
+    ----------
+    graph : PoseGraph
+        The graph.
+    poses : numpy.ndarray or None, shape (V, 3)
+        Vertex poses (default: the graph's).
+    """
+    poses = graph.poses if poses is None else np.asarray(poses, dtype=np.float64)
+    xi, xj = poses[graph.edges[:, 0]], poses[graph.edges[:, 1]]
+    return se2_log(_between(_between(xi, xj), graph.measurements, inverse_first=True))
+
+
+def edge_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> np.ndarray:
+    """Squared Mahalanobis distances rᵀΩr of every edge, shape ``(E,)``.
+
+    Parameters
+    ----------
+    graph : PoseGraph
+        The graph.
+    poses : numpy.ndarray or None
+        Vertex poses (default: the graph's).
+    """
+    r = edge_residuals(graph, poses)
+    return np.einsum("ei,eij,ej->e", r, graph.information, r)
+
+
+def graph_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> float:
+    """χ² = Σ rᵀΩr over all edges (g2o's ``chi2``; 2 × GTSAM's ``error``).
+
+    Parameters
+    ----------
+    graph : PoseGraph
+        The graph.
+    poses : numpy.ndarray or None
+        Vertex poses (default: the graph's).
+    """
+    return float(edge_chi2(graph, poses).sum())
+
+
+def _between(a: np.ndarray, b: np.ndarray, *, inverse_first: bool = False) -> np.ndarray:
+    """a⁻¹·b for pose arrays (rows), or b⁻¹·a with ``inverse_first`` (Z⁻¹·T for a = T, b = Z)."""
+    if inverse_first:
+        a, b = b, a
+    c, s = np.cos(a[:, 2]), np.sin(a[:, 2])
+    dx, dy = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[:, 2] - a[:, 2])], -1)
+
+
+def _weights(s: np.ndarray, kernel: str, k: float) -> np.ndarray:
+    """IRLS weights ρ'(s) of the kernels on squared distances s."""
+    if kernel == "huber":
+        root = np.sqrt(s)
+        return np.where(root <= k, 1.0, k / np.maximum(root, 1e-300))
+    if kernel == "cauchy":
+        return 1.0 / (1.0 + s / (k * k))
+    if kernel == "dcs":
+        return np.minimum(1.0, 2.0 * k / (k + s)) ** 2
+    return np.ones_like(s)
+
+
+def _robust_cost(s: np.ndarray, kernel: str, k: float) -> np.ndarray:
+    if kernel == "huber":
+        root = np.sqrt(s)
+        return np.where(root <= k, s, 2.0 * k * root - k * k)
+    if kernel == "cauchy":
+        return k * k * np.log1p(s / (k * k))
+    if kernel == "dcs":  # the cost whose IRLS weight is DCS's scale squared (Agarwal, eq. 12)
+        return np.where(s <= k, s, k * (3.0 * s - k) / (s + k))
+    return s
+
+
+class _Structure:
+    """Sparsity pattern of H for a graph, with fixed vertices left out (built once)."""
+
+    def __init__(self, graph: PoseGraph, fixed: np.ndarray) -> None:
+        n = graph.n_vertices
+        free = np.flatnonzero(~fixed)
+        self.n_free = free.size
+        self.free = free
+        # a fill-reducing order of the free vertices, computed once: SuperLU's minimum degree
+        # on the vertex graph (a Laplacian plus identity: positive definite), 9× smaller than H
+        index = np.full(n, -1, np.int64)
+        index[free] = np.arange(free.size)
+        a, b = index[graph.edges[:, 0]], index[graph.edges[:, 1]]
+        both = (a >= 0) & (b >= 0)
+        a, b = a[both], b[both]
+        laplacian = sparse.coo_matrix(
+            (np.full(2 * a.size, -1.0), (np.concatenate([a, b]), np.concatenate([b, a]))),
+            shape=(free.size, free.size),
+        ).tocsc()
+        laplacian = laplacian + sparse.diags(1.0 - np.asarray(laplacian.sum(0)).ravel())
+        order = splu(laplacian.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True}).perm_c  # fmt: skip
+        column = np.full(n, -1, np.int64)
+        column[free] = order
+        self.free = free
+        self.column_of_free = order
+        i, j = graph.edges[:, 0], graph.edges[:, 1]
+        ci, cj = column[i], column[j]
+        # the 4 blocks (ii, ij, ji, jj) of each edge: 36 entries, row-major 3×3 each
+        pairs = np.stack([np.stack([ci, ci], -1), np.stack([ci, cj], -1),
+                          np.stack([cj, ci], -1), np.stack([cj, cj], -1)], 1)  # fmt: skip
+        a = np.arange(3)
+        rows = 3 * pairs[:, :, 0, None, None] + a[None, None, :, None]
+        cols = 3 * pairs[:, :, 1, None, None] + a[None, None, None, :]
+        rows, cols = np.broadcast_arrays(rows, cols)
+        keep = (pairs[:, :, 0] >= 0) & (pairs[:, :, 1] >= 0)
+        self.keep = np.broadcast_to(keep[:, :, None, None], rows.shape).ravel()
+        self.rows = rows.ravel()[self.keep]
+        self.cols = cols.ravel()[self.keep]
+        self.ci, self.cj = ci, cj
+        size = 3 * self.n_free
+        # the map from the 36·E entries to the CSC matrix's data (duplicates summed)
+        probe = sparse.coo_matrix(
+            (np.arange(1, self.rows.size + 1, dtype=np.float64), (self.rows, self.cols)),
+            shape=(size, size),
+        ).tocsc()
+        probe.sum_duplicates()
+        self.indptr, self.indices = probe.indptr, probe.indices
+        # position of each kept entry in the CSC data: via a linear key lookup
+        key_csc = np.repeat(np.arange(size), np.diff(probe.indptr)) * size + probe.indices
+        key = self.cols * size + self.rows
+        self.slot = np.searchsorted(key_csc, key)
+        self.size = size
+        diag_key = np.arange(size) * size + np.arange(size)
+        self.diag_slot = np.searchsorted(key_csc, diag_key)
+
+    def matrix(self, blocks: np.ndarray) -> sparse.csc_matrix:
+        data = np.bincount(self.slot, blocks.ravel()[self.keep], minlength=self.indices.size)
+        return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.size, self.size))
+
+    def gradient(self, gi: np.ndarray, gj: np.ndarray) -> np.ndarray:
+        g = np.zeros((self.n_free + 1, 3))  # row n_free collects the fixed vertices' parts
+        np.add.at(g, np.where(self.ci >= 0, self.ci, self.n_free), gi)
+        np.add.at(g, np.where(self.cj >= 0, self.cj, self.n_free), gj)
+        return g[:-1].ravel()
+
+    def steps(self, step: np.ndarray) -> np.ndarray:
+        """The step of each free vertex (in ``free``'s order) from the ordered solution."""
+        return step.reshape(-1, 3)[self.column_of_free]
+
+
+def _linearise(graph: PoseGraph, poses: np.ndarray, weights: np.ndarray):
+    """Residuals, and the blocks JᵀWΩJ and gradients JᵀWΩr of every edge."""
+    xi, xj = poses[graph.edges[:, 0]], poses[graph.edges[:, 1]]
+    r = se2_log(_between(_between(xi, xj), graph.measurements, inverse_first=True))
+    jinv = se2_right_jacobian_inv(r)
+    jj = jinv
+    ji = -jinv @ se2_adjoint(_between(xj, xi))
+    omega = graph.information * weights[:, None, None]
+    oji, ojj = omega @ ji, omega @ jj
+    jit, jjt = np.swapaxes(ji, 1, 2), np.swapaxes(jj, 1, 2)
+    blocks = np.stack([jit @ oji, jit @ ojj, jjt @ oji, jjt @ ojj], 1)
+    wr = np.einsum("eij,ej->ei", omega, r)
+    gi = np.einsum("eji,ej->ei", ji, wr)
+    gj = np.einsum("eji,ej->ei", jj, wr)
+    return r, blocks, gi, gj
+
+
+def optimize_pose_graph(
+    graph: PoseGraph,
+    *,
+    initial: str = "graph",
+    robust: str = "none",
+    robust_scale: float = 1.0,
+    robust_edges: np.ndarray | None = None,
+    max_iterations: int = 100,
+    tolerance: float = 1e-10,
+) -> PoseGraphResult:
+    """Minimise χ² over the vertex poses (module docstring).
+
+    Parameters
+    ----------
+    graph : PoseGraph
+        The graph; its poses are the initial guess (``initial="graph"``).
+    initial : {"graph", "chordal"}
+        Start from the graph's poses or from :func:`chordal_initialization`.
+    robust : {"none", "huber", "cauchy", "dcs"}
+        Kernel on the edges of ``robust_edges``.
+    robust_scale : float
+        The kernel's k (Huber, Cauchy: on the Mahalanobis distance √s; DCS: Φ on s), > 0.
+    robust_edges : numpy.ndarray or None, shape (E,)
+        Boolean mask of the edges the kernel applies to (default: all).
+    max_iterations : int
+        Most linear solves, >= 1.
+    tolerance : float
+        Stop when the cost decreases by less than this fraction in a step, > 0.
+
+    Returns
+    -------
+    PoseGraphResult
+
+    Raises
+    ------
+    EstimationError
+        If the normal equations are singular (a vertex no edge constrains fully).
+    """
+    check_choice("initial", initial, INITIALIZATIONS)
+    check_choice("robust", robust, ROBUST_KERNELS)
+    k = positive("robust_scale", robust_scale)
+    max_iterations = integer("max_iterations", max_iterations, 1)
+    tolerance = positive("tolerance", tolerance)
+    mask = np.ones(graph.n_edges, bool) if robust_edges is None else np.asarray(robust_edges, bool)
+    if mask.shape != (graph.n_edges,):
+        raise ConfigError(f"robust_edges must have shape ({graph.n_edges},) (got {mask.shape})")
+    start = time.perf_counter()
+    chi2_initial = graph_chi2(graph)
+    poses = graph.poses.copy() if initial == "graph" else chordal_initialization(graph)
+    fixed = graph.fixed.copy()
+    if not fixed.any():
+        fixed[0] = True
+    structure = _Structure(graph, fixed)
+    free = structure.free
+
+    def cost_of(p: np.ndarray) -> tuple[float, np.ndarray]:
+        s = edge_chi2(graph, p)
+        if robust != "none":
+            s = np.where(mask, _robust_cost(s, robust, k), s)
+        return float(s.sum()), s
+
+    def weights_of(p: np.ndarray) -> np.ndarray:
+        if robust == "none":
+            return np.ones(graph.n_edges)
+        return np.where(mask, _weights(edge_chi2(graph, p), robust, k), 1.0)
+
+    cost, _ = cost_of(poses)
+    history = [cost]
+    lam, nu = 0.0, 2.0
+    iterations = 0
+    converged = False
+    weights = weights_of(poses)
+    while iterations < max_iterations and not converged:
+        _, blocks, gi, gj = _linearise(graph, poses, weights)
+        h = structure.matrix(blocks)
+        g = structure.gradient(gi, gj)
+        diag = np.maximum(h.diagonal(), 1e-12)
+        while iterations < max_iterations:
+            iterations += 1
+            damped = h
+            if lam > 0.0:
+                damped = h.copy()
+                damped.data[structure.diag_slot] += lam * diag
+            try:
+                step = -_solve(damped, g)
+            except RuntimeError as exc:  # "Factor is exactly singular"
+                if lam == 0.0:
+                    raise EstimationError(
+                        f"pose graph: singular normal equations ({exc}); a vertex is not fully "
+                        "constrained by its edges"
+                    ) from None
+                step = np.full(g.shape, np.nan)
+            trial = poses.copy()
+            trial[free] = _retract(poses[free], structure.steps(step))
+            new_cost = cost_of(trial)[0] if np.all(np.isfinite(step)) else math.inf
+            # the decrease the quadratic model predicts, L(0) − L(δ) = −(gᵀδ + ½δᵀHδ), times 2
+            predicted = -(2.0 * g @ step + step @ (h @ step))
+            if new_cost <= cost:
+                decrease = (cost - new_cost) / max(cost, 1e-300)
+                gain = (cost - new_cost) / predicted if predicted > 0 else 1.0
+                poses, cost = trial, new_cost
+                history.append(cost)
+                # Nielsen's update (Madsen, Nielsen and Tingleff, "Methods for non-linear least
+                # squares problems", 2004, eq. 3.16): near-Gauss-Newton while the model is good
+                lam *= max(1.0 / 3.0, 1.0 - (2.0 * gain - 1.0) ** 3)
+                nu = 2.0
+                if lam < 1e-12:
+                    lam = 0.0
+                if decrease < tolerance or np.abs(step).max() < 1e-10:
+                    converged = True
+                break
+            lam = max(lam * nu, 1e-6)
+            nu *= 2.0
+            if lam > 1e12:
+                converged = True  # no step lowers the cost: a (local) minimum to rounding
+                break
+        weights = weights_of(poses)
+    chi2 = graph_chi2(graph, poses)
+    return PoseGraphResult(
+        poses=poses,
+        chi2_initial=chi2_initial,
+        chi2=chi2,
+        iterations=iterations,
+        solve_time_s=time.perf_counter() - start,
+        converged=converged,
+        edge_weights=weights,
+        history=np.array(history),
+    )
+
+
+def _retract(poses: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """X·Exp(δ) for each row."""
+    return compose(poses, se2_exp_map(delta))
+
+
+def chordal_initialization(graph: PoseGraph) -> np.ndarray:
+    """Rotations first by the chordal relaxation, then translations; both linear.
+
+    Each rotation is a 2-vector q_i = (cos θ_i, sin θ_i) left free of its unit norm; an edge
+    asks q_j = R(Z_θ) q_i (weight: its information in θ). With q of the first vertex held, the
+    weighted least-squares solution is normalised to unit length. Then, the rotations fixed, an
+    edge asks t_j − t_i = R_i Z_t (weight R_i Ω_tt R_iᵀ), a second linear problem. The result
+    is moved so that the first vertex keeps its pose in the graph.
+
+    Parameters
+    ----------
+    graph : PoseGraph
+        The graph (its poses serve only to place the first vertex).
+
+    Returns
+    -------
+    numpy.ndarray, shape (V, 3)
+    """
+    n, i, j = graph.n_vertices, graph.edges[:, 0], graph.edges[:, 1]
+    e = graph.n_edges
+    # rotations: residual q_j − R(z) q_i, 2 rows per edge, unknowns 2 per vertex
+    c, s = np.cos(graph.measurements[:, 2]), np.sin(graph.measurements[:, 2])
+    w = np.sqrt(np.maximum(graph.information[:, 2, 2], 1e-12))
+    row = np.repeat(np.arange(2 * e), 3).reshape(e, 2, 3)
+    rows = np.concatenate([row[:, 0], row[:, 1]], 1).ravel()
+    cols = np.stack([2 * j, 2 * i, 2 * i + 1, 2 * j + 1, 2 * i, 2 * i + 1], 1).ravel()
+    vals = (np.stack([np.ones(e), -c, s, np.ones(e), -s, -c], 1) * w[:, None]).ravel()
+    a = sparse.csr_matrix((vals, (rows, cols)), shape=(2 * e, 2 * n))
+    q0 = np.array([math.cos(0.0), math.sin(0.0)])
+    q = _anchored_lsq(a, np.zeros(2 * e), 2, q0).reshape(n, 2)
+    norm = np.hypot(q[:, 0], q[:, 1])
+    theta = np.arctan2(q[:, 1], q[:, 0])
+    if np.any(norm < 1e-9):
+        theta = np.where(norm < 1e-9, 0.0, theta)
+    # translations: t_j − t_i = R_i z_t, whitened by the Cholesky factor of R_i Ω_tt R_iᵀ
+    ci, si = np.cos(theta[i]), np.sin(theta[i])
+    zt = graph.measurements[:, :2]
+    rhs = np.stack([ci * zt[:, 0] - si * zt[:, 1], si * zt[:, 0] + ci * zt[:, 1]], -1)
+    rot = np.stack([np.stack([ci, -si], -1), np.stack([si, ci], -1)], -2)
+    cov_inv = rot @ graph.information[:, :2, :2] @ np.swapaxes(rot, 1, 2)
+    try:
+        chol = np.swapaxes(np.linalg.cholesky(cov_inv), 1, 2)  # Lᵀ: ‖Lᵀ r‖² = rᵀ Ω r
+    except np.linalg.LinAlgError:
+        chol = np.broadcast_to(np.eye(2), (e, 2, 2))
+    rows = np.repeat(np.arange(2 * e), 4)
+    blk = np.arange(2)
+    cols_j = 2 * j[:, None, None] + blk[None, None, :]
+    cols_i = 2 * i[:, None, None] + blk[None, None, :]
+    cols = np.concatenate([np.broadcast_to(cols_j, (e, 2, 2)),
+                           np.broadcast_to(cols_i, (e, 2, 2))], 2).ravel()  # fmt: skip
+    vals = np.concatenate([chol, -chol], 2).ravel()
+    a = sparse.csr_matrix((vals, (rows, cols)), shape=(2 * e, 2 * n))
+    b = np.einsum("eij,ej->ei", chol, rhs).ravel()
+    t = _anchored_lsq(a, b, 2, np.zeros(2)).reshape(n, 2)
+    poses = np.column_stack([t, wrap_angle(theta)])
+    # place the first vertex where the graph has it
+    anchor = graph.poses[0] if np.all(np.isfinite(graph.poses[0])) else np.zeros(3)
+    return compose(compose(anchor, inverse_pose(poses[0])), poses)
+
+
+def _anchored_lsq(a: sparse.csr_matrix, b: np.ndarray, block: int, value: np.ndarray):
+    """Least squares min ‖A x − b‖ with the first ``block`` unknowns held at ``value``."""
+    a = a.tocsc()
+    rest = a[:, block:]
+    rhs = b - a[:, :block] @ value
+    normal = (rest.T @ rest).tocsc()
+    try:
+        x = splu(normal, permc_spec="MMD_AT_PLUS_A").solve(rest.T @ rhs)
+    except RuntimeError as exc:
+        raise EstimationError(
+            f"chordal initialisation: singular system ({exc}); the graph is not connected"
+        ) from None
+    return np.concatenate([value, x])
+
+
+def _solve(h: sparse.csc_matrix, g: np.ndarray) -> np.ndarray:
+    """H⁻¹g by SuperLU in symmetric mode (no pivoting off the diagonal: H is positive
+    definite), H already in the fill-reducing order of :class:`_Structure`: on manhattan's
+    10,497 unknowns 0.05 s against 0.7 s with SuperLU's default partial pivoting, which
+    destroys the ordering."""
+    lu = splu(h, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return lu.solve(g)

@@ -1,0 +1,219 @@
+"""Detections of obstacles not on the map: a scan's unexplained returns, clustered.
+
+The rule, step by step:
+
+1. A reading is a return when it is finite and below ``max_range`` (NaN and no-return beams
+   are skipped); its endpoint is ``sensor + r (cos(θ + α), sin(θ + α))``.
+2. A return is *explained by the map* when the map cell holding its endpoint lies within
+   ``map_tolerance`` of an occupied map cell, centre to centre
+   (:attr:`~wheelbase.planning.OccupancyGrid.distance_field`), or outside the map.
+3. The other returns form clusters: a return joins the cluster of the return of the beam
+   before it (the previous beam index; the last beam before the first when the beams go
+   round the full circle, so a cluster may straddle the scan's seam) when that beam's return
+   is unexplained too and their endpoints are closer than ``cluster_distance``. Clusters of
+   fewer than ``min_points`` returns are dropped.
+4. Each cluster is one detection, read as a disc: the beams that hit a disc of radius ρ whose
+   centre is D away span the angle 2β with sin β = ρ/D, and the nearest return is
+   r_min = D − ρ (the beam through the centre). With 2β the cluster's angular span plus one
+   beam spacing Δα (its outer beams miss half a spacing at each side), ρ = r_min sin β /
+   (1 − sin β) and the centre lies at r_min + ρ along the bisector of the span: exact for a
+   disc at any range, up to the beam spacing and the range noise. Clusters with ρ >
+   ``max_radius`` (or spanning half the view and more) are dropped: long unmapped walls are
+   left to the costmap.
+5. The measurement covariance is the points' spread over their number plus the floor
+   σ² with σ = ``measurement_std``: R = C/n + σ² I, with C the points' covariance (divided
+   by n).
+6. A cluster is *occluded* when the beam just outside one of its edges returns nearer than
+   that edge's return: the object may go on behind what is in front, so its span, radius and
+   centre are not to be trusted: its R gains ρ² I (its centre is uncertain by about the
+   radius seen; the tracker then leans on its prediction, and does not learn the radius from
+   it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from wheelbase._validate import as_float_array
+from wheelbase.errors import InputError, MapError
+from wheelbase.geometry import wrap_angle
+from wheelbase.perception.specs import TrackerSpec, check_scan_geometry
+from wheelbase.planning import OccupancyGrid
+
+__all__ = ["Detections", "detect"]
+
+
+@dataclass(frozen=True, eq=False)
+class Detections:
+    """The obstacles a scan shows off the map (module docstring).
+
+    Parameters
+    ----------
+    position : numpy.ndarray
+        ``(M, 2)`` detected centres (x, y) [m], world frame.
+    covariance : numpy.ndarray
+        ``(M, 2, 2)`` their covariances R [m²].
+    radius : numpy.ndarray
+        ``(M,)`` radius estimates ρ [m].
+    points : numpy.ndarray
+        ``(M,)`` int64 number of returns in each cluster.
+    occluded : numpy.ndarray
+        ``(M,)`` bool: something nearer hides an edge of the cluster (step 6).
+    """
+
+    position: np.ndarray
+    covariance: np.ndarray
+    radius: np.ndarray
+    points: np.ndarray
+    occluded: np.ndarray
+
+    def __len__(self) -> int:
+        return self.position.shape[0]
+
+
+def _beam_spacing(angles: np.ndarray) -> float:
+    if angles.shape[0] < 2:
+        return 0.0
+    steps = np.abs(wrap_angle(np.diff(angles)))
+    return float(np.median(steps))
+
+
+def detect(
+    spec: TrackerSpec,
+    sensor_pose: ArrayLike,
+    beam_angles: ArrayLike,
+    ranges: ArrayLike,
+    max_range: float,
+    grid: OccupancyGrid,
+) -> Detections:
+    """The detections of one scan (module docstring).
+
+    Parameters
+    ----------
+    spec : TrackerSpec
+        The ``tracker:`` keys (``map_tolerance``, ``cluster_distance``, ``min_points``,
+        ``max_radius``, ``measurement_std``).
+    sensor_pose : array_like, shape (3,)
+        The lidar's world pose (x [m], y [m], θ [rad]).
+    beam_angles : array_like, shape (K,)
+        Beam directions α [rad] in the sensor frame, in scan order.
+    ranges : array_like, shape (K,)
+        Readings [m]: NaN or >= ``max_range`` (or +inf) for no return.
+    max_range : float
+        The lidar's largest range [m], > 0.
+    grid : OccupancyGrid
+        The map (what it explains is not detected).
+
+    Returns
+    -------
+    Detections
+    """
+    if not isinstance(spec, TrackerSpec):
+        raise InputError(f"spec must be a TrackerSpec (got {type(spec).__name__})")
+    if not isinstance(grid, OccupancyGrid):
+        raise MapError(f"grid must be an OccupancyGrid (got {type(grid).__name__})")
+    pose = as_float_array("sensor_pose", sensor_pose, 3, min_ndim=1, max_ndim=1)
+    angles = as_float_array("beam_angles", beam_angles, min_ndim=1, max_ndim=1)
+    try:
+        readings = np.asarray(ranges, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"ranges must be numeric (got {type(ranges).__name__})") from None
+    if readings.shape != angles.shape:
+        raise InputError(
+            f"ranges must have one reading per beam, shape {angles.shape} (got {readings.shape})"
+        )
+    if (readings < 0.0).any():
+        raise InputError("ranges must be >= 0 m, +inf (no return) or NaN (no reading)")
+    max_range = check_scan_geometry(pose[:2], max_range)
+
+    beams = np.flatnonzero(np.isfinite(readings) & (readings < max_range))
+    direction = pose[2] + angles[beams]
+    points = pose[:2] + readings[beams, None] * np.column_stack([np.cos(direction),
+                                                                  np.sin(direction)])  # fmt: skip
+    cells = grid.world_to_cell(points)
+    rows, cols = grid.shape
+    inside = (cells[:, 0] >= 0) & (cells[:, 0] < rows) & (cells[:, 1] >= 0) & (cells[:, 1] < cols)
+    clearance = np.zeros(points.shape[0])
+    clearance[inside] = grid.distance_field[cells[inside, 0], cells[inside, 1]]
+    # the map's edge is a wall to the lidar (its rays stop there): returns on it are explained
+    x0, x1, y0, y1 = grid.extent
+    edge = np.minimum.reduce([points[:, 0] - x0, x1 - points[:, 0], points[:, 1] - y0,
+                              y1 - points[:, 1]])  # fmt: skip
+    clearance = np.minimum(clearance, np.maximum(edge, 0.0))
+    unexplained = inside & (clearance > spec.map_tolerance)
+    spacing = _beam_spacing(angles)
+    seam = (
+        angles.shape[0] > 2 and abs(float(wrap_angle(angles[0] - angles[-1]))) <= 1.5 * spacing
+    )  # the beams go round: the last one is next to the first
+    return _clusters(spec, pose[:2], points[unexplained], beams[unexplained], readings,
+                     seam, spacing)  # fmt: skip
+
+
+def _clusters(
+    spec: TrackerSpec, sensor: np.ndarray, points: np.ndarray, beams: np.ndarray,
+    readings: np.ndarray, ring: bool, spacing: float,
+) -> Detections:  # fmt: skip
+    """Steps 3–6 of the module docstring on the unexplained endpoints ``points`` of beams
+    ``beams`` (ascending) of the scan ``readings``; ``ring``: the beams go round."""
+    n = points.shape[0]
+    empty = Detections(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0, np.int64),
+                       np.zeros(0, bool))  # fmt: skip
+    if n == 0:
+        return empty
+    beam_count = readings.shape[0]
+    near = np.hypot(*(np.diff(points, axis=0)).T) < spec.cluster_distance
+    linked = near & (np.diff(beams) == 1)
+    label = np.concatenate([[0], np.cumsum(~linked)])
+    seam = bool(
+        ring and n > 1 and beams[0] == 0 and beams[-1] == beam_count - 1
+        and math.dist(points[0], points[-1]) < spec.cluster_distance
+    )  # fmt: skip
+    if seam and label[-1] > 0:
+        label[label == label[-1]] = 0  # the last cluster goes on into the first
+        label = np.unique(label, return_inverse=True)[1]
+    count = np.bincount(label)
+    centroid = np.stack([np.bincount(label, points[:, 0]), np.bincount(label, points[:, 1])], -1)
+    centroid /= count[:, None]
+    rel = points - centroid[label]
+    spread = np.zeros((count.size, 2, 2))
+    np.add.at(spread, label, rel[:, :, None] * rel[:, None, :])
+    spread /= count[:, None, None]
+    offset = points - sensor
+    reach = np.hypot(offset[:, 0], offset[:, 1])
+    towards = np.arctan2(centroid[:, 1] - sensor[1], centroid[:, 0] - sensor[0])
+    side = wrap_angle(np.arctan2(offset[:, 1], offset[:, 0]) - towards[label])
+    low = np.full(count.size, np.inf)
+    high = np.full(count.size, -np.inf)
+    nearest = np.full(count.size, np.inf)
+    np.minimum.at(low, label, side)
+    np.maximum.at(high, label, side)
+    np.minimum.at(nearest, label, reach)
+    sin_half = np.sin(np.minimum(0.5 * (high - low + spacing), 0.5 * math.pi))
+    # sin β = 1: the cluster spans half the view or more (the sensor is in it): no disc
+    radius = np.full(count.size, np.inf)
+    disc = sin_half < 1.0
+    radius[disc] = nearest[disc] * sin_half[disc] / (1.0 - sin_half[disc])
+    keep = (count >= spec.min_points) & (radius <= spec.max_radius)
+    if not keep.any():
+        return empty
+    middle = towards + 0.5 * (low + high)
+    centre = sensor + (nearest + radius)[:, None] * np.column_stack([np.cos(middle),
+                                                                     np.sin(middle)])  # fmt: skip
+    # step 6: an edge beam whose neighbour outside the cluster returns nearer is hidden there
+    occluded = np.zeros(count.size, bool)
+    for same, step in ((np.concatenate([[seam], linked]), -1),
+                       (np.concatenate([linked, [seam]]), 1)):  # fmt: skip
+        neighbour = beams + step
+        if ring:
+            neighbour %= beam_count
+        edge = ~same & (neighbour >= 0) & (neighbour < beam_count)
+        edge[edge] &= readings[neighbour[edge]] < reach[edge]  # NaN compares False
+        occluded[label[edge]] = True
+    hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
+    covariance = spread / count[:, None, None] + spec.measurement_std**2 * np.eye(2) + hidden
+    return Detections(centre[keep], covariance[keep], radius[keep], count[keep].astype(np.int64),
+                      occluded[keep])  # fmt: skip

@@ -1,0 +1,295 @@
+"""MPPI with a perception view (issue 22): the costmap critic against a hand computation, the
+dynamic-obstacle critic's time indexing and prediction, avoidance of a disc coming head-on and of
+a box on the path (and the collisions without the view), the NumPy and Numba backends equal on
+the same noise, the safe stop, bad views."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crowd_cases import encounter, inflated_costmap, local_view
+from wheelbase.control import MPPI, VelocityLimits
+from wheelbase.control.footprint_field import footprint_disks
+from wheelbase.control.obstacle_critics import (
+    PerceptionInputs,
+    costmap_check,
+    costmap_costs,
+    predict_tracks,
+    track_costs,
+)
+from wheelbase.errors import ConfigError, InputError
+from wheelbase.models import DiffDrive, Unicycle
+from wheelbase.planning import Footprint, PlannedPath
+
+LIMITS = VelocityLimits(max_speed=0.5, max_yaw_rate=1.5)
+ROBOT = Footprint.rectangle(0.4, 0.4)
+LINE = PlannedPath.from_points([[0.0, 0.0], [8.0, 0.0]])
+HEAD_ON = (np.array([[5.0, 0.0]]), np.array([[-0.5, 0.0]]), np.array([0.3]))
+BOX = (2.7, -0.3, 3.3, 0.3)
+NO_PATH_CRITICS = {"path": 0.0, "path_align": 0.0, "follow": 0.0, "goal": 0.0,
+                   "goal_heading": 0.0, "prefer_forward": 0.0, "effort": 0.0, "rate": 0.0,
+                   "obstacle": 0.0, "dynamic_obstacle": 0.0}  # fmt: skip
+
+
+def mppi(seed=0, **gains):
+    gains.setdefault("samples", 500)
+    return MPPI.from_gains(Unicycle(), footprint=ROBOT, seed=seed, **gains)
+
+
+# --------------------------------------------------------------------------- closed loop
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_disc_coming_head_on_is_avoided_with_tracks_and_hit_without(seed):
+    seen = encounter(mppi(seed), LINE, (0.0, 0.0, 0.0), ROBOT, discs=HEAD_ON, duration=14.0)
+    blind = encounter(mppi(seed), LINE, (0.0, 0.0, 0.0), ROBOT, discs=HEAD_ON, duration=14.0,
+                      perceive=False)  # fmt: skip
+    assert seen.min_gap > 0.1  # passed with a margin
+    assert blind.min_gap < 0.0  # the same robot without its view drives into it
+    assert seen.poses[-1, 0] > 5.0  # and it went on along the path
+
+
+def test_a_box_marked_in_the_costmap_is_passed():
+    costmap = inflated_costmap([BOX], (-1.0, -3.0, 8.0, 3.0))
+    path = PlannedPath.from_points([[0.0, 0.0], [6.0, 0.0]])
+    seen = encounter(mppi(), path, (0.0, 0.0, 0.0), ROBOT, costmap=costmap, boxes=[BOX],
+                     duration=25.0)  # fmt: skip
+    blind = encounter(mppi(), path, (0.0, 0.0, 0.0), ROBOT, costmap=costmap, boxes=[BOX],
+                      duration=25.0, perceive=False)  # fmt: skip
+    assert seen.min_gap > 0.0 and seen.statuses[-1] == "arrived"
+    assert blind.min_gap < 0.0
+
+
+# --------------------------------------------------------------------------- costmap critic
+def tiny_costmap():
+    """5 × 6 cells of 0.5 m, origin (-1, -1): row 0 is the lowest y."""
+    cost = np.array(
+        [
+            [0, 10, 20, 30, 40, 50],
+            [60, 70, 80, 90, 100, 110],
+            [120, 130, 140, 150, 160, 170],
+            [180, 190, 200, 210, 220, 230],
+            [240, 250, 252, 255, 0, 0],
+        ],
+        dtype=np.uint8,
+    )
+    return SimpleNamespace(cost=cost, resolution=0.5, origin=(-1.0, -1.0))
+
+
+def test_costmap_critic_equals_a_hand_computation():
+    costmap = tiny_costmap()
+    controller = MPPI(Unicycle(), 6, 0.5, 4, (0.2, 0.3), 1.0, NO_PATH_CRITICS | {"costmap": 2.0},
+                      LIMITS, savgol_window=0)  # fmt: skip
+    noise = np.random.default_rng(3).standard_normal((4, 6, 2)) * (0.2, 0.3)
+    plan = controller.plan((0.1, 0.2, 0.3), LINE, noise, perception=SimpleNamespace(
+        costmap=costmap, tracks=None, time=0.0))  # fmt: skip
+    poses = controller.predict(plan, plan.samples)[:, 1:]  # after each step, world frame
+    expected = np.zeros(4)
+    for i in range(4):
+        for x, y, _ in poses[i]:
+            col, row = math.floor((x + 1.0) / 0.5), math.floor((y + 1.0) / 0.5)
+            inside = 0 <= row < 5 and 0 <= col < 6
+            value = int(costmap.cost[row, col]) if inside else 0
+            expected[i] += (1.0 if value > 252 else value / 252.0) if inside else 0.0
+    np.testing.assert_allclose(plan.costs, 2.0 * expected / 6, rtol=1e-9)
+    assert expected.min() > 0.0  # the rollouts do cross costed cells
+
+
+def test_an_outline_over_a_lethal_cell_collides_though_its_centre_is_free():
+    cost = np.zeros((20, 20), np.uint8)
+    cost[10, 14] = 254  # x in [0.7, 0.75), y in [0.5, 0.55)
+    geometry = np.array([0.0, 0.0, 0.05, 1.0, 1.0])
+    inputs = PerceptionInputs(ROBOT, footprint_disks(ROBOT, outline=False), 0.5, 1.0, 0.03)
+    near = inputs._near(cost, 0.05)
+    # the robot's front edge (x + 0.2) over the cell, then 2 cm short of it, then rotated 45°
+    poses = np.array([[0.52, 0.52, 0.0], [0.48, 0.52, 0.0], [0.52, 0.52, math.pi / 4]])
+    soft, hit = costmap_check(poses, cost, near, geometry, inputs.polygon)
+    assert hit.tolist() == [True, False, False]
+    np.testing.assert_array_equal(soft, 0.0)  # the centres are on free cells
+    twin = costmap_costs(poses, cost, near, geometry, inputs.polygon)
+    np.testing.assert_array_equal(twin[1], hit)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_costmap_numpy_twin_equals_the_compiled_one(seed):
+    rng = np.random.default_rng(seed)
+    cost = rng.choice(np.array([0, 30, 120, 252, 253, 254, 255], np.uint8), (30, 40),
+                      p=[0.5, 0.1, 0.1, 0.1, 0.05, 0.1, 0.05])  # fmt: skip
+    geometry = np.array([-1.0, -0.5, 0.05, 1.0, float(rng.integers(2))])
+    inputs = PerceptionInputs(ROBOT, footprint_disks(ROBOT, outline=False), 0.5, 1.0, 0.03)
+    near = inputs._near(cost, 0.05)
+    poses = np.column_stack([rng.uniform(-1.5, 1.5, 300), rng.uniform(-1.0, 1.5, 300),
+                             rng.uniform(-math.pi, math.pi, 300)])  # fmt: skip
+    compiled = costmap_check(poses, cost, near, geometry, inputs.polygon)
+    vectorised = costmap_costs(poses, cost, near, geometry, inputs.polygon)
+    np.testing.assert_array_equal(compiled[1], vectorised[1])
+    np.testing.assert_allclose(compiled[0], vectorised[0], rtol=1e-15)
+
+
+# --------------------------------------------------------------------------- dynamic critic
+def straight_rollout(speed=0.5, dt=0.1, steps=60):
+    t = dt * np.arange(1, steps + 1)
+    return np.stack([speed * t, np.zeros_like(t), np.zeros_like(t)], -1)[None], t
+
+
+def test_the_cost_at_step_k_uses_the_prediction_at_step_k():
+    poses, t = straight_rollout()
+    point = np.zeros((1, 3))
+    inputs = PerceptionInputs(None, point, 0.5, 0.0, 0.0, hold_time=0.0)
+    # A crosses the robot's line at x = 2 at t = 2 s, when the robot is at x = 1: no contact,
+    # though its swept path crosses the rollout's (a static check would call it a collision).
+    early = inputs.arrays(local_view(np.array([[2.0, -2.0]]), np.array([[0.0, 1.0]]),
+                                     np.array([0.3]), 0.0), np.zeros(3), 0.0, t, 0.5)  # fmt: skip
+    _soft, hit = track_costs(poses, early.table, early.relief, early.disks, 0.5)
+    assert not hit.any()
+    swept = np.hypot(poses[0, :, 0, None] - 2.0, poses[0, :, 1, None] - np.linspace(-2, 2, 50))
+    assert swept.min() < 0.3  # the static view of its path does cross the rollout
+    # B reaches (2, 0) at t = 4 s, as the robot does: contact exactly while |Δp(t)| <= 0.3.
+    late = inputs.arrays(local_view(np.array([[2.0, -1.0]]), np.array([[0.0, 0.25]]),
+                                    np.array([0.3]), 0.0), np.zeros(3), 0.0, t, 0.5)  # fmt: skip
+    _soft, hit = track_costs(poses, late.table, late.relief, late.disks, 0.5)
+    gap = np.hypot(0.5 * t - 2.0, -1.0 + 0.25 * t)
+    np.testing.assert_array_equal(hit[0], gap <= 0.3)
+    assert hit[0].any() and not hit[0, : np.argmax(gap <= 0.3)].any()
+
+
+def test_the_view_time_shifts_the_prediction():
+    _, t = straight_rollout(steps=10)
+    inputs = PerceptionInputs(None, np.zeros((1, 3)), 0.5, 0.0, 0.0, hold_time=0.0)
+    view = local_view(np.array([[2.0, 0.3]]), np.array([[-1.0, 0.0]]), np.array([0.3]), 1.0)
+    arrays = inputs.arrays(view, np.array([0.5, 0.0, 0.0]), 1.5, t, 0.5)  # 0.5 s stale
+    # relative to the robot at x = 0.5: the track at 2 - (0.5 + τ) with τ the step time
+    np.testing.assert_allclose(arrays.table[:, 0, 0], 2.0 - (0.5 + t) - 0.5, atol=1e-12)
+
+
+def test_prediction_covariance_is_the_constant_velocity_propagation():
+    rng = np.random.default_rng(2)
+    a = rng.standard_normal((3, 4, 4))
+    covariance = a @ np.swapaxes(a, 1, 2) * 0.1
+    times, q = np.array([0.0, 0.7, 2.5]), 0.03
+    _mean, sigma = predict_tracks(rng.standard_normal((3, 2)), rng.standard_normal((3, 2)),
+                                 covariance, times, q)  # fmt: skip
+    for k, tau in enumerate(times):
+        transition = np.block([[np.eye(2), tau * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+        noise = q * np.block([[tau**3 / 3 * np.eye(2), tau**2 / 2 * np.eye(2)],
+                              [tau**2 / 2 * np.eye(2), tau * np.eye(2)]])  # fmt: skip
+        for j in range(3):
+            full = transition @ covariance[j] @ transition.T + noise
+            assert sigma[k, j] == pytest.approx(math.sqrt(np.linalg.eigvalsh(full[:2, :2])[-1]))
+
+
+def test_unconfirmed_tracks_are_ignored_and_far_ones_dropped():
+    _, t = straight_rollout(steps=10)
+    inputs = PerceptionInputs(None, np.zeros((1, 3)), 0.5, 1.0, 0.03)
+    tracks = SimpleNamespace(
+        position=np.array([[1.0, 0.0], [1.0, 0.5], [40.0, 0.0]]),
+        velocity=np.zeros((3, 2)),
+        covariance=None,
+        radius=np.full(3, 0.3),
+        confirmed=np.array([True, False, True]),
+    )
+    arrays = inputs.arrays(SimpleNamespace(costmap=None, tracks=tracks, time=0.0), np.zeros(3),
+                           0.0, t, 0.5)  # fmt: skip
+    assert arrays.table.shape[1] == 1
+    np.testing.assert_allclose(arrays.table[0, 0, :2], [1.0, 0.0])
+
+
+# --------------------------------------------------------------------------- backends, stop
+@pytest.mark.parametrize("model", [Unicycle(), DiffDrive(0.05, 0.2)], ids=["unicycle", "diff"])
+def test_numpy_and_numba_agree_on_the_same_noise_with_a_view(model):
+    costmap = inflated_costmap([BOX], (-1.0, -3.0, 8.0, 3.0))
+    view = local_view(np.array([[3.5, 0.4], [1.5, -1.2]]), np.array([[-0.5, 0.0], [0.0, 0.6]]),
+                      np.array([0.3, 0.25]), 0.0, costmap=costmap)  # fmt: skip
+    controllers = {
+        name: MPPI(
+            model, 24, 0.05, 128, (0.2, 0.4), 0.05, None, LIMITS, backend=name, footprint=ROBOT
+        )
+        for name in ("numpy", "numba")
+    }
+    rng = np.random.default_rng(7)
+    for k in range(3):
+        noise = rng.standard_normal((128, 24, 2)) * (0.2, 0.4)
+        plans = {name: c.plan((1.6 + 0.1 * k, 0.05, 0.1), LINE, noise, perception=view, t=0.1 * k)
+                 for name, c in controllers.items()}  # fmt: skip
+        np.testing.assert_allclose(plans["numba"].costs, plans["numpy"].costs, rtol=1e-9,
+                                   atol=1e-9)  # fmt: skip
+        np.testing.assert_allclose(plans["numba"].command, plans["numpy"].command, atol=1e-9)
+        assert (plans["numpy"].costs >= 1e6).any()  # the view does make some rollouts lethal
+
+
+def test_held_samples_keep_their_first_perturbation():
+    controller = MPPI(Unicycle(), 20, 0.05, 50, (0.2, 0.4), 0.05, None, LIMITS, footprint=ROBOT,
+                      held_noise_fraction=0.2, allow_reverse=False)  # fmt: skip
+    view = local_view(None, None, None, 0.0)
+    plan = controller.plan((0.0, 0.0, 0.0), LINE, perception=view)
+    held, free = plan.samples[40:], plan.samples[:40]
+    np.testing.assert_array_equal(held, np.broadcast_to(held[:, :1], held.shape))
+    assert np.ptp(free[:, :, 1], axis=1).min() > 0.0
+    # and without a view nothing is held
+    plan = MPPI(Unicycle(), 20, 0.05, 50, (0.2, 0.4), 0.05, None, LIMITS).plan((0, 0, 0), LINE)
+    assert np.ptp(plan.samples[40:, :, 1], axis=1).min() > 0.0
+
+
+def test_a_robot_inside_a_lethal_region_stops():
+    cost = np.full((40, 40), 254, np.uint8)
+    view = SimpleNamespace(costmap=SimpleNamespace(cost=cost, resolution=0.05, origin=(-1, -1)),
+                           tracks=None, time=0.0)  # fmt: skip
+    controller = mppi()
+    command = controller(0.0, (0.0, 0.0, 0.0), LINE, perception=view)
+    assert controller.status == "all_collide"
+    np.testing.assert_array_equal(command, [0.0, 0.0])
+
+
+def test_a_track_touching_the_robot_lets_it_back_away():
+    # a walker already in contact: only rollouts that get deeper are lethal, so it is not frozen
+    view = local_view(np.array([[0.45, 0.0]]), np.zeros((1, 2)), np.array([0.3]), 0.0)
+    controller = mppi(reverse_against_path=True)
+    controller(0.0, (0.0, 0.0, 0.0), LINE, perception=view)
+    assert controller.status == "ok"
+    assert float(controller.last_plan.controls[:, 0].mean()) < 0.0  # it backs off
+
+
+# --------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize(
+    ("view", "match"),
+    [
+        (SimpleNamespace(costmap=SimpleNamespace(cost=np.zeros((4, 4)), resolution=0.05,
+                                                 origin=(0, 0)), tracks=None, time=0.0),
+         "perception.costmap.cost must be a non-empty uint8"),
+        (SimpleNamespace(costmap=SimpleNamespace(cost=np.zeros((4, 4), np.uint8),
+                                                 resolution=-1.0, origin=(0, 0)),
+                         tracks=None, time=0.0), r"resolution must be > 0 m"),
+        (SimpleNamespace(costmap=object(), tracks=None, time=0.0), "needs cost, resolution"),
+        (SimpleNamespace(costmap=None, tracks=SimpleNamespace(
+            position=np.zeros((2, 2)), velocity=np.zeros((3, 2)), radius=np.ones(2)), time=0.0),
+         r"velocity must have shape \(2, 2\)"),
+        (SimpleNamespace(costmap=None, tracks=SimpleNamespace(
+            position=np.zeros((1, 2)), velocity=np.zeros((1, 2)), radius=[-0.1]), time=0.0),
+         "radius must be >= 0"),
+        (SimpleNamespace(costmap=None, tracks=SimpleNamespace(
+            position=[[np.nan, 0.0]], velocity=np.zeros((1, 2)), radius=[0.1]), time=0.0),
+         "position must be finite"),
+        (SimpleNamespace(costmap=None, tracks=SimpleNamespace(
+            position=np.zeros((1, 2)), velocity=np.zeros((1, 2)), radius=[0.1]), time="now"),
+         "perception.time must be a finite time"),
+    ],
+)  # fmt: skip
+def test_bad_views_name_what_is_wrong(view, match):
+    with pytest.raises(InputError, match=match):
+        mppi(samples=16)(0.0, (0.0, 0.0, 0.0), LINE, perception=view)
+
+
+def test_bad_perception_critics_and_the_jax_backend():
+    with pytest.raises(ConfigError, match="dynamic_inflation"):
+        mppi(dynamic_inflation=0.0)
+    with pytest.raises(ConfigError, match="held_noise_fraction"):
+        mppi(held_noise_fraction=1.5)
+    pytest.importorskip("jax")
+    controller = MPPI(Unicycle(), 10, 0.05, 16, 0.2, 0.1, None, LIMITS, backend="jax")
+    with pytest.raises(ConfigError, match="perception is not supported on the jax backend"):
+        controller(0.0, (0, 0, 0), LINE, perception=local_view(None, None, None, 0.0))

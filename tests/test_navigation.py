@@ -1,0 +1,203 @@
+"""Replanning and recovery (wheelbase.navigation): what the robot does when its plan is blocked."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from wheelbase.errors import ConfigError
+from wheelbase.navigation import Navigator, NavigatorOptions, Route, believed_grid
+from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid
+
+RES = 0.1
+FOOTPRINT = Footprint.rectangle(0.4, 0.4)
+
+
+@dataclass(frozen=True)
+class Costmap:
+    cost: np.ndarray
+    resolution: float = RES
+    origin: tuple = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Tracks:
+    position: np.ndarray
+    velocity: np.ndarray
+    radius: np.ndarray
+
+
+@dataclass(frozen=True)
+class View:
+    costmap: Costmap
+    tracks: Tracks | None = None
+
+
+def room(rows=40, cols=100):
+    """A walled 10 m × 4 m room (lethal walls)."""
+    cost = np.zeros((rows, cols), np.uint8)
+    cost[0, :] = cost[-1, :] = cost[:, 0] = cost[:, -1] = 254
+    return cost
+
+
+def box(cost, x0, x1, y0, y1):
+    cost = cost.copy()
+    cost[int(y0 / RES) : int(y1 / RES), int(x0 / RES) : int(x1 / RES)] = 254
+    return cost
+
+
+def planner(grid, start, goals):
+    path = HybridAStar(grid, footprint=(0.5, 0.5), turning_radius=0.0).plan(start, goals[0])
+    return path if path.success else None
+
+
+class Straight:
+    """The local law: drive at 0.3 m/s towards the path's last point (enough to see calls)."""
+
+    command_names = ("v", "omega")
+
+    def __init__(self):
+        self.paths = []
+
+    def reset(self):
+        self.paths = []
+
+    def __call__(self, t, pose, path):
+        self.paths.append(path)
+        return np.array([0.3, 0.0])
+
+
+START = np.array([1.0, 2.0, 0.0])
+GOAL = np.array([9.0, 2.0, 0.0])
+
+
+def navigator(**options):
+    first = planner(OccupancyGrid(room() >= 254, RES), START, [GOAL])
+    local = Straight()
+    nav = Navigator(local, planner, FOOTPRINT, NavigatorOptions(**options))
+    return nav, local, Route(first, (GOAL,))
+
+
+def test_a_box_on_the_path_is_planned_around_and_the_old_plan_kept_until_then():
+    nav, local, first = navigator(rate_hz=0.0)
+    free = View(Costmap(room()))
+    nav(0.0, START, first, perception=free)
+    assert local.paths[-1] is first.plan and nav.replans == 0
+    blocked = View(Costmap(box(room(), 4.0, 4.6, 1.0, 2.6)))  # across the straight line
+    nav(0.1, START, first, perception=blocked)
+    assert nav.replans == 1
+    new = local.paths[-1]
+    assert new is not first.plan
+    grid = believed_grid(blocked, 0.2)
+    assert not grid.in_collision(FOOTPRINT, new.poses).any()
+    assert np.max(new.poses[:, 1]) > 2.6  # goes round the box above it
+
+
+def test_a_closed_corridor_tries_every_recovery_then_ends_blocked():
+    nav, _, first = navigator(rate_hz=0.0, max_retries=3, wait_time=0.5)
+    wall = View(Costmap(box(room(), 4.0, 4.6, 0.0, 4.0)))  # the room cut in two
+    t, pose, modes = 0.0, START.copy(), []
+    for _ in range(400):
+        command = nav(t, pose, first, perception=wall)
+        modes.append(nav.status)
+        # integrate the recovery's command (unicycle) so back_up and spin progress
+        v, omega = command
+        pose = pose + 0.05 * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), omega])
+        t += 0.05
+        if nav.status == "blocked":
+            break
+    assert nav.status == "blocked"
+    assert nav.recoveries == 3
+    assert "recovering" in modes
+    np.testing.assert_array_equal(nav(t, pose, first, perception=wall), [0.0, 0.0])
+    # wait, back up, spin happened: the robot moved back and turned
+    assert pose[0] < START[0] - 0.1
+    assert abs(pose[2]) > 0.5
+
+
+def test_a_walker_crossing_the_path_does_not_block_the_route():
+    nav, local, first = navigator(rate_hz=0.0)
+    walker = box(room(), 2.7, 3.3, 1.7, 2.3)  # the walker's cells are marked lethal
+    tracks = Tracks(np.array([[3.0, 2.0]]), np.array([[0.0, 0.5]]), np.array([0.3]))
+    nav(0.0, START, first, perception=View(Costmap(walker), tracks))
+    assert nav.replans == 0 and local.paths[-1] is first.plan
+    standing = Tracks(np.array([[3.0, 2.0]]), np.array([[0.0, 0.05]]), np.array([0.3]))
+    nav(0.1, START, first, perception=View(Costmap(walker), standing))
+    assert nav.replans == 1  # a person standing still is planned around
+
+
+def test_periodic_replans_are_skipped_while_nothing_changes():
+    nav, _, first = navigator(rate_hz=2.0)
+    free = View(Costmap(room()))
+    for k in range(20):
+        nav(0.1 * k, START, first, perception=free)
+    assert nav.replans == 1  # the first periodic replan; the belief never changed after it
+
+
+def test_without_perception_the_navigator_follows_blindly():
+    nav, local, first = navigator()
+    nav(0.0, START, first)
+    nav(0.5, START, first)
+    assert nav.replans == 0 and local.paths == [first.plan, first.plan]
+
+
+def test_bad_options_name_the_key():
+    with pytest.raises(ConfigError, match="unknown 'dance'"):
+        NavigatorOptions(behaviours=("wait", "dance"))
+    with pytest.raises(ConfigError, match="lookahead"):
+        NavigatorOptions(lookahead=-1.0)
+
+
+def corridor_view(*boxes):
+    """The bundled corridor_bay map as a costmap, with lethal boxes (x0, x1, y0, y1) marked."""
+    from wheelbase.planning.maps import load_map
+
+    grid = load_map("corridor_bay")
+    cost = np.where(grid.occupied, 254, 0).astype(np.uint8)
+    for x0, x1, y0, y1 in boxes:
+        r0, r1 = int(y0 / grid.resolution), int(y1 / grid.resolution)
+        c0, c1 = int(x0 / grid.resolution), int(x1 / grid.resolution)
+        cost[r0:r1, c0:c1] = 254
+    return View(Costmap(cost, grid.resolution, grid.origin)), grid
+
+
+def drive(nav, route, view, pose, t, seconds, dt=0.05):
+    """Integrate the navigator's (v, ω) on a unicycle; the statuses seen on the way."""
+    seen = []
+    for _ in range(round(seconds / dt)):
+        v, omega = nav(t, pose, route, perception=view)
+        seen.append(nav.status)
+        pose = pose + dt * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), omega])
+        pose[2] = math.remainder(pose[2], 2 * math.pi)
+        t += dt
+    return pose, t, seen
+
+
+def test_a_robot_without_the_right_of_way_waits_in_the_passing_bay_then_goes_on():
+    from wheelbase.control import PurePursuit
+
+    square = Footprint.rectangle(0.7, 0.7)
+
+    def corridor_planner(grid, start, goals):
+        planner = HybridAStar(grid, footprint=(0.8, 0.8), turning_radius=0.0)
+        path = planner.plan(start, goals[0])
+        return path if path.success else None
+
+    free, grid = corridor_view()
+    start, goal = np.array([8.6, 0.8, math.pi]), np.array([1.0, 0.8, math.pi])
+    first = corridor_planner(OccupancyGrid(grid.occupied, grid.resolution), start, [goal])
+    local = PurePursuit(speed=0.3)
+    nav = Navigator(local, corridor_planner, square, NavigatorOptions(rate_hz=0.0))
+    other = corridor_view((5.4, 6.1, 0.45, 1.15))[0]  # a stopped robot in the corridor ahead
+    pose, t, seen = drive(nav, Route(first, (goal,), priority=1), other, start, 0.0, 20.0)
+    assert nav.yields == 1 and seen[-1] == "yielding"
+    assert 6.75 < pose[0] < 9.25 and pose[1] > 1.6  # in the bay, out of the corridor
+    # the same wait for the robot with the right of way: it recovers, it does not yield
+    boss = Navigator(PurePursuit(speed=0.3), corridor_planner, square, NavigatorOptions())
+    drive(boss, Route(first, (goal,), priority=0), other, start, 0.0, 3.0)
+    assert boss.yields == 0 and boss.recoveries >= 1
+    # the other robot has gone by: the way is clear, the yielding robot goes on to its goal
+    pose, t, seen = drive(nav, Route(first, (goal,), priority=1), free, pose, t, 40.0)
+    assert seen[-1] != "yielding" and nav.yields == 1
+    assert math.hypot(*(pose[:2] - goal[:2])) < 0.3
