@@ -115,9 +115,10 @@ def test_path_plot_and_curve_csv(tmp_path):
 
     matplotlib.use("Agg")
     from wheelbase.planning import Footprint, load_map, reeds_shepp_path
+    from wheelbase.planning.plot import plot_path
 
     path = reeds_shepp_path((5.0, 5.0, 0.0), (4.0, 5.0, math.pi), 1.5).sample(0.05)
-    ax = path.plot(grid=load_map("maze"), footprint=Footprint.rectangle(0.6, 0.4))
+    ax = plot_path(path, grid=load_map("maze"), footprint=Footprint.rectangle(0.6, 0.4))
     assert len(ax.lines) >= 2
     written = path.to_csv(tmp_path / "rs.csv")
     data = np.loadtxt(written, delimiter=",", skiprows=1)

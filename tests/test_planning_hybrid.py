@@ -15,6 +15,7 @@ from wheelbase.planning import (
     PlannedPath,
     PolygonWorld,
     smooth_path,
+    write_ros_yaml,
 )
 from wheelbase.planning.collision import _scratch
 from wheelbase.planning.escape import _arc, _move, escape
@@ -598,7 +599,7 @@ def test_goal_tolerance_accepts_a_nearby_state():
 def test_load_map_by_name_and_path(tmp_path):
     grid = load_map("parking_lot")
     assert grid.shape == (300, 400) and grid.resolution == pytest.approx(0.1)
-    grid.to_ros_yaml(tmp_path / "copy.yaml")
+    write_ros_yaml(grid, tmp_path / "copy.yaml")
     np.testing.assert_array_equal(load_map(tmp_path / "copy.yaml").occupied, grid.occupied)
     with pytest.raises(ConfigError, match="map"):
         load_map("atlantis")
