@@ -176,7 +176,9 @@ def register_slam(app: typer.Typer) -> None:
         data: Annotated[
             Path, typer.Argument(help="A CARMEN log, a ROS 2 bag, or an MRCLAM folder.")
         ],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("slam", "metrics.json, map.png and the figures of the run")
+        ] = "wheelbase-slam",
         robot: int = typer.Option(1, "--robot", help="MRCLAM robot number, 1-5."),
         method: str = typer.Option("smoothing", "--method", help="Landmarks: ekf or smoothing."),
         frames: int = typer.Option(24, "--frames", help="Frames of the animation (lidar)."),
