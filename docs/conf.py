@@ -79,7 +79,8 @@ def _escape_bars(app, what, name, obj, options, lines):
 # The build is nitpicky (tests/test_docs.py: -n -W): every cross-reference must resolve. Names of
 # other projects (the standard library, NumPy, matplotlib) cannot link offline, without an
 # intersphinx inventory, so they stay plain text on purpose; every wheelbase name must resolve.
-nitpick_ignore_regex = [(r"py:.*", r"(concurrent|numpy|matplotlib|scipy|gymnasium|dask)\..*")]
+_OTHERS = "concurrent|copy|dataclasses|typing|numpy|scipy|matplotlib|gymnasium|dask|numba|jax"
+nitpick_ignore_regex = [(r"py:.*", rf"({_OTHERS})\..*")]
 
 
 def _import(name: str):

@@ -1,12 +1,12 @@
 """Draw the figure of the home page and of every task page from the command the page shows.
 
-Run ``python docs/make_images.py [--only NAME ...]`` from the repository (``--data DIR``: the
-MRCLAM folder, default ``../shared/data/mrclam``). Each figure comes from running that command
-through ``python -m wheelbase`` in a scratch folder; the PNG it writes is shrunk to at most
-``MAX_WIDTH`` pixels and 64 colours and saved as ``docs/images/page_NAME.png`` (tens of kB, so
+Run ``python docs/make_images.py [--only NAME ...]`` from the repository (``--data DIR``: the real
+data, default ``../shared/data``, with ``mrclam/`` and ``carmen/``). Each figure comes from running
+that command through ``python -m wheelbase`` in a scratch folder; the PNG it writes is shrunk to at
+most ``MAX_WIDTH`` pixels and 64 colours and saved as ``docs/images/page_NAME.png`` (tens of kB, so
 the repository stays small). Prints JSON: each file with its size and the command that drew it.
 No figure in the documentation is pasted by hand; the gymnasium page's learning curve is
-``examples/gym_ppo.py``'s (it trains for minutes).
+``examples/gym_ppo.py``'s (it trains for minutes), the terrain page's come from its own scripts.
 """
 
 from __future__ import annotations
@@ -35,7 +35,9 @@ PAGES: dict[str, tuple[list[str], str]] = {
     "control": (["control", "--law", "polar", "--start", "2,0,180"], "run.png"),
     "scenario": (["run", "{scenario}", "--no-gif"], "map.png"),
     "batch": (["batch", "amcl_warehouse", "--seeds", "8"], "batch.csv"),
-    "localise": (["localize", "{data}", "--robot", "1", "--filter", "ekf"], "paths.png"),
+    "localise": (["localize", "{data}/mrclam", "--robot", "1", "--filter", "ekf"], "paths.png"),
+    "perceive": (["run", "unexpected_boxes", "--no-gif"], "map.png"),
+    "slam": (["map", "{data}/carmen/intel-corrected.log.gz"], "map.png"),
     "foxglove": (["run", "parking", "--mcap", "--no-gif"], "map.png"),
 }
 
@@ -108,7 +110,7 @@ def draw(name: str, data: Path, scratch: Path) -> dict:
 def main(argv: list[str] | None = None) -> list[dict]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", choices=sorted(PAGES), help="pages to redraw")
-    parser.add_argument("--data", type=Path, default=DOCS.parent.parent / "shared/data/mrclam")
+    parser.add_argument("--data", type=Path, default=DOCS.parent.parent / "shared/data")
     args = parser.parse_args(argv)
     IMAGES.mkdir(exist_ok=True)
     with tempfile.TemporaryDirectory() as folder:

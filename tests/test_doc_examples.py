@@ -45,7 +45,12 @@ def test_every_python_block_runs(page, tmp_path, monkeypatch):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    monkeypatch.chdir(tmp_path)
+    # a fresh folder, beside which ../shared is the project's shared data (as for a checkout)
+    work = tmp_path / "work"
+    work.mkdir()
+    if (ROOT.parent / "shared").is_dir():
+        (tmp_path / "shared").symlink_to(ROOT.parent / "shared")
+    monkeypatch.chdir(work)
     namespace: dict = {"__name__": "__doc_example__"}
     for number, block in enumerate(python_blocks(page), start=1):
         code = compile(block, f"{page.name} block {number}", "exec")
