@@ -11,9 +11,16 @@ Prints one JSON object:
   the engine) and ``batch_process_pool_runs_per_s`` (a pool of ``--workers`` processes, one run
   per task, as ``wheelbase batch`` worked before); target: the vectorised batch >= 20x the pool;
 - ``cli_help_s``: wall time of ``wheelbase --help`` in a fresh process (median of 5); target
-  <= 0.5 s.
+  <= 0.5 s;
+- ``batch_memory``: the peak resident memory of one process (``ru_maxrss``) that runs
+  ``run_batch`` over 1,000, 10,000 and ``--memory-seeds`` (100,000) seeds of
+  :data:`MEMORY_SCENARIO` (a 1.5 m drive with encoder noise, 2.6 s simulated, 200 steps at
+  most) under the default memory budget, each in a fresh process; target: flat, under 2 GB at
+  100,000 seeds. The seeds run in vectorised chunks that fit the budget (512 MiB) and only
+  the finished rows are kept; before, one process kept every seed's whole log.
 
-Usage: ``python benchmarks/closed_loop.py [--seeds 100] [--workers 2] [--repeat 3] [--quick]``.
+Usage: ``python benchmarks/closed_loop.py [--seeds 100] [--workers 2] [--repeat 3]
+[--memory-seeds 100000] [--quick]``.
 """
 
 from __future__ import annotations
@@ -94,6 +101,50 @@ def time_batch(seeds: int, workers: int) -> dict:
     }
 
 
+MEMORY_SCENARIO = {
+    "name": "short",
+    "map": "empty",
+    "robot": {"model": "diffdrive"},
+    "controller": {"law": "kanayama"},
+    "odometry": {"mode": "encoders", "pulses_per_revolution": 512, "tick_noise_std": 1.0},
+    "start": [0.0, 0.0, 0.0],
+    "goal": [1.5, 0.0, 0.0],
+    "trajectory": {"max_speed": 1.0, "max_acceleration": 1.0},
+    "dt": 0.02,
+    "duration": 4.0,
+}
+"""The scenario of ``batch_memory``: small, so that 100,000 seeds take minutes, not hours."""
+
+
+def memory_child(seeds: int) -> None:
+    """Run the memory scenario over ``seeds`` seeds in this process; print its figures."""
+    import resource
+
+    start = time.perf_counter()
+    result = run_batch([MEMORY_SCENARIO], seeds=seeds)
+    statuses = [row["status"] for row in result.rows]
+    print(json.dumps({
+        "seeds": seeds,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "wall_s": time.perf_counter() - start,
+        "runs_per_s": result.runs_per_second,
+        "arrived": statuses.count("arrived") / len(statuses),
+    }))  # fmt: skip
+
+
+def batch_memory(counts: list[int]) -> dict:
+    """Peak memory of one process per batch size (module docstring)."""
+    runs = []
+    for seeds in counts:
+        done = subprocess.run(
+            [sys.executable, __file__, "--memory-child", str(seeds)],
+            capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    peak = max(run["peak_rss_mb"] for run in runs)
+    return {"runs": runs, "peak_rss_mb": peak, "target_mb": 2048.0, "met": peak < 2048.0}
+
+
 def time_cli_help(repeat: int = 5) -> dict:
     command = shutil.which("wheelbase")
     argv = [command, "--help"] if command else [sys.executable, "-m", "wheelbase", "--help"]
@@ -110,13 +161,25 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=100)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--memory-seeds", type=int, default=100_000)
+    parser.add_argument("--memory-child", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--memory-only", action="store_true", help="only batch_memory")
     parser.add_argument("--quick", action="store_true", help="4 seeds, 1 repeat (smoke run)")
     args = parser.parse_args()
+    if args.memory_child:
+        memory_child(args.memory_child)
+        return
     if args.quick:
-        args.seeds, args.repeat = 4, 1
+        args.seeds, args.repeat, args.memory_seeds = 4, 1, 300
+    counts = sorted({min(1_000, args.memory_seeds), min(10_000, args.memory_seeds),
+                     args.memory_seeds})  # fmt: skip
+    if args.memory_only:
+        print(json.dumps({"benchmark": "closed_loop", "batch_memory": batch_memory(counts)}))
+        return
     demo = time_demo(args.repeat)
     batch = time_batch(args.seeds, args.workers)
     cli = time_cli_help()
+    memory = batch_memory(counts)
     out = {
         "benchmark": "closed_loop",
         "demo_run_only_s": demo["run_only_s"],
@@ -126,6 +189,7 @@ def main() -> None:
         "demo": demo,
         "batch": batch,
         "cli": cli,
+        "batch_memory": memory,
     }
     print(json.dumps(out, indent=2))
 

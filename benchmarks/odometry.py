@@ -16,16 +16,15 @@ from pathlib import Path
 import numpy as np
 
 from wheelbase.control.goal import FIGURE8_GOALS
+from wheelbase.datasets.mrclam import MrclamData, load_mrclam
 from wheelbase.odometry import (
     DEAD_RECKONING_METHODS,
     WheelOdometry,
     calibrate_umbmark,
     dead_reckoning_errors,
     drift_table,
-    load_mrclam,
     yaw_rate_fit,
 )
-from wheelbase.odometry.mrclam import MrclamData
 from wheelbase.sim import run_go_to_goal
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam"

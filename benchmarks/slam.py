@@ -131,73 +131,84 @@ ROUTES = {
 }  # fmt: skip
 
 
-def simulation(quick: bool) -> dict:
+def simulated_log(world: str, beams: int, quick: bool):
+    """A looped route on a bundled map driven under AMCL, its scans as a ScanLog whose
+    odometry is dead-reckoned from the logged encoder ticks (wheels 1 % larger than the
+    odometry believes) and whose reference is the true pose; and the run's status."""
     import wheelbase
     from wheelbase.datasets import scans_from_log
-    from wheelbase.dynamics import RM100_HALF_TRACK
-    from wheelbase.mapping import LidarSlam, map_agreement
-    from wheelbase.mapping.evaluation import absolute_trajectory_error
+    from wheelbase.dynamics import RM100, RM100_HALF_TRACK
     from wheelbase.odometry import WheelOdometry, integrate_increments
-    from wheelbase.planning import load_map
     from wheelbase.sensors import Lidar
 
+    scenario = {
+        "name": f"slam_{world}", "map": world,
+        "robot": {"model": "diffdrive", "preset": "rm100"}, "plant": "kinematic",
+        "controller": {"law": "kanayama"},
+        "odometry": {"mode": "encoders", "pulses_per_revolution": 2048,
+                     "wheel_radius_scale": [1.01, 1.01]},
+        "sensors": {"lidar": {"beams": beams, "fov_deg": 360, "max_range": 8.0,
+                              "range_std": 0.01, "rate_hz": 5}},
+        "localization": {"method": "amcl"},
+        "trajectory": {"max_speed": 0.6, "max_acceleration": 0.5, "max_yaw_rate": 1.0},
+        "dt": 0.05, "duration": 400, **ROUTES[world],
+    }  # fmt: skip
+    if quick:
+        scenario["goals"] = scenario["goals"][:1]
+    run = wheelbase.run(scenario)
+    log = scans_from_log(run.log, Lidar(beams=beams, max_range=8.0), source=f"{world}-{beams}")
+    odo = WheelOdometry(RM100.wheel_radius, RM100_HALF_TRACK, 2048)
+    ticks = run.log.ticks[0, : int(run.log.length[0])]
+    distance, rotation = odo.increments(np.diff(ticks, axis=0))
+    poses = integrate_increments(run.log.true_pose[0, 0], distance, rotation)
+    rows = np.array(sorted(row for (r, row) in run.log.scans if r == 0))
+    log = type(log)(log.t, log.ranges, log.angles, log.max_range, poses[rows], log.reference,
+                    log.mount, log.invalid_readings, log.source)  # fmt: skip
+    return log, run.metrics.get("status")
+
+
+def simulation_slam(world: str, log) -> dict:
+    """SLAM with odometry, and without loop closures, against the truth of a simulated log."""
+    from wheelbase.mapping import LidarSlam, OccupancyMapper, map_agreement
+    from wheelbase.mapping.evaluation import absolute_trajectory_error
+    from wheelbase.planning import load_map
+
+    truth = load_map(world)
+    steps = np.hypot(*np.diff(log.reference[:, :2], axis=0).T)
+    row: dict = {
+        "scans": log.n_scans,
+        "distance_m": float(steps.sum()),
+        "odometry_rmse_m": absolute_trajectory_error(log.odometry, log.reference),
+    }
+    variants = {
+        "slam": LidarSlam(use_odometry=True),
+        "no_loop_closure": LidarSlam(use_odometry=True, loop_every=10**9),
+    }
+    for label, slam in variants.items():
+        result = slam.run(log)
+        grid = (
+            OccupancyMapper(resolution=truth.resolution)
+            .build(result.poses, log.ranges, log.angles, sensor_max_range=log.max_range)
+            .to_grid()
+        )
+        agreement, cells = map_agreement(grid, truth)
+        error = result.poses[:, :2] - log.reference[:, :2]
+        row[label] = {
+            "position_rmse_m": absolute_trajectory_error(result.poses, log.reference),
+            "position_rmse_unaligned_m": float(np.sqrt(np.mean(np.sum(error**2, 1)))),
+            "map_agreement": agreement, "cells_compared": cells,
+            "loop_closures": len(result.loops),
+            "processing_time_s": result.processing_time_s,
+        }  # fmt: skip
+    return row
+
+
+def simulation(quick: bool) -> dict:
     out = {}
-    for world, route in ROUTES.items():
+    for world in ROUTES:
         for beams in (60,) if quick else (60, 360):
-            scenario = {
-                "name": f"slam_{world}", "map": world,
-                "robot": {"model": "diffdrive", "preset": "rm100"}, "plant": "kinematic",
-                "controller": {"law": "kanayama"},
-                "odometry": {"mode": "encoders", "pulses_per_revolution": 2048,
-                             "wheel_radius_scale": [1.01, 1.01]},
-                "sensors": {"lidar": {"beams": beams, "fov_deg": 360, "max_range": 8.0,
-                                      "range_std": 0.01, "rate_hz": 5}},
-                "localization": {"method": "amcl"},
-                "trajectory": {"max_speed": 0.6, "max_acceleration": 0.5, "max_yaw_rate": 1.0},
-                "dt": 0.05, "duration": 400, **route,
-            }  # fmt: skip
-            if quick:
-                scenario["goals"] = scenario["goals"][:1]
-            run = wheelbase.run(scenario)
-            lidar = Lidar(beams=beams, max_range=8.0)
-            log = scans_from_log(run.log, lidar, source=f"{world}-{beams}")
-            # the encoder odometry: the logged ticks, the nominal radius (1 % small)
-            preset = wheelbase.dynamics.RM100
-            odo = WheelOdometry(preset.wheel_radius, RM100_HALF_TRACK, 2048)
-            rows = int(run.log.length[0])
-            ticks = run.log.ticks[0, :rows]
-            distance, rotation = odo.increments(np.diff(ticks, axis=0))
-            poses = integrate_increments(run.log.true_pose[0, 0], distance, rotation)
-            rows_of_scans = np.array(sorted(row for (r, row) in run.log.scans if r == 0))
-            log = type(log)(log.t, log.ranges, log.angles, log.max_range,
-                            poses[rows_of_scans], log.reference, log.mount,
-                            log.invalid_readings, log.source)  # fmt: skip
-            truth = load_map(world)
-            row: dict = {"status": run.metrics.get("status"), "scans": log.n_scans,
-                         "distance_m": float(np.hypot(*np.diff(log.reference[:, :2],
-                                                                axis=0).T).sum()),
-                         "odometry_rmse_m": absolute_trajectory_error(log.odometry,
-                                                                      log.reference)}  # fmt: skip
-            for label, slam in (("slam", LidarSlam(use_odometry=True)),
-                                ("no_loop_closure", LidarSlam(use_odometry=True,
-                                                              loop_every=10**9))):  # fmt: skip
-                result = slam.run(log)
-                grid = (
-                    LidarSlam()
-                    .mapper.__class__(resolution=truth.resolution)
-                    .build(result.poses, log.ranges, log.angles, sensor_max_range=log.max_range)
-                    .to_grid()
-                )
-                agreement, cells = map_agreement(grid, truth)
-                row[label] = {
-                    "position_rmse_m": absolute_trajectory_error(result.poses, log.reference),
-                    "position_rmse_unaligned_m": float(np.sqrt(np.mean(np.sum(
-                        (result.poses[:, :2] - log.reference[:, :2]) ** 2, 1)))),
-                    "map_agreement": agreement, "cells_compared": cells,
-                    "loop_closures": len(result.loops),
-                    "processing_time_s": result.processing_time_s,
-                }  # fmt: skip
-            out[f"{world}_{beams}"] = row
+            log, status = simulated_log(world, beams, quick)
+            out[f"{world}_{beams}"] = {"status": status, **simulation_slam(world, log)}
     return out
 
 

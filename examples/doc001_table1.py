@@ -3,7 +3,8 @@ Document 001, Table I: the trajectory model evaluated with Simpson's 1/3 rule, r
 =========================================================================================
 
 Run ``python examples/doc001_table1.py [--out doc001_table1.csv] [--overwrite]``: prints the
-table (rich) and writes it to CSV, one row per initial heading and variable.
+table (rich), writes it to CSV, one row per initial heading and variable, and draws the four
+arcs with the printed end points beside them (``doc001_table1.png``).
 
 What the document gives
 -----------------------
@@ -22,15 +23,15 @@ The inputs we use, and how we found them
 θ₀ that turns by Δθ, the chord from start to end points along θ₀ + Δθ/2 (the inscribed-angle
 theorem): Δθ = −69.8° requires the end point at bearing −34.9° from heading 0°, but the printed
 (9.56, −7.42) lies at −37.8°, far outside the rounding of two decimals (±0.04°). A least-squares
-fit of ω_R, ω_L and T of the exact arc to the four printed rows (:func:`fit_exact_arc`,
+fit of ω_R, ω_L and T of the exact arc to the four printed rows (``fit_exact_arc``,
 scipy.optimize.least_squares, 1° of θ weighted like 1 m) indeed leaves position residuals of up
 to 0.59 m (turn −69.86°); letting the turn drift to −72.9° still leaves 0.28 m.
 
 The printed column *is* reproduced, to every printed digit of all four rows, by 12 steps of
 H = 0.5 s of Euler's method that updates the heading first and then moves along the *new*
-heading (θ_{k+1} = θ_k + Hω, x_{k+1} = x_k + Hv·cos θ_{k+1}, …; :func:`document_actual`): its
+heading (θ_{k+1} = θ_k + Hω, x_{k+1} = x_k + Hv·cos θ_{k+1}, …; ``document_actual``): its
 chord points along θ₀ + (n + 1)Δθ/(2n), which is −37.81° for n = 12 steps and no other n. Fitting
-v and ω of that scheme (:func:`fit_document_actual`) and rounding to wheel speeds in 0.01 rad/s
+v and ω of that scheme (``fit_document_actual``) and rounding to wheel speeds in 0.01 rad/s
 gives the inputs used throughout:
 
     ω_L = 222.77 rad/s, ω_R = 206.53 rad/s (document order: u₁ = ω_R, u₂ = ω_L), T = 6 s,
@@ -128,7 +129,7 @@ class Row:
     printed_actual, printed_simpson : float
         Document 001's Table I values (as printed).
     document_actual : float
-        Our reconstruction of the printed "Actual" (:func:`document_actual`).
+        Our reconstruction of the printed "Actual" (``document_actual``).
     exact : float
         The exact closed-form arc ("actual").
     methods : dict
@@ -180,7 +181,7 @@ def _printed_residuals(end_pose, metres_per_degree: float = 0.1) -> np.ndarray:
 
 
 def fit_document_actual() -> tuple[float, float]:
-    """Fit v [m/s] and ω [rad/s] of :func:`document_actual` (12 steps of H) to Table I."""
+    """Fit v [m/s] and ω [rad/s] of ``document_actual`` (12 steps of H) to Table I."""
     fit = least_squares(
         lambda p: _printed_residuals(lambda h: document_actual(h, p[0], p[1])),
         x0=[2.0, -0.2],
@@ -348,6 +349,43 @@ def print_table(rows: list[Row]) -> None:
     Console().print(table)
 
 
+def plot_arcs(path: Path, *, overwrite: bool = False) -> Path:
+    """Draw the exact arc from each initial heading with the printed "Actual" and "Simpson's"
+    end points and our reconstruction of "Actual" (``document_actual``); write ``path`` (PNG).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from wheelbase import simulate
+    from wheelbase.plot import save_figure
+
+    v, omega = body_speeds(*WHEEL_SPEEDS)
+    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+    ax = fig.add_subplot()
+    for k, heading in enumerate(HEADINGS_DEG):
+        arc = simulate(ROBOT, [0.0, 0.0, math.radians(heading)], WHEEL_SPEEDS, DURATION_S,
+                       STEP_S / 20, "exact")  # fmt: skip
+        colour = f"C{k}"
+        ax.plot(*arc.poses[:, :2].T, color=colour, label=f"exact arc from {heading:g}°")
+        printed = PRINTED[heading]
+        ax.plot(*printed["actual"][:2], "o", mfc="none", color=colour, ms=9)
+        ax.plot(*printed["simpson"][:2], "s", mfc="none", color=colour, ms=7)
+        ax.plot(*document_actual(heading, v, omega)[:2], "x", color=colour, ms=8)
+    ax.plot([], [], "ko", mfc="none", label='printed "Actual"')
+    ax.plot([], [], "ks", mfc="none", label='printed "Simpson\'s"')
+    ax.plot([], [], "kx", label="heading-first Euler (reproduces the printed Actual)")
+    ax.plot(0, 0, "k+", ms=10)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title("Document 001, Table I: 6 s at (ω_L, ω_R) = (222.77, 206.53) rad/s")
+    ax.legend(fontsize=7, loc="lower left")
+    return save_figure(fig, path, overwrite=overwrite)
+
+
 def main(argv: list[str] | None = None) -> list[Row]:
     """Print Table I, write it to CSV and return its rows."""
     parser = argparse.ArgumentParser(description="Document 001, Table I, reproduced")
@@ -371,7 +409,8 @@ def main(argv: list[str] | None = None) -> list[Row]:
     )
     print(f"Simpson: largest position error {worst_simpson:.2e} m <= bound {bound:.2e} m")
     path = write_csv(rows, args.out, overwrite=args.overwrite)
-    print(f"wrote {path}")
+    figure = plot_arcs(args.out.with_suffix(".png"), overwrite=args.overwrite)
+    print(f"wrote {path} and {figure}")
     return rows
 
 

@@ -28,11 +28,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from wheelbase.datasets.mrclam import load_mrclam
 from wheelbase.odometry import (
     DEAD_RECKONING_METHODS,
     dead_reckon,
     dead_reckoning_errors,
-    load_mrclam,
     yaw_rate_fit,
 )
 

@@ -1,6 +1,6 @@
 """
-Hybrid A* on every bundled map (document 002's "smooth path planning … using Hybrid A*")
-========================================================================================
+Hybrid A* on every bundled map (document 002's smooth path planning)
+=====================================================================
 
 Usage::
 
@@ -24,6 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from wheelbase.planning import Footprint, HybridAStar, bundled_scenarios, load_map
+from wheelbase.planning.plot import plot_path
 
 
 def main(out: Path) -> None:
@@ -38,7 +39,7 @@ def main(out: Path) -> None:
             f"cusps={path.cusps} time={path.stats.planning_time_s * 1e3:6.1f} ms "
             f"expanded={path.stats.expanded_nodes}"
         )
-        ax = path.plot(grid=grid, footprint=footprint, footprint_every=1.5)
+        ax = plot_path(path, grid=grid, footprint=footprint, footprint_every=1.5)
         ax.set_title(f"{sc.map_name}: {sc.name} ({path.length:.1f} m, {path.cusps} cusps)")
         ax.figure.savefig(out / f"planning_{sc.name}.png", dpi=110, bbox_inches="tight")
         plt.close(ax.figure)

@@ -26,9 +26,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from wheelbase.planning import (
-    OccupancyGrid,
     astar,
     dubins_path,
+    read_movingai_map,
     read_movingai_scenarios,
     reeds_shepp_path,
 )
@@ -67,7 +67,7 @@ def main(out: Path) -> None:
     plt.close(fig)
 
     if ARENA.exists():
-        grid = OccupancyGrid.from_movingai(ARENA)
+        grid = read_movingai_map(ARENA)
         scenarios = read_movingai_scenarios(ARENA.with_name("arena.map.scen"))
         sc = max(scenarios, key=lambda s: s.optimal_length)
         start, goal = sc.grid_cells()

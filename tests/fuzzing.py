@@ -283,6 +283,46 @@ BASES: list[dict[str, Any]] = [
         "duration": 10.0,
     },
 ]
+BASES.append(
+    {  # among obstacles the map does not show (issue 22): a lidar, a costmap, walkers, a box
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle", "footprint": [0.3, 0.3]},
+        "controller": {"law": "pure_pursuit"},
+        "control_rate_hz": 5.0,
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 24, "max_range": 4.0, "rate_hz": 5.0}},
+        "world": {
+            "obstacles": [{"box": [1.5, 0.0, 0.3, 0.3, 10.0]}],
+            "agents": [{"count": 2, "radius": 0.2, "behaviour": "wander", "region": [0, 1, 3, 2]}],
+            "path_boxes": {"count": [0, 1], "size": [0.2, 0.3], "clear": 0.5},
+        },
+        "costmap": {"inflation_radius": 0.3},
+        "tracker": {},
+        "replanning": {"rate_hz": 1.0},
+        "recovery": {"max_retries": 2, "wait_time": 0.5},
+        "start": [0.0, 0.0, 0.0],
+        "goal": [3.0, 0.0, 0.0],
+        "dt": 0.1,
+        "duration": 6.0,
+    }
+)
+BASES.append(
+    {  # a fleet of two robots that see each other
+        "name": "fuzz",
+        "map": "empty",
+        "robot": {"model": "unicycle", "footprint": [0.3, 0.3]},
+        "controller": {"law": "pure_pursuit"},
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 24, "max_range": 4.0, "rate_hz": 5.0}},
+        "fleet": [
+            {"start": [0.0, 0.0, 0.0], "goal": [3.0, 0.0, 0.0]},
+            {"start": [3.0, 1.0, 180.0], "goal": [0.0, 1.0, 180.0]},
+        ],
+        "dt": 0.1,
+        "duration": 6.0,
+    }
+)
 for _base in BASES:
     _base["resources"] = dict(_FUZZ_RESOURCES)
     _base.setdefault("planner", {})["options"] = {"time_limit": 2.0}
@@ -319,7 +359,30 @@ def _scenario_paths() -> list[tuple[str, ...]]:
     options = set(inspect.signature(HybridAStar).parameters)
     paths += [("planner", "options", name) for name in sorted(options)]
     paths += _ground_paths()
+    paths += _navigation_paths()
     return paths
+
+
+def _navigation_paths() -> list[tuple[str, ...]]:
+    """The keys of the world, fleet, costmap and tracker sections (issue 22), optional
+    sections that the schema walk does not enter."""
+    from dataclasses import fields
+
+    from wheelbase.perception import CostmapSpec, TrackerSpec
+    from wheelbase.scenario_world import FleetRobotSpec, PathBoxesSpec, WorldSpec
+    from wheelbase.world.spec import AGENT_KEYS, OBSTACLE_KINDS
+
+    return [
+        *[("world", name) for name in WorldSpec.model_fields],
+        *[("world", "path_boxes", name) for name in PathBoxesSpec.model_fields],
+        *[("world", "agents", 0, name) for name in AGENT_KEYS],
+        *[("world", "obstacles", 0, name) for name in OBSTACLE_KINDS],
+        *[("fleet", k, name) for k in (0, 1) for name in (*FleetRobotSpec.model_fields, "goal")],
+        *[("costmap", f.name) for f in fields(CostmapSpec)],
+        *[("tracker", f.name) for f in fields(TrackerSpec)],
+        ("fleet",),
+        ("control_rate_hz",),
+    ]
 
 
 def _ground_paths() -> list[tuple[str, ...]]:
@@ -331,6 +394,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
     from wheelbase.scenario_terrain import (
         ContactsSpec,
         PayloadSpec,
+        RasterSpec,
         RegionSpec,
         SoilSpec,
         SurfaceSpec,
@@ -347,6 +411,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
         *keys(SurfaceSpec, ("terrain", "surface")),
         *keys(SoilSpec, ("terrain", "surface", "soil")),
         *keys(RegionSpec, region),
+        *keys(RasterSpec, ("terrain", "raster")),
         *keys(SurfaceSpec, (*region, "surface")),
         *keys(PayloadSpec, ("robot", "payload")),
         *keys(ContactsSpec, ("robot", "contacts")),
@@ -1428,7 +1493,7 @@ CLI_COMMANDS: dict[str, tuple[list[str], dict[str, int]]] = {
     "scenarios": ([], {}),
     "batch": (
         ["demo", "--seeds", "2"],
-        {"--seeds": 1, "--workers": 1, "--chunk-size": 1},  # (--scheduler: a network wait)
+        {"--seeds": 1, "--workers": 1, "--chunk-size": 1, "--memory-mb": 1},  # not --scheduler
     ),
     "localize": (
         [str(_MRCLAM), "--robot", "1", "--filter", "ekf"],

@@ -149,3 +149,65 @@ def test_a_killed_dask_worker_loses_no_run():
     assert killed
     assert [row["seed"] for row in result.rows] == list(range(8))  # none lost, none twice
     assert all(row["status"] in ("arrived", "missed_goal") for row in result.rows)
+
+
+def test_seeds_run_in_chunks_that_fit_the_memory_budget():
+    from wheelbase.runner import prepare, run_seeds, seeds_per_chunk
+
+    prepared = prepare(SCENARIO)
+    per_chunk = seeds_per_chunk(prepared.engine, prepared.start, 2**20)
+    twice = seeds_per_chunk(prepared.engine, prepared.start, 2**21)
+    assert twice in (2 * per_chunk, 2 * per_chunk + 1)
+    assert seeds_per_chunk(prepared.engine, prepared.start, 1.0) == 1  # at least one
+    together = run_seeds(SCENARIO, range(5))
+    one_by_one = run_seeds(SCENARIO, range(5), memory_budget=1.0)  # five chunks of one seed
+    assert _untimed(together) == _untimed(one_by_one)
+    with pytest.raises(ConfigError, match="memory_budget"):
+        run_seeds(SCENARIO, range(2), memory_budget=0.0)
+
+
+def test_resume_runs_again_the_rows_that_ended_in_error(tmp_path):
+    journal = tmp_path / "rows.jsonl"
+    full = run_batch([SCENARIO], seeds=3, journal=journal)
+    lines = journal.read_text().splitlines()
+    lost = json.loads(lines[2])  # seed 1, as if its chunk had been lost to a killed worker
+    lines[2] = json.dumps({"scenario_index": 0, "name": "short", "seed": lost["seed"],
+                           "status": "error", "error": "KilledWorker: ..."})  # fmt: skip
+    journal.write_text("\n".join(lines) + "\n")
+    ran = []
+    resumed = run_batch([SCENARIO], seeds=3, journal=journal, resume=True,
+                        progress=lambda done, total: ran.append(done))  # fmt: skip
+    assert ran == [3]  # the one error row ran again
+    assert _untimed(resumed.rows) == _untimed(full.rows)
+
+
+def test_only_wheelbase_errors_become_rows(monkeypatch):
+    import wheelbase.runner
+    from wheelbase.batch import run_chunk
+    from wheelbase.errors import PlanningError
+
+    def broken(scenario, seeds, memory_budget=None):
+        raise TypeError("a bug")
+
+    def refused(scenario, seeds, memory_budget=None):
+        raise PlanningError("start in collision")
+
+    monkeypatch.setattr(wheelbase.runner, "run_seeds", refused)
+    rows = run_chunk(SCENARIO, [0, 1])
+    assert [row["status"] for row in rows] == ["error", "error"]
+    assert rows[0]["error"] == "PlanningError: start in collision"
+    monkeypatch.setattr(wheelbase.runner, "run_seeds", broken)
+    with pytest.raises(TypeError, match="a bug"):
+        run_chunk(SCENARIO, [0, 1])
+    with pytest.raises(TypeError, match="a bug"), ThreadPoolExecutor(max_workers=1) as pool:
+        run_batch([SCENARIO], seeds=2, executor=pool)  # on an executor too: not a row
+
+
+def test_identical_rows_say_a_scenario_has_no_randomness():
+    quiet = {**SCENARIO, "odometry": {"mode": "perfect"}, "name": "quiet"}
+    result = run_batch([quiet, SCENARIO], seeds=3)
+    (i, quiet_name, quiet_rows), (j, noisy_name, noisy_rows) = result.groups()
+    assert (i, quiet_name, j, noisy_name) == (0, "quiet", 1, "short")
+    assert result.identical(quiet_rows) and not result.identical(noisy_rows)
+    assert result.summary(noisy_rows)["odometry_drift_m"]["max"] > 0
+    assert "odometry_drift_m" not in result.summary(quiet_rows)  # perfect state: no drift

@@ -150,3 +150,33 @@ def test_control_law_mppi_runs_on_a_map(tmp_path):
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["status"] == "arrived" and metrics["min_clearance_m"] > 0.05
     assert (out / "animation.gif").exists()
+
+
+NOISY = (
+    SHORT.replace("name: short", "name: noisy")
+    + """\
+odometry: {tick_noise_std: 0.5}
+sensors: {landmarks: {positions: [[0.5, 1.0], [1.5, -0.5]], max_range: 5.0}}
+localization: {method: ekf}
+"""
+)
+
+
+def test_batch_tables_one_scenario_each_and_says_when_seeds_change_nothing(tmp_path):
+    short, noisy = tmp_path / "short.yaml", tmp_path / "noisy.yaml"
+    short.write_text(SHORT)
+    noisy.write_text(NOISY)
+    out = tmp_path / "batch"
+    result = invoke("batch", short, noisy, "--seeds", 3, "--out", out, "--memory-mb", 64)
+    assert result.exit_code == 0, result.output
+    text = result.output
+    assert "short: 3 runs" in text and "noisy: 3 runs" in text  # never averaged together
+    assert "short: the 3 seeds gave identical runs: the scenario has no randomness" in text
+    assert "noisy: the 3 seeds" not in text
+    noisy_table = text[text.index("noisy: 3 runs") :]
+    assert "localization_rms_error_m" in noisy_table  # a filter's batch shows its error
+    payload = json.loads((out / "batch.json").read_text())
+    groups = {group["name"]: group for group in payload["scenarios"]}
+    assert groups["short"]["identical_rows"] and not groups["noisy"]["identical_rows"]
+    assert groups["noisy"]["runs"] == 3 and "localization_rms_error_m" in groups["noisy"]["summary"]
+    one_line_error(invoke("batch", short, "--out", tmp_path / "b", "--memory-mb", -1), "memory-mb")

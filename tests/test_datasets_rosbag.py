@@ -99,7 +99,7 @@ def test_slam_and_map_commands_on_a_bag(tmp_path, run_log):
     mapped = runner.invoke(app, ["map", str(bag), "--out", str(tmp_path / "m"), "--poses",
                                  "odometry"])  # fmt: skip
     assert mapped.exit_code == 0, mapped.output
-    grid = wheelbase.planning.OccupancyGrid.from_ros_yaml(tmp_path / "m" / "map.yaml")
+    grid = wheelbase.planning.read_ros_yaml(tmp_path / "m" / "map.yaml")
     assert grid.resolution == 0.05 and grid.occupied.any()
     none = runner.invoke(app, ["map", str(bag), "--out", str(tmp_path / "n")])
     assert none.exit_code == 2 and "no reference poses" in none.output

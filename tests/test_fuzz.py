@@ -51,6 +51,13 @@ def check(call, case, kind: str) -> None:
 @example({**fuzzing.BASES[5], "robot": {"preset": "rm100", "payload": {"mass": 1e5}}})
 @example({**fuzzing.BASES[5], "terrain": {"resolution": 1e-9}})  # a raster of 1e20 cells
 @example({**fuzzing.BASES[5], "goals": [{"pose": [1, 0, 0], "payload": {"mass": "x"}}]})
+@example({**fuzzing.BASES[6], "control_rate_hz": 1e300})
+@example({**fuzzing.BASES[6], "costmap": {"inflation_radius": -1.0}})
+@example({**fuzzing.BASES[6], "world": {"agents": [{"count": 10**6}]}})
+@example({**fuzzing.BASES[6], "world": {"obstacles": [{"disc": [0.0, 0.0, 0.5]}]}})  # on start
+@example({**fuzzing.BASES[6], "world": {"path_boxes": {"count": [5, 5], "size": [9, 9]}}})
+@example({**fuzzing.BASES[7], "fleet": [{"start": [0, 0, 0], "goal": [1, 0, 0]}] * 2})
+@example({**fuzzing.BASES[7], "fleet": []})
 def test_scenario_fields(case):
     check(fuzzing.run_scenario, case, "scenario")
 

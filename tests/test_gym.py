@@ -285,3 +285,34 @@ def test_benchmark_quick_prints_the_figures():
     assert report["config"]["beams"] == BEAMS
     parts = report["vector_step_breakdown_us"]
     assert parts["total"] == pytest.approx(sum(v for k, v in parts.items() if k != "total"))
+
+
+def test_a_world_of_walkers_is_seen_and_touched_in_the_environment():
+    from wheelbase.gym import NavigateVectorEnv
+
+    world = {
+        "obstacles": [{"box": [5.0, 5.0, 1.0, 1.0, 0.0]}],
+        "agents": [{"count": 6, "radius": 0.3, "behaviour": "wander", "region": [2, 2, 8, 8]}],
+    }
+    plain = NavigateVectorEnv(num_envs=3)
+    crowded = NavigateVectorEnv(num_envs=3, world=world)
+    options = {"start": np.tile([1.0, 5.0, 0.0], (3, 1)), "goal": np.tile([9.0, 5.0, 0.0], (3, 1))}
+    seen_plain, _ = plain.reset(seed=0, options=options)
+    seen, _ = crowded.reset(seed=0, options=options)
+    beams = plain.task.lidar.beams
+    # facing the box at 3.5 m (and walkers in the way): every reading is no longer than the map's
+    assert np.all(seen[:, :beams] <= seen_plain[:, :beams] + 1e-9)
+    assert seen[0, beams // 2] * 5.0 <= 3.5 + 1e-6  # the beam straight ahead stops at the box
+    # the walkers move with the steps: the world state advances, the scans change
+    before = crowded.task.world_state.position.copy()
+    for _ in range(5):
+        crowded.step(np.zeros((3, 2), dtype=np.float32))
+    assert not np.allclose(crowded.task.world_state.position, before)
+    # driving straight into the box ends the episode as a collision
+    terminated = np.zeros(3, bool)
+    for _ in range(60):
+        _, _, term, _, _ = crowded.step(np.tile([1.0, 0.0], (3, 1)).astype(np.float32))
+        terminated |= term
+        if terminated.all():
+            break
+    assert terminated.all()

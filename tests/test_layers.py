@@ -129,3 +129,112 @@ def test_what_decides_never_imports_the_world(package):
 )  # fmt: skip
 def test_the_world_check_finds_every_form_of_import(line):
     assert world_imports(line, SRC / "control" / "x.py")
+
+
+# Import cycles: within a package (planning's readers and grid, maps and world files, paths and
+# their plots were three circles) or across packages of one layer. Every import counts: at the
+# top of a module, inside a function (a lazy import is a dependency that runs later) and under
+# TYPE_CHECKING (a type-only import still means the module cannot be read without the other).
+def module_name(path: Path, root: Path) -> str:
+    parts = ("wheelbase", *path.relative_to(root).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph(root: Path) -> dict[str, set[str]]:
+    """Module -> the modules of the package under ``root`` that it imports. A name imported
+    from a package is resolved to its submodule, or through the package's lazy ``_EXPORTS``
+    table to the module that defines it, else to the package itself."""
+    files = {module_name(p, root): p for p in root.rglob("*.py") if "data" not in p.parts}
+    exports: dict[str, dict[str, str]] = {}
+    for name, path in files.items():
+        if path.name == "__init__.py":
+            for node in ast.walk(ast.parse(path.read_text())):
+                if (
+                    isinstance(node, ast.Assign)
+                    and any(getattr(t, "id", None) == "_EXPORTS" for t in node.targets)
+                    and isinstance(node.value, ast.Dict)
+                ):
+                    exports[name] = {
+                        k.value: v.value
+                        for k, v in zip(node.value.keys, node.value.values, strict=True)
+                        if isinstance(k, ast.Constant) and isinstance(v, ast.Constant)
+                    }
+    graph: dict[str, set[str]] = {name: set() for name in files}
+    for name, path in files.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text())):
+            targets = []
+            if isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join([*up, base]) if base else ".".join(up)
+                for alias in node.names:
+                    full = f"{base}.{alias.name}"
+                    if full in files:
+                        targets.append(full)
+                    else:
+                        targets.append(exports.get(base, {}).get(alias.name, base))
+            elif isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            graph[name] |= {t for t in targets if t in files and t != name}
+    return graph
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each as a cycle."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycles():
+    cycles = import_cycles(import_graph(SRC))
+    assert not cycles, "import cycles: " + "; ".join(" <-> ".join(c) for c in cycles)
+
+
+def test_the_cycle_check_finds_lazy_typing_and_package_imports(tmp_path):
+    root = tmp_path / "wheelbase"
+    (root / "pkg").mkdir(parents=True)
+    (root / "__init__.py").write_text("")
+    files = {
+        "pkg/__init__.py": '_EXPORTS = {"Grid": "wheelbase.pkg.grid"}\n',
+        "pkg/grid.py": "def load():\n    from wheelbase.pkg.reader import read\n",
+        "pkg/reader.py": "from wheelbase.pkg import Grid\n",
+        "pkg/path.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+        "    from .plot import draw\n",
+        "pkg/plot.py": "from wheelbase.pkg.path import Path\n",
+        "pkg/one_way.py": "import wheelbase.pkg.grid\n",
+    }
+    for name, text in files.items():
+        (root / name).write_text(text)
+    cycles = import_cycles(import_graph(root))
+    assert sorted(cycles) == [
+        ["wheelbase.pkg.grid", "wheelbase.pkg.reader"],
+        ["wheelbase.pkg.path", "wheelbase.pkg.plot"],
+    ]

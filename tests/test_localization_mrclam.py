@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from wheelbase.cli import app
+from wheelbase.datasets.mrclam import find_mrclam_files, load_landmarks, load_measurements
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import compose
 from wheelbase.localization.mrclam import (
@@ -18,9 +19,6 @@ from wheelbase.localization.mrclam import (
     Sightings,
     _retrodict,
     correlated_inflation,
-    find_mrclam_files,
-    load_landmarks,
-    load_measurements,
     localize,
     position_nees,
 )

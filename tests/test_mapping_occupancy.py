@@ -8,7 +8,7 @@ import pytest
 from wheelbase.errors import ConfigError, MapError
 from wheelbase.mapping.evaluation import map_agreement
 from wheelbase.mapping.occupancy import OccupancyMapper, logit
-from wheelbase.planning import OccupancyGrid, load_map
+from wheelbase.planning import OccupancyGrid, load_map, read_ros_yaml, write_ros_yaml
 from wheelbase.sensors import Lidar
 
 
@@ -87,8 +87,8 @@ def test_the_map_server_files_round_trip(tmp_path):
         .build([[2.0, 2.0, 0.3], [4.5, 2.0, 2.0]], scans, lidar.beam_angles, sensor_max_range=8.0)
         .to_grid()
     )
-    grid.to_ros_yaml(tmp_path / "map.yaml")
-    back = OccupancyGrid.from_ros_yaml(tmp_path / "map.yaml")
+    write_ros_yaml(grid, tmp_path / "map.yaml")
+    back = read_ros_yaml(tmp_path / "map.yaml")
     np.testing.assert_array_equal(back.occupied, grid.occupied)
     np.testing.assert_array_equal(back.unknown, grid.unknown)
     assert back.origin == pytest.approx(grid.origin) and back.resolution == grid.resolution

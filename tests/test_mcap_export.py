@@ -41,6 +41,7 @@ PROTOBUF_TOPICS = {
     "/pose/true": "foxglove.PoseInFrame",
     "/pose/estimated": "foxglove.PoseInFrame",
     "/tf": "foxglove.FrameTransforms",
+    "/tf_true": "foxglove.FrameTransforms",
     "/markers": "foxglove.SceneUpdate",
 }
 JSON_TOPICS = ("/command", "/twist", "/wheel_rates", "/torques", "/metrics")
@@ -77,6 +78,46 @@ def _theta(q) -> float:
     return 2.0 * math.atan2(q.z, q.w)
 
 
+def _tree(messages):
+    """(map → odom, odom → base_link) poses of every /tf message."""
+    correction, odometry = [], []
+    for _, message in messages:
+        first, second = message.transforms
+        assert (first.parent_frame_id, first.child_frame_id) == ("map", "odom")
+        assert (second.parent_frame_id, second.child_frame_id) == ("odom", "base_link")
+        correction.append([first.translation.x, first.translation.y, _theta(first.rotation)])
+        odometry.append([second.translation.x, second.translation.y, _theta(second.rotation)])
+    return np.array(correction), np.array(odometry)
+
+
+def _same_poses(got, expected):
+    got, expected = np.asarray(got), np.asarray(expected)
+    np.testing.assert_allclose(got[:, :2], expected[:, :2], rtol=0, atol=1e-9)
+    assert np.max(np.abs(wrap_angle(got[:, 2] - expected[:, 2]))) < 1e-9
+
+
+def test_a_filter_publishes_its_correction_as_map_to_odom(tmp_path):
+    ekf = {
+        "name": "ekf", "map": "empty", "robot": {"model": "diffdrive"},
+        "controller": {"law": "kanayama"},
+        "odometry": {"tick_noise_std": 0.5, "wheel_radius_scale": [1.02, 1.0]},
+        "sensors": {"landmarks": {"positions": [[0.5, 1.0], [1.5, -0.5]], "max_range": 5.0}},
+        "localization": {"method": "ekf"}, "start": [0.0, 0.0, 0.0], "goal": [1.5, 0.5, 0.0],
+        "trajectory": {"max_speed": 1.0, "max_acceleration": 1.0}, "dt": 0.02,
+    }  # fmt: skip
+    result = run(ekf)
+    path = write_mcap(result, tmp_path / "ekf.mcap")
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        tf = [(m.log_time, p) for _, _, m, p in reader.iter_decoded_messages(topics=["/tf"])]
+    correction, odometry = _tree(tf)
+    log = result.log
+    _same_poses(odometry, log.extras["odom_pose"][0])  # the wheel odometry alone
+    _same_poses([compose(a, b) for a, b in zip(correction, odometry, strict=True)],
+                log.estimated_pose[0])  # fmt: skip
+    assert np.hypot(*correction[-1, :2]) > 1e-3  # the filter corrected the 2 % wheel error
+
+
 def test_schemas_are_foxglove_and_counts_match_the_log(result, decoded):
     summary, messages, _ = decoded
     log = result.log
@@ -92,7 +133,8 @@ def test_schemas_are_foxglove_and_counts_match_the_log(result, decoded):
         assert schemas[topic][1] == "json"
         assert summary.schemas[messages[topic][0][1].schema_id].encoding == "jsonschema"
     counts = Counter({topic: len(values) for topic, values in messages.items()})
-    per_row = ("/pose/true", "/pose/estimated", "/tf", "/command", "/twist", "/wheel_rates")
+    per_row = ("/pose/true", "/pose/estimated", "/tf", "/tf_true", "/command", "/twist",
+               "/wheel_rates")  # fmt: skip
     assert counts == Counter(
         {"/map": 1, "/plan": 1, "/markers": 1, "/metrics": 1, "/torques": rows}
         | dict.fromkeys(per_row, rows)
@@ -116,21 +158,17 @@ def test_poses_and_times_equal_the_log(result, decoded):
         theta = np.array([_theta(m.pose.orientation) for _, m in got])
         np.testing.assert_allclose(xy, poses[:, :2], rtol=0, atol=1e-9)
         assert np.max(np.abs(wrap_angle(theta - poses[:, 2]))) < 1e-9
-    # The frame tree map → odom → base_link composes to the true pose; odom → base_link is
-    # the estimate, so the odom frame carries the drift.
-    composed = []
-    for _, message in protobuf["/tf"]:
-        first, second = message.transforms
-        assert (first.parent_frame_id, first.child_frame_id) == ("map", "odom")
-        assert (second.parent_frame_id, second.child_frame_id) == ("odom", "base_link")
-        a = [first.translation.x, first.translation.y, _theta(first.rotation)]
-        b = [second.translation.x, second.translation.y, _theta(second.rotation)]
-        composed.append(compose(np.array(a), np.array(b)))
-    composed = np.array(composed)
-    np.testing.assert_allclose(composed[:, :2], log.true_pose[0, :, :2], rtol=0, atol=1e-9)
-    assert np.max(np.abs(wrap_angle(composed[:, 2] - log.true_pose[0, :, 2]))) < 1e-9
+    # The frame tree is the robot's (REP 105): map → odom → base_link composes to the
+    # estimate; with odometry alone map → odom is the identity. The truth has its own topic.
+    correction, odometry = _tree(protobuf["/tf"])
+    np.testing.assert_allclose(correction, 0.0, atol=1e-12)
+    _same_poses(odometry, log.estimated_pose[0])
     drift = np.hypot(*(log.true_pose[0, -1, :2] - log.estimated_pose[0, -1, :2]))
-    assert drift > 1e-3  # the wheel radii are off by 1 %: the odom frame must have moved
+    assert drift > 1e-3  # the wheel radii are off by 1 %: the tree is not the truth
+    truth = [message.transforms[0] for _, message in protobuf["/tf_true"]]
+    assert {(f.parent_frame_id, f.child_frame_id) for f in truth} == {("map", "base_link_true")}
+    _same_poses([[f.translation.x, f.translation.y, _theta(f.rotation)] for f in truth],
+                log.true_pose[0])  # fmt: skip
     # JSON signals: the command columns, torques and wheel rates of every row.
     command = messages["/command"]
     assert [p["t"] for *_, p in command] == t.tolist()
@@ -287,3 +325,56 @@ def test_lidar_scans_are_laser_scans_in_the_robot_frame(tmp_path):
     assert scan.start_angle == pytest.approx(-math.radians(135))
     assert scan.end_angle == pytest.approx(math.radians(135))
     assert scan.pose.position.x == 0.0 and scan.pose.orientation.w == 1.0
+
+
+def test_agents_costmap_and_tracks_of_a_run_among_walkers(tmp_path):
+    scenario = {
+        "name": "walkers",
+        "map": "room20",
+        "robot": {"model": "unicycle", "footprint": [0.4, 0.4]},
+        "controller": {"law": "mppi", "gains": {"samples": 200}},
+        "control_rate_hz": 10,
+        "odometry": {"mode": "perfect"},
+        "sensors": {"lidar": {"beams": 90, "max_range": 6.0, "range_std": 0.01, "rate_hz": 10}},
+        "world": {
+            "obstacles": [{"box": [10.0, 4.0, 0.6, 0.6, 0.0]}],
+            "agents": [{"count": 4, "radius": 0.25, "region": [4, 4, 9, 9]}],
+        },
+        "start": [2.0, 2.0, 45.0],
+        "goal": [8.0, 8.0, 45.0],
+        "dt": 0.05,
+        "duration": 4.0,
+    }
+    result = run(scenario)
+    path = write_mcap(result, tmp_path / "walkers.mcap")
+    topics: dict[str, list] = {}
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        for _, channel, message, proto in reader.iter_decoded_messages(
+            topics=["/world/obstacles", "/world/agents", "/costmap", "/tracks"]
+        ):
+            topics.setdefault(channel.topic, []).append((message.log_time, proto))
+    log = result.log
+    # agents every 0.1 s at their logged positions, discs of their radius
+    agents = topics["/world/agents"]
+    assert len(agents) == pytest.approx(log.t[-1] / 0.1 + 1, abs=1)
+    stamp, update = agents[-1]
+    row = int(np.argmin(np.abs(log.t - stamp / 1e9)))
+    first = update.entities[0]
+    centre = np.mean([[p.x, p.y] for p in first.lines[0].points], axis=0)
+    np.testing.assert_allclose(centre, log.agents[0, row, 0, :2], atol=1e-6)
+    assert len(update.entities) == 4
+    # the box off the map, once
+    ((_, obstacles),) = topics["/world/obstacles"]
+    ring = np.array([[p.x, p.y] for p in obstacles.entities[0].lines[0].points])
+    np.testing.assert_allclose(np.sort(ring[:, 0]), [9.7, 9.7, 10.3, 10.3], atol=1e-9)
+    # what the robot believes, once a second: the map plus the cells its lidar marked
+    assert len(topics["/costmap"]) == len(log.perceived) >= 3
+    _, grid = topics["/costmap"][-1]
+    cells = np.frombuffer(grid.data, np.uint8).reshape(-1, grid.column_count)
+    marked = np.asarray(max(log.perceived.items())[1]["marks"], dtype=np.float64)
+    assert len(marked) > 0  # the walls at least
+    where = result.grid.world_to_cell(marked)
+    assert np.all(cells[where[:, 0], where[:, 1]] == 100)
+    np.testing.assert_array_equal(cells[result.grid.occupied], 100)
+    assert len(topics["/tracks"]) == len(log.perceived)

@@ -7,14 +7,9 @@ import pytest
 
 from shared_data import DATA as SHARED_DATA
 from shared_data import absent
+from wheelbase.datasets import MrclamData, load_mrclam
 from wheelbase.errors import ConfigError, DataError
-from wheelbase.odometry import (
-    MrclamData,
-    command_response,
-    dead_reckoning_errors,
-    load_mrclam,
-    yaw_rate_fit,
-)
+from wheelbase.odometry import command_response, dead_reckoning_errors, yaw_rate_fit
 
 DATA = SHARED_DATA / "mrclam"
 ODOMETRY = DATA / "Dataset6_Robot1_Odometry.dat"

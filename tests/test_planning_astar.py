@@ -10,7 +10,14 @@ from hypothesis import strategies as st
 from shared_data import DATA as SHARED_DATA
 from shared_data import absent
 from wheelbase.errors import ConfigError, InputError, PlanningError
-from wheelbase.planning import OccupancyGrid, astar, dijkstra, read_movingai_scenarios
+from wheelbase.planning import (
+    OccupancyGrid,
+    astar,
+    dijkstra,
+    read_movingai_map,
+    read_movingai_scenarios,
+    read_ros_yaml,
+)
 
 SHARED = SHARED_DATA
 ARENA = SHARED / "movingai" / "arena.map"
@@ -19,7 +26,7 @@ TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
 
 @pytest.mark.skipif(not ARENA.exists(), reason=absent(ARENA))
 def test_movingai_arena_all_scenarios_optimal():
-    grid = OccupancyGrid.from_movingai(ARENA)
+    grid = read_movingai_map(ARENA)
     scenarios = read_movingai_scenarios(ARENA.with_name("arena.map.scen"))
     assert len(scenarios) == 130
     for sc in scenarios:
@@ -85,7 +92,7 @@ def test_astar_errors():
 @pytest.mark.skipif(not TB3.exists(), reason=absent(TB3))
 def test_turtlebot3_world_plan_across():
     with pytest.warns(UserWarning):
-        grid = OccupancyGrid.from_ros_yaml(TB3)
+        grid = read_ros_yaml(TB3)
     robot = grid.inflate(0.105)  # turtlebot3 burger radius
     start = robot.world_to_cell([-2.0, -0.5])
     goal = robot.world_to_cell([1.8, 0.5])

@@ -10,7 +10,14 @@ from hypothesis import strategies as st
 from shared_data import DATA as SHARED_DATA
 from shared_data import absent
 from wheelbase.errors import ConfigError, DataError, InputError, MapError
-from wheelbase.planning import Footprint, OccupancyGrid
+from wheelbase.planning import (
+    Footprint,
+    OccupancyGrid,
+    read_image,
+    read_movingai_map,
+    read_ros_yaml,
+    write_ros_yaml,
+)
 
 SHARED = SHARED_DATA
 TB3 = SHARED / "maps" / "turtlebot3_world.yaml"
@@ -45,17 +52,17 @@ def test_ros_yaml_modes(tmp_path):
     base = "image: m.pgm\nresolution: 0.1\norigin: [1, 2, 0]\noccupied_thresh: 0.65\n"
     base += "free_thresh: 0.196\n"
     (tmp_path / "a.yaml").write_text(base + "negate: 0\n")
-    grid = OccupancyGrid.from_ros_yaml(tmp_path / "a.yaml")
+    grid = read_ros_yaml(tmp_path / "a.yaml")
     # p = (255 - v)/255 = 1.0, 0.61, 0.196, 0.004 -> occ, unknown, unknown, free
     np.testing.assert_array_equal(grid.unknown[0], [False, True, True, False])
     np.testing.assert_array_equal(grid.occupied[0], [True, True, True, False])
-    free_unknown = OccupancyGrid.from_ros_yaml(tmp_path / "a.yaml", unknown_as_occupied=False)
+    free_unknown = read_ros_yaml(tmp_path / "a.yaml", unknown_as_occupied=False)
     np.testing.assert_array_equal(free_unknown.occupied[0], [True, False, False, False])
     (tmp_path / "n.yaml").write_text(base + "negate: 1\n")
-    negated = OccupancyGrid.from_ros_yaml(tmp_path / "n.yaml")
+    negated = read_ros_yaml(tmp_path / "n.yaml")
     np.testing.assert_array_equal(negated.occupied[0], [False, True, True, True])
     (tmp_path / "s.yaml").write_text(base + "mode: scale\n")
-    scaled = OccupancyGrid.from_ros_yaml(tmp_path / "s.yaml")
+    scaled = read_ros_yaml(tmp_path / "s.yaml")
     np.testing.assert_array_equal(scaled.occupied[0], [True, False, False, False])
     assert grid.origin == (1.0, 2.0) and grid.resolution == 0.1
 
@@ -65,8 +72,8 @@ def test_ros_writer_round_trip(tmp_path):
     occ = rng.random((17, 23)) < 0.3
     unknown = rng.random((17, 23)) < 0.1
     grid = OccupancyGrid(occ | unknown, 0.05, (-1.5, 2.25), unknown)
-    grid.to_ros_yaml(tmp_path / "map.yaml")
-    back = OccupancyGrid.from_ros_yaml(tmp_path / "map.yaml")
+    write_ros_yaml(grid, tmp_path / "map.yaml")
+    back = read_ros_yaml(tmp_path / "map.yaml")
     np.testing.assert_array_equal(back.occupied, grid.occupied)
     np.testing.assert_array_equal(back.unknown, unknown)
     assert back.origin == grid.origin and back.resolution == grid.resolution
@@ -78,7 +85,7 @@ def test_image_loader(tmp_path):
     pixels = np.full((3, 4), 255, np.uint8)
     pixels[0, 0] = 0  # top-left: highest y, lowest x
     Image.fromarray(pixels).save(tmp_path / "m.png")
-    grid = OccupancyGrid.from_image(tmp_path / "m.png", 0.2)
+    grid = read_image(tmp_path / "m.png", 0.2)
     assert grid.occupied[2, 0] and grid.occupied.sum() == 1
 
 
@@ -89,12 +96,12 @@ def test_loader_errors(tmp_path):
         OccupancyGrid.from_array(np.zeros((2, 3), bool), -1.0)
     (tmp_path / "bad.yaml").write_text("image: x.pgm\nresolution: 0.1\n")
     with pytest.raises(MapError, match="origin"):
-        OccupancyGrid.from_ros_yaml(tmp_path / "bad.yaml")
+        read_ros_yaml(tmp_path / "bad.yaml")
     (tmp_path / "bad2.yaml").write_text("image: x.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n")
     with pytest.raises(DataError, match="not found"):
-        OccupancyGrid.from_ros_yaml(tmp_path / "bad2.yaml")
+        read_ros_yaml(tmp_path / "bad2.yaml")
     with pytest.raises(DataError, match="cannot read"):
-        OccupancyGrid.from_movingai(tmp_path / "none.map")
+        read_movingai_map(tmp_path / "none.map")
     grid = OccupancyGrid.from_array(np.zeros((2, 3), bool), 1.0)
     with pytest.raises(InputError, match="poses"):
         grid.in_collision(Footprint.rectangle(1, 1), [1.0, 2.0])
@@ -123,15 +130,13 @@ def test_bad_ros_yaml_fields_are_map_errors(tmp_path, yaml_text, error, match):
     _write_pgm(tmp_path / "m.pgm", np.array([[0, 254]], np.uint8))
     (tmp_path / "bad.yaml").write_text(yaml_text)
     with pytest.raises(error, match=match):
-        OccupancyGrid.from_ros_yaml(tmp_path / "bad.yaml")
+        read_ros_yaml(tmp_path / "bad.yaml")
 
 
 def test_yaml_booleans_for_negate_are_read_as_map_server_does(tmp_path):
     _write_pgm(tmp_path / "m.pgm", np.array([[0, 254]], np.uint8))
     (tmp_path / "y.yaml").write_text(ROS_BASE + "negate: true\n")
-    np.testing.assert_array_equal(
-        OccupancyGrid.from_ros_yaml(tmp_path / "y.yaml").occupied[0], [False, True]
-    )
+    np.testing.assert_array_equal(read_ros_yaml(tmp_path / "y.yaml").occupied[0], [False, True])
 
 
 @pytest.mark.parametrize(
@@ -171,8 +176,8 @@ def test_cell_limit_can_be_raised(tmp_path):
 
     Image.fromarray(np.full((30, 40), 255, np.uint8)).save(tmp_path / "m.png")
     with pytest.raises(MapError, match=r"40 × 30 = 1.2e\+03 pixels.*max_cells = 1000"):
-        OccupancyGrid.from_image(tmp_path / "m.png", 0.1, max_cells=1000)
-    assert OccupancyGrid.from_image(tmp_path / "m.png", 0.1, max_cells=1200).shape == (30, 40)
+        read_image(tmp_path / "m.png", 0.1, max_cells=1000)
+    assert read_image(tmp_path / "m.png", 0.1, max_cells=1200).shape == (30, 40)
 
 
 @pytest.mark.parametrize("threshold", [math.nan, math.inf, "abc"])
@@ -184,13 +189,13 @@ def test_thresholds_must_be_finite(tmp_path, threshold):
         OccupancyGrid.from_array(np.array([[0.0, 0.9]]), 1.0, occupied_thresh=threshold)
     Image.fromarray(np.zeros((2, 2), np.uint8)).save(tmp_path / "m.png")
     with pytest.raises(ConfigError, match="threshold"):
-        OccupancyGrid.from_image(tmp_path / "m.png", 1.0, threshold=threshold)
+        read_image(tmp_path / "m.png", 1.0, threshold=threshold)
 
 
 @pytest.mark.skipif(not TB3.exists(), reason=absent(TB3))
 def test_turtlebot3_pixels_follow_map_server_rules():
     with pytest.warns(UserWarning, match="not found"):  # its YAML names map.pgm
-        grid = OccupancyGrid.from_ros_yaml(TB3)
+        grid = read_ros_yaml(TB3)
     raw = np.flipud(np.asarray(__import__("PIL.Image").Image.open(TB3.with_suffix(".pgm"))))
     np.testing.assert_array_equal(grid.occupied, raw != 254)
     np.testing.assert_array_equal(grid.unknown, raw == 205)

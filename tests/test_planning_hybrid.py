@@ -8,8 +8,17 @@ import pytest
 
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import se2_exp, transform_points, wrap_angle
-from wheelbase.planning import Footprint, HybridAStar, OccupancyGrid, PlannedPath, smooth_path
-from wheelbase.planning.escape import _arc, escape
+from wheelbase.planning import (
+    Footprint,
+    HybridAStar,
+    OccupancyGrid,
+    PlannedPath,
+    PolygonWorld,
+    smooth_path,
+    write_ros_yaml,
+)
+from wheelbase.planning.collision import _scratch
+from wheelbase.planning.escape import _arc, _move, escape
 from wheelbase.planning.maps import BUNDLED_MAPS, bundled_scenarios, load_map
 
 
@@ -109,6 +118,117 @@ def test_bundled_scenarios_all_succeed_collision_free(name):
         check_path(grid, planner, path, sc.start, sc.goal)
 
 
+CAR = {"footprint": (4.69, 1.94), "rear_axle_to_center": 1.415, "turning_radius": 3.006}
+
+
+def street_slot(ratio, curb=True):
+    """A parallel slot ``ratio`` car lengths long between two parked 4.7 m cars 0.2 m off the
+    road's edge (a curb behind them, or open pavement), a 5.5 m lane; the poses in the middle
+    of the slot and in the lane past it (the rule of benchmarks/parking.py)."""
+    length, r2c = CAR["footprint"][0], CAR["rear_axle_to_center"]
+    s0 = 1.0 + 4.7
+    s1 = s0 + ratio * length
+    x_max = s1 + 4.7 + 6.0
+    polygons = [
+        [(1.0, 0.2), (s0, 0.2), (s0, 2.1), (1.0, 2.1)],
+        [(s1, 0.2), (s1 + 4.7, 0.2), (s1 + 4.7, 2.1), (s1, 2.1)],
+    ]
+    if curb:
+        polygons.append([(0.0, -0.3), (x_max, -0.3), (x_max, 0.0), (0.0, 0.0)])
+    world = PolygonWorld(polygons, bounds=(0.0, x_max, -0.3 if curb else -3.0, 7.6),
+                         resolution=0.05)  # fmt: skip
+    parked = np.array([(s0 + s1) / 2 - r2c, 1.15, 0.0])
+    lane = np.array([s1 + 1.0 + length / 2 - r2c, 2.1 + 0.5 + 0.97, 0.0])
+    return world, parked, lane
+
+
+def test_defaults_leave_and_enter_a_tight_slot():
+    """A slot 1.3 car lengths long behind a curb, with the planner's defaults: out of the slot
+    to the lane (a tight start, a free goal) and into it (the reverse). The automatic end is
+    the slot, which the lattice of whole primitives cannot leave (exhausted after one
+    expansion); the plan must not do worse than either end: it goes on with moves to contact
+    from the slot, and without them (moves_to_contact=False) from the lane."""
+    world, parked, lane = street_slot(1.3)
+    for start, goal in ((parked, lane), (lane, parked)):
+        for options in ({}, {"moves_to_contact": False}):
+            planner = HybridAStar(world, **CAR, smooth=False, **options)
+            path = planner.plan(start, goal)
+            check_path(world, planner, path, start, goal)
+        # either end alone, with whole primitives only: the slot's fails, the lane's succeeds
+        ends = {
+            side: HybridAStar(world, **CAR, search_from=side, moves_to_contact=False).plan(
+                start, goal
+            )
+            for side in ("start", "goal")
+        }
+        slot = "start" if start is parked else "goal"
+        assert ends[slot].stats.message == "search space exhausted"
+        assert ends["goal" if slot == "start" else "start"].success
+
+
+def test_defaults_leave_a_slot_1_10_car_lengths_long():
+    """0.47 m to spare behind a curb: the default lattice (0.485 m bins) is exhausted from
+    both ends, cut moves too; the escape by moves to contact takes the car out and in."""
+    world, parked, lane = street_slot(1.1)
+    for start, goal in ((parked, lane), (lane, parked)):
+        planner = HybridAStar(world, **CAR)
+        path = planner.plan(start, goal)
+        check_path(world, planner, path, start, goal)
+        assert path.cusps >= 10
+
+
+def test_moves_to_contact_leaves_what_the_lattice_solves_unchanged():
+    """Moves to contact run only where the lattice of whole primitives found nothing: where it
+    finds a path, the path and the expansions are the same with them on or off."""
+    world, parked, lane = street_slot(1.6, curb=False)
+    sc = next(s for s in bundled_scenarios() if s.name == "reverse_into_bay")
+    lot = load_map(sc.map_name)
+    lot_car = {"footprint": sc.footprint, "rear_axle_to_center": sc.rear_axle_to_center,
+               "turning_radius": sc.turning_radius}  # fmt: skip
+    for grid, car, start, goal in (
+        (world, CAR, parked, lane),
+        (world, CAR, lane, parked),
+        (lot, lot_car, sc.start, sc.goal),
+    ):
+        on, off = (
+            HybridAStar(grid, **car, moves_to_contact=flag).plan(start, goal)
+            for flag in (True, False)
+        )
+        assert on.success and off.success
+        np.testing.assert_array_equal(on.poses, off.poses)
+        assert on.stats.expanded_nodes == off.stats.expanded_nodes
+
+
+def test_a_move_to_contact_keeps_its_margin_and_ends_at_contact():
+    """The escape's moves (sphere tracing on the exact clearance, then samples): every pose of a
+    move keeps the margin less half a sample's sweep, and one step past its end does not."""
+    world, parked, _ = street_slot(1.1)
+    fp = Footprint.rectangle(*CAR["footprint"], CAR["rear_axle_to_center"])
+    radius, step, margin = CAR["turning_radius"], 0.005, 0.006
+    rho = fp.max_radius
+    box = np.array(world.bounds)
+    scratch = _scratch(world._kernel_world, fp.polygon)
+    shape = (world._kernel_world, fp.polygon, fp.circles, fp.circle_radius)
+    rng = np.random.default_rng(3)
+    stopped = 0
+    for _ in range(12):
+        pose = parked + np.array([rng.uniform(-0.2, 0.2), rng.uniform(-0.1, 0.1),
+                                  rng.uniform(-0.1, 0.1)])  # fmt: skip
+        if world.footprint_clearance(fp, pose) < margin:
+            continue
+        for d, k in itertools.product((1, -1), (1, 0, -1)):
+            kappa = k / radius
+            length, free = _move(*shape, box, *pose, d, kappa, 2.0, margin, rho, step, *scratch)
+            s = np.linspace(0.0, length, 400)
+            clear = world.footprint_clearance(fp, _arc(pose, kappa, d * s))
+            assert clear.min() >= margin - step * (1 + rho * abs(kappa)) / 2 - 1e-9
+            if not free:
+                stopped += 1
+                beyond = _arc(pose, kappa, d * (length + np.linspace(0.0, step, 50)))
+                assert world.footprint_clearance(fp, beyond).min() < margin + 1e-9
+    assert stopped > 20
+
+
 def test_moves_to_contact_park_in_a_slot_1_15_car_lengths_long():
     """Out of a 1.15-car-length slot takes 13 moves, most shorter than a motion primitive: cut
     at contact. Without them the search runs out of states; with them the path is exact at
@@ -118,9 +238,14 @@ def test_moves_to_contact_park_in_a_slot_1_15_car_lengths_long():
     options = {**sc.planner, "smooth": False}
     assert options.pop("moves_to_contact") is True
     kwargs = {"rear_axle_to_center": sc.rear_axle_to_center, **options}
-    without = HybridAStar(world, sc.footprint, sc.turning_radius, **kwargs)
-    assert not without.plan(sc.start, sc.goal).success
-    planner = HybridAStar(world, sc.footprint, sc.turning_radius, moves_to_contact=True, **kwargs)
+    # the lattice of whole primitives from the slot (from the lane it explores the whole map
+    # for seconds before it exhausts)
+    without = HybridAStar(
+        world, sc.footprint, sc.turning_radius, moves_to_contact=False, search_from="start",
+        **kwargs,
+    )  # fmt: skip
+    assert without.plan(sc.start, sc.goal).stats.message == "search space exhausted"
+    planner = HybridAStar(world, sc.footprint, sc.turning_radius, **kwargs)  # the default
     path = planner.plan(sc.start, sc.goal)
     check_path(world, planner, path, sc.start, sc.goal, spacing=0.02)
     assert path.cusps >= 9
@@ -166,9 +291,9 @@ def test_a_slot_1_10_car_lengths_long_is_left_by_moves_to_contact():
         assert path.cusps >= 30
         without = HybridAStar(
             world, case.footprint, case.turning_radius, moves_to_contact=False,
-            rear_axle_to_center=case.rear_axle_to_center, **options,
+            search_from="goal", rear_axle_to_center=case.rear_axle_to_center, **options,
         )  # fmt: skip
-        assert not without.plan(case.start, case.goal).success
+        assert without.plan(case.start, case.goal).stats.message == "search space exhausted"
         # the one time limit covers the lattice, the escape and the lattice after it
         hurried = HybridAStar(
             world, case.footprint, case.turning_radius, moves_to_contact=True, time_limit=0.05,
@@ -193,6 +318,7 @@ def test_escape_in_the_open_is_the_start_and_bad_settings_are_clear_errors():
     assert expanded == 1 and exits[0].poses.tolist() == [[2.0, 2.0, 0.0]]
     for bad, words in (
         ({"step": 1e-12}, "samples per move"),
+        ({"spacing": 1e-12}, "spacing 1e-12 m asks"),
         ({"margin": -1.0}, "margin"),
         ({"turning_radius": 0.0}, "turning_radius"),
         ({"exits": 0}, "exits"),
@@ -473,7 +599,7 @@ def test_goal_tolerance_accepts_a_nearby_state():
 def test_load_map_by_name_and_path(tmp_path):
     grid = load_map("parking_lot")
     assert grid.shape == (300, 400) and grid.resolution == pytest.approx(0.1)
-    grid.to_ros_yaml(tmp_path / "copy.yaml")
+    write_ros_yaml(grid, tmp_path / "copy.yaml")
     np.testing.assert_array_equal(load_map(tmp_path / "copy.yaml").occupied, grid.occupied)
     with pytest.raises(ConfigError, match="map"):
         load_map("atlantis")

@@ -15,7 +15,8 @@ from wheelbase.planning import (
     PolygonWorld,
     load_map,
 )
-from wheelbase.planning.world_io import load_world, world_schema
+from wheelbase.planning.maps import load_world
+from wheelbase.planning.world_io import world_schema
 
 # a non-convex polygon with a hole, a convex one and two discs
 L_SHAPE = [(2.0, 1.0), (6.0, 1.0), (6.0, 2.0), (3.0, 2.0), (3.0, 5.0), (2.0, 5.0)]

@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
@@ -241,3 +242,29 @@ def test_importing_plot_does_not_load_pyplot():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout
     assert output.strip() == "False"
+
+
+def test_the_animation_title_is_the_status_at_that_time(tmp_path):
+    # every frame said "arrived t = 9.6 s", the final status, from the first frame on
+    from wheelbase.control import PolarPose
+    from wheelbase.models import Unicycle
+    from wheelbase.plot import animate
+    from wheelbase.report import status_at
+    from wheelbase.sim import closed_loop
+
+    log = closed_loop(PolarPose(), Unicycle(), [1.0, 0.5, 0.0], [0, 0, 0], 20.0, 0.05,
+                      goal=[0, 0, 0], tolerance=(0.01, 0.02))  # fmt: skip
+    last = int(log.length[0]) - 1
+    assert log.statuses[0] == "arrived"
+    assert [status_at(log, k) for k in (0, last // 2, last - 1)] == ["running"] * 3
+    assert status_at(log, last) == "arrived"
+    asked = []
+
+    def title(k: int) -> str:
+        asked.append(k)
+        return status_at(log, k)
+
+    run = types.SimpleNamespace(t=log.t, poses=log.true_pose[0])
+    animate(run, tmp_path / "run.gif", title=title, max_frames=12)
+    frames = sorted(set(asked))
+    assert len(frames) == 12 and frames[0] == 0 and frames[-1] == log.t.size - 1

@@ -157,3 +157,72 @@ def test_least_clearance_is_the_brute_force_minimum():
                                  rng.uniform(-np.pi, np.pi, 300)])  # fmt: skip
         expected = float(np.min(grid.footprint_clearance(footprint, poses)))
         assert _min_clearance(grid, footprint, poses) == expected
+
+
+SLOW_FOLLOWER = {
+    "name": "slow",
+    "map": "empty",
+    "robot": {"model": "unicycle"},
+    "controller": {"law": "pure_pursuit", "gains": {"speed": 0.2}},
+    "odometry": {"mode": "perfect"},
+    "start": [0.0, 0.0, 0.0],
+    "goal": [6.0, 0.0, 0.0],
+    "trajectory": {"max_speed": 1.0, "max_acceleration": 1.0},
+    "dt": 0.05,
+    "duration": 60.0,
+}
+
+
+def test_duration_governs_a_robot_slower_than_its_reference():
+    # The reference reaches the goal in about 7 s; the follower, at 0.2 m/s, in about 30 s:
+    # more than 15 s late (the old settle time), well within the duration.
+    m = run(SLOW_FOLLOWER).metrics
+    assert m["status"] == "arrived"
+    assert m["trajectory_duration_s"] < 8.0 and 25.0 < m["duration_s"] < 60.0
+    assert m["arrival_delay_s"] == pytest.approx(m["duration_s"] - m["trajectory_duration_s"])
+    assert m["arrival_delay_s"] > 15.0
+    # a settle time, when given, ends the run that long after the reference instead
+    cut = run({**SLOW_FOLLOWER, "settle_time": 5.0}).metrics
+    assert cut["status"] == "timeout" and "arrival_delay_s" not in cut
+    assert cut["duration_s"] == pytest.approx(cut["trajectory_duration_s"] + 5.0, abs=0.051)
+    with pytest.raises(ScenarioError, match="settle_time"):
+        run({**SLOW_FOLLOWER, "settle_time": -1.0})
+
+
+def test_a_path_follower_is_scored_by_its_distance_to_the_path():
+    # At 0.2 m/s behind a 1 m/s reference the follower is metres from where the timed
+    # trajectory is, yet on the path all along: that is its tracking error.
+    m = run(SLOW_FOLLOWER).metrics
+    assert m["tracking_error_of"] == "path"
+    assert m["tracking_rms_position_error_m"] == m["path_deviation_rms_m"] < 0.01
+    assert m["tracking_max_position_error_m"] == m["path_deviation_max_m"] < 0.02
+    assert m["timed_rms_position_error_m"] > 1.0 and m["timed_max_position_error_m"] > 4.0
+    assert "tracking_rms_heading_error_deg" not in m and "timed_rms_heading_error_deg" in m
+    # a trajectory law keeps the timed error as its tracking error
+    timed = run(BASE).metrics
+    assert timed["tracking_error_of"] == "trajectory" and "timed_rms_position_error_m" not in timed
+    # with perfect state there is no estimate to score: no drift, no localisation error
+    for key in ("odometry_drift_m", "localization_rms_error_m", "final_position_error_estimated_m"):
+        assert key not in m
+    assert "odometry_drift_m" in timed and "localization_final_error_m" not in timed
+
+
+def test_min_clearance_is_the_least_over_every_pose():
+    scenario = {**BASE, "dt": 0.005}  # 1,600 rows
+    result = run(scenario)
+    from wheelbase.runner import prepare
+
+    prepared = prepare(scenario)
+    poses = result.log.true_pose[0]
+    every = prepared.grid.footprint_clearance(prepared.footprint, poses)
+    assert result.metrics["min_clearance_m"] == float(np.min(every))
+
+
+def test_reversals_ignore_the_flicker_of_a_turn_in_place():
+    from wheelbase.sim.log import _reversals
+
+    turning = np.array([0.5] * 20 + [1e-5, -1e-5, 2e-5, -3e-5] * 10 + [0.5] * 20)
+    assert _reversals(turning) == 0  # a forward-only run: no reversal
+    parking = np.array([0.5] * 20 + [0.01, -0.01] * 3 + [-0.3] * 20 + [0.4] * 5)
+    assert _reversals(parking) == 2  # backwards and forwards again
+    assert _reversals(np.zeros(5)) == 0 and _reversals(np.array([])) == 0

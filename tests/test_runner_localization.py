@@ -51,6 +51,9 @@ def test_odometry_alone_misses_where_amcl_arrives(amcl_result):
     assert alone.metrics["localization_max_error_m"] > 0.05
     m = amcl_result.metrics
     assert m["status"] == "arrived" and m["localization"] == "amcl"
+    # a filter's final error is its own, not an odometry drift
+    assert "odometry_drift_m" not in m and m["localization_final_error_m"] < 0.04
+    assert "odometry_drift_m" in alone.metrics and "localization_final_error_m" not in alone.metrics
     assert m["localization_rms_error_m"] < 0.02 and m["localization_max_error_m"] < 0.04
     assert m["localization_updates"] > 10 and m["localization_beams_used"] > 40 * 10
     # of the 60 beams each update chooses, those not used are skipped (max-range readings)

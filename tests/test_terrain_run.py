@@ -218,3 +218,31 @@ def test_traction_control_limits_each_wheel_torque():
     )
     with pytest.raises(ConfigError, match="wheel torques"):
         TractionControl(lambda t, s, r: 0, RM100)
+
+
+# --------------------------------------------------------------------------- raster
+def test_a_raster_of_surfaces_lies_under_the_regions(tmp_path):
+    from PIL import Image
+
+    from wheelbase.scenario_ground import build_terrain
+
+    pixels = np.full((20, 40), 255, np.uint8)  # 2 m × 4 m at 0.1 m: concrete
+    pixels[:, 20:] = 128  # the right half (x > 2 m) ice
+    pixels[:10, :] = 0  # the top half (y > 1 m, image rows at the top) sand
+    Image.fromarray(pixels).save(tmp_path / "floor.png")
+    raster = {"image": "floor.png", "resolution": 0.1, "origin": [0.0, -1.0],
+              "legend": {255: "dry_concrete", 128: "ice", 0: "dry_sand"}}  # fmt: skip
+    region = {"polygon": [[0.2, -0.8], [0.6, -0.8], [0.6, -0.4], [0.2, -0.4]], "surface": "grass"}
+    data = _with(terrain={"raster": raster, "regions": [region]})
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(data))
+    scenario = load_scenario(tmp_path / "s.yaml")  # the image is found beside the file
+    terrain = build_terrain(scenario, prepare(scenario).grid)
+    names = terrain.names
+    assert names[int(terrain.index([1.0, -0.5]))] == "dry_concrete"
+    assert names[int(terrain.index([3.0, -0.5]))] == "ice"
+    assert names[int(terrain.index([1.0, 0.5]))] == "dry_sand"
+    assert names[int(terrain.index([0.4, -0.6]))] == "grass"  # the region over the raster
+    data["terrain"]["raster"]["legend"] = {255: "dry_concrete"}
+    (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(data))
+    with pytest.raises(ScenarioError, match="grey level 0 of the image has no surface"):
+        run(tmp_path / "s.yaml")

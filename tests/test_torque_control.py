@@ -122,6 +122,21 @@ def test_issue_targets_on_the_feasible_document_trajectory():
         )
 
 
+def test_a_tracking_run_that_completes_its_reference_arrives_or_misses():
+    # The reference's end is the arrival: the PID ends within micrometres (arrived), the open
+    # loop half a metre off (missed_goal, not a timeout); a run cut short times out.
+    pid = track_trajectory(RM100, REF, ComputedTorquePID(RM100))
+    open_loop = track_trajectory(RM100, REF)
+    assert pid.statuses == ["arrived"] and open_loop.statuses == ["missed_goal"]
+    assert pid.metrics()[0]["final_position_error_true_m"] < 1e-4
+    assert open_loop.metrics()[0]["final_position_error_true_m"] > 0.05
+    np.testing.assert_allclose(pid.end_time, REF.duration, atol=0.011)
+    early = track_trajectory(RM100, REF, ComputedTorquePID(RM100), t_end=100.0)
+    assert early.statuses == ["timeout"]
+    loose = track_trajectory(RM100, REF, tolerance=(1.0, math.pi))
+    assert loose.statuses == ["arrived"]  # within a metre, any heading
+
+
 def test_open_loop_on_the_documents_heading_jumps_misses_by_metres():
     doc = heading_from_velocity(trapezoidal(DOC, (0.1, 0.1)))
     run = track_trajectory(RM100, doc)

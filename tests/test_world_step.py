@@ -56,6 +56,9 @@ def test_step_is_pure_and_reproducible():
     for name, value in before.items():
         np.testing.assert_array_equal(getattr(state, name), value)
     assert not state.position.flags.writeable  # the state cannot be changed in place
+    mine = np.zeros((2, 1, 3))
+    RobotBodies(mine, np.zeros((2, 1, 2)), Footprint.rectangle(0.5, 0.4))
+    assert mine.flags.writeable  # a caller's own arrays are not frozen
     assert not a.equals(state) and a.step.tolist() == [1, 1]
     # reproducible from the seed alone, over a long run
     assert run(world, world.start([3, 4]), 60, bodies=bodies).equals(

@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         ViaDirection,
         ViaPoint,
     )
+    from wheelbase.datasets.mrclam import load_mrclam
     from wheelbase.dynamics import RM100, DiffDriveDynamics, RigidBody, simulate_dynamics
     from wheelbase.errors import (
         ConfigError,
@@ -62,7 +63,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         reference_from_derivatives,
         reference_from_xy,
     )
-    from wheelbase.odometry import Encoder, WheelOdometry, dead_reckon, load_mrclam
+    from wheelbase.odometry import Encoder, WheelOdometry, dead_reckon
     from wheelbase.planning import (
         Footprint,
         HybridAStar,
@@ -132,7 +133,7 @@ _EXPORTS = {
     "Encoder": "wheelbase.odometry",
     "WheelOdometry": "wheelbase.odometry",
     "dead_reckon": "wheelbase.odometry",
-    "load_mrclam": "wheelbase.odometry",
+    "load_mrclam": "wheelbase.datasets.mrclam",
     "Footprint": "wheelbase.planning",
     "HybridAStar": "wheelbase.planning",
     "OccupancyGrid": "wheelbase.planning",

@@ -1,7 +1,10 @@
 """Batch runs: many scenarios, or one scenario over many noise seeds, vectorised and in chunks.
 
-The seeds of one scenario run as one vectorised batch: the plan is made once and the engine
-steps one robot per seed in lockstep (:func:`wheelbase.runner.run_seeds`). Large batches are
+The seeds of one scenario run as vectorised batches: the plan is made once and the engine
+steps one robot per seed in lockstep (:func:`wheelbase.runner.run_seeds`), as many seeds at a
+time as fit a memory budget (:data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB, or
+``memory_budget``); only the finished runs' metrics are kept, so memory stays flat however
+many seeds there are. Large batches are
 split into chunks of seeds, each chunk one task on any :class:`concurrent.futures.Executor` —
 a local process pool, or a Dask distributed client's executor
 (``Client(address).get_executor()``) so that a sweep scales out to a cluster without code
@@ -24,14 +27,16 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase.errors import ConfigError
+from wheelbase.errors import ConfigError, WheelbaseError
 from wheelbase.limits import MAX_SEEDS
 
 __all__ = ["JOURNAL", "BatchResult", "Journal", "run_batch", "run_chunk"]
 
 
-def run_chunk(scenario: dict[str, Any], seeds: Sequence[int]) -> list[dict[str, Any]]:
-    """Run one scenario (given as a dict) over ``seeds`` as one vectorised batch; never raises.
+def run_chunk(
+    scenario: dict[str, Any], seeds: Sequence[int], memory_budget: float | None = None
+) -> list[dict[str, Any]]:
+    """Run one scenario (given as a dict) over ``seeds`` as vectorised batches.
 
     Parameters
     ----------
@@ -39,21 +44,46 @@ def run_chunk(scenario: dict[str, Any], seeds: Sequence[int]) -> list[dict[str, 
         A scenario mapping as accepted by :func:`wheelbase.scenario.load_scenario`.
     seeds : sequence of int
         Noise seeds, one run each.
+    memory_budget : float, optional
+        Bytes the logs of the seeds run together may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`).
 
     Returns
     -------
     list of dict
         The metrics of each run with ``name`` and ``seed``, in the order of ``seeds``. When the
-        chunk cannot run (an invalid scenario, a start in collision, or any other exception),
-        every row has ``status`` ``"error"`` and the exception's type and message in
-        ``error``.
+        chunk cannot run for a reason wheelbase names (a :class:`~wheelbase.errors.WheelbaseError`:
+        an invalid scenario, a start in collision), every row has ``status`` ``"error"`` and the
+        error's type and message in ``error``.
+
+    Raises
+    ------
+    Exception
+        Any other exception (a TypeError, a MemoryError: a bug or the machine, not the
+        scenario) propagates: it is not a result.
     """
     from wheelbase.runner import run_seeds
 
     try:
-        return run_seeds(scenario, seeds)
-    except Exception as error:  # a batch records every failure and goes on
+        return run_seeds(scenario, seeds, memory_budget=memory_budget)
+    except WheelbaseError as error:  # a batch records every failure of a scenario, goes on
         return _error_rows(scenario.get("name", "scenario"), seeds, error)
+
+
+_NOT_OUTCOMES = frozenset(
+    {"seed", "scenario_index", "planning_time_s", "compile_time_s", "expanded_nodes"}
+)
+"""Row keys that are not a run's outcome: which seed, and how long the shared plan took."""
+
+
+def _worker_gave_up(error: BaseException) -> bool:
+    """Whether an executor lost the task (a killed process, a broken pool, a Dask worker
+    killed too often) rather than the task failing."""
+    from concurrent.futures import BrokenExecutor, CancelledError
+
+    if isinstance(error, (BrokenExecutor, CancelledError, WheelbaseError)):
+        return True
+    return type(error).__name__ in ("KilledWorker", "CommClosedError")
 
 
 def _error_rows(name: str, seeds: Sequence[int], error: Exception) -> list[dict[str, Any]]:
@@ -82,12 +112,48 @@ class BatchResult:
         """Completed runs per wall-clock second."""
         return len(self.rows) / self.wall_time_s if self.wall_time_s > 0 else math.inf
 
-    def summary(self) -> dict[str, dict[str, float]]:
-        """Mean, median, 90th percentile, min and max of every numeric metric."""
+    def groups(self) -> list[tuple[int, str, list[dict[str, Any]]]]:
+        """The rows of each scenario: (scenario_index, name, rows), in submission order."""
+        out: dict[int, tuple[int, str, list[dict[str, Any]]]] = {}
+        for row in self.rows:
+            index = int(row.get("scenario_index", 0))
+            out.setdefault(index, (index, str(row.get("name", "")), []))[2].append(row)
+        return list(out.values())
+
+    @staticmethod
+    def identical(rows: list[dict[str, Any]]) -> bool:
+        """Whether several runs gave the same row (besides seed and timings): a scenario
+        without randomness, whose seeds all run the same run.
+
+        Parameters
+        ----------
+        rows : list of dict
+            The rows of one scenario.
+        """
+        if len(rows) < 2:
+            return False
+
+        def outcome(row: dict[str, Any]) -> dict[str, Any]:
+            return {k: v for k, v in row.items() if k not in _NOT_OUTCOMES}
+
+        first = outcome(rows[0])
+        return all(outcome(row) == first for row in rows[1:])
+
+    def summary(self, rows: list[dict[str, Any]] | None = None) -> dict[str, dict[str, float]]:
+        """Mean, median, 90th percentile, min and max of every numeric metric.
+
+        Parameters
+        ----------
+        rows : list of dict, optional
+            The rows to summarise (default: all; one scenario's from :meth:`groups`).
+        """
+        rows = self.rows if rows is None else rows
         out: dict[str, dict[str, float]] = {}
-        keys = [key for key in self.rows[0] if key != "seed"] if self.rows else []
+        keys: list[str] = []
+        for row in rows:
+            keys.extend(key for key in row if key not in keys and key not in ("seed",))
         for key in keys:
-            values = [row.get(key) for row in self.rows]
+            values = [row.get(key) for row in rows]
             numbers = np.array(
                 [
                     float(v)
@@ -105,12 +171,13 @@ class BatchResult:
                 "min": float(np.min(numbers)),
                 "max": float(np.max(numbers)),
             }
-        statuses = [row.get("status") for row in self.rows]
+        statuses = [row.get("status") for row in rows]
         out["success_rate"] = {"mean": statuses.count("arrived") / max(1, len(statuses))}
         return out
 
     def write(self, folder: str | Path, *, force: bool = False) -> list[Path]:
-        """Write ``batch.csv`` and ``batch.json`` (rows + summary) into ``folder``.
+        """Write ``batch.csv`` and ``batch.json`` (rows, the summary of all runs, and each
+        scenario's summary and whether its runs were identical) into ``folder``.
 
         Parameters
         ----------
@@ -137,6 +204,16 @@ class BatchResult:
             "wall_time_s": self.wall_time_s,
             "runs_per_second": self.runs_per_second,
             "summary": self.summary(),
+            "scenarios": [
+                {
+                    "scenario_index": index,
+                    "name": name,
+                    "runs": len(rows),
+                    "identical_rows": self.identical(rows),
+                    "summary": self.summary(rows),
+                }
+                for index, name, rows in self.groups()
+            ],
             "rows": self.rows,
         }
         paths[1].write_text(json.dumps(payload, indent=2, default=float))
@@ -230,6 +307,7 @@ def run_batch(
     progress: Callable[[int, int], None] | None = None,
     journal: str | Path | None = None,
     resume: bool = False,
+    memory_budget: float | None = None,
 ) -> BatchResult:
     """Run every scenario (× every seed) as vectorised chunks and collect the metrics.
 
@@ -252,15 +330,21 @@ def run_batch(
         Append every finished row to this JSON-lines file as its chunk finishes
         (:class:`Journal`): an interrupted batch keeps what it finished.
     resume : bool
-        With ``journal``: take the rows already there and run only the missing ones.
+        With ``journal``: take the rows already there and run only the missing ones, and
+        again those that ended ``error`` (a chunk lost to a killed worker).
+    memory_budget : float, optional
+        Bytes the logs of the seeds one process runs together may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB): the seeds of a chunk run in
+        vectorised parts that fit it.
 
     Returns
     -------
     BatchResult
         Rows in submission order (scenario-major, then seed), each with ``scenario_index``.
-        A chunk that raises (a run in error) gives rows with ``status`` ``"error"``; the batch
-        goes on. On a Dask cluster a chunk whose worker dies is run again elsewhere by Dask;
-        its rows are kept once (by position).
+        A chunk that fails with a :class:`~wheelbase.errors.WheelbaseError`, or whose worker
+        gives up, gives rows with ``status`` ``"error"``; the batch goes on. Any other
+        exception propagates. On a Dask cluster a chunk whose worker dies is run again
+        elsewhere by Dask; its rows are kept once (by position).
     """
     import time
 
@@ -293,7 +377,13 @@ def run_batch(
         book = Journal(journal, fingerprint, resume=resume)
     tasks: list[tuple[int, dict[str, Any], list[int]]] = []
     for number, data, own in plan:
-        missing = [seed for seed in own if book is None or (number, seed) not in book.done]
+        missing = [
+            seed
+            for seed in own
+            if book is None
+            or (number, seed) not in book.done
+            or book.done[(number, seed)].get("status") == "error"  # run it again
+        ]
         size = chunk_size
         if size is None:
             quarter = math.ceil(len(missing) / 4)
@@ -303,6 +393,10 @@ def run_batch(
 
     total = sum(len(own) for _, _, own in plan)
     done = total - sum(len(chunk) for _, _, chunk in tasks)
+    if memory_budget is not None:
+        from wheelbase._validate import positive
+
+        positive("memory_budget", memory_budget, "bytes")
     start = time.perf_counter()
 
     def finished(number: int, rows: list[dict[str, Any]]) -> None:
@@ -319,17 +413,19 @@ def run_batch(
     found: dict[tuple[int, int], dict[str, Any]] = dict(book.done) if book is not None else {}
     if executor is None:
         for number, data, chunk in tasks:
-            finished(number, run_chunk(data, chunk))
+            finished(number, run_chunk(data, chunk, memory_budget))
     else:
         futures = {
-            executor.submit(run_chunk, data, chunk): (number, chunk)
+            executor.submit(run_chunk, data, chunk, memory_budget): (number, chunk)
             for number, data, chunk in tasks
         }
         for future in as_completed(futures):
             number, chunk = futures[future]
             try:
                 rows = future.result()
-            except Exception as error:  # the worker gave up (killed too often, broken pool)
+            except Exception as error:
+                if not _worker_gave_up(error):
+                    raise  # a bug, not a lost worker: not a row
                 rows = _error_rows(resolved[number].name, chunk, error)
             finished(number, rows)
     ordered = [found[(number, seed)] for number, _, own in plan for seed in own]

@@ -14,9 +14,13 @@ topic                     schema                        content
 ``/plan``                 ``foxglove.PosesInFrame``     the planned path in ``map``, t=0
 ``/pose/true``            ``foxglove.PoseInFrame``      the true pose in ``map``, every row
 ``/pose/estimated``       ``foxglove.PoseInFrame``      the estimator's pose in ``map``, every row
-``/tf``                   ``foxglove.FrameTransforms``  ``map → odom`` (true ∘ estimate⁻¹: the
-                                                        odometry drift) and ``odom → base_link``
-                                                        (the estimate), every row
+``/tf``                   ``foxglove.FrameTransforms``  the estimator's tree (REP 105): ``map →
+                                                        odom`` (its correction, estimate ∘
+                                                        odometry⁻¹; the identity without a
+                                                        filter) and ``odom → base_link`` (the
+                                                        wheel odometry), every row
+``/tf_true``              ``foxglove.FrameTransforms``  ``map → base_link_true``: the true pose,
+                                                        every row
 ``/markers``              ``foxglove.SceneUpdate``      the footprint (frame ``base_link``) and the
                                                         goals (frame ``map``), t=0
 ``/scan``                 ``foxglove.LaserScan``        the lidar's scans (frame ``base_link``, the
@@ -24,6 +28,12 @@ topic                     schema                        content
                                                         they were taken, when the log kept them
 ``/particles``            ``foxglove.PosesInFrame``     a particle filter's particles in ``map``,
                                                         at the rows the log kept them (AMCL)
+``/world/obstacles``      ``foxglove.SceneUpdate``      a world's obstacles off the map, t=0
+``/world/agents``         ``foxglove.SceneUpdate``      its agents (discs and velocity arrows),
+                                                        every 0.1 s
+``/costmap``              ``foxglove.Grid``             what the robot believes (the map and the
+                                                        cells its lidar marked: 100), once a second
+``/tracks``               ``foxglove.SceneUpdate``      its confirmed tracks, once a second
 ``/command``              JSON                          the command columns (``command_names``)
 ``/twist``                JSON                          true body twist ``u``, ``v``, ``r``
 ``/wheel_rates``          JSON                          ``left``, ``right`` [rad/s]
@@ -31,10 +41,11 @@ topic                     schema                        content
 ``/metrics``              JSON                          the run's metrics, at its last row
 ========================  ============================  ===========================================
 
-So ``map → odom → base_link`` composes to the true pose, and the odom frame moving against the
-map is the drift of the odometry. Times are simulated time from t = 0 (``log_time`` and every
-message's ``timestamp``, in integer nanoseconds). Poses are written as float64 positions and
-unit quaternions about z (θ = 2·atan2(q_z, q_w)).
+So ``map → odom → base_link`` composes to the estimate, as REP 105 and Nav2 publish it: the odom
+frame jumps against the map when a filter corrects the odometry; the truth is on its own topics
+(``/pose/true``, ``/tf_true``), never in the robot's tree. Times are simulated time from t = 0
+(``log_time`` and every message's ``timestamp``, in integer nanoseconds). Poses are written as
+float64 positions and unit quaternions about z (θ = 2·atan2(q_z, q_w)).
 
 The Foxglove protobuf schemas come from ``foxglove-schemas-protobuf`` and the file is written by
 ``mcap``; both are the optional extra ``wheelbase[foxglove]``.
@@ -69,9 +80,14 @@ MCAP_TOPICS = (
     "/pose/true",
     "/pose/estimated",
     "/tf",
+    "/tf_true",
     "/markers",
     "/scan",
     "/particles",
+    "/world/obstacles",
+    "/world/agents",
+    "/costmap",
+    "/tracks",
     "/command",
     "/twist",
     "/wheel_rates",
@@ -80,7 +96,8 @@ MCAP_TOPICS = (
 )
 """Topics an MCAP file of one robot can hold (``/torques`` on a dynamic plant only,
 ``/map/obstacles`` for a :class:`~wheelbase.planning.PolygonWorld`, ``/scan`` with a lidar,
-``/particles`` with a particle filter)."""
+``/particles`` with a particle filter, the ``/world`` topics, ``/costmap`` and ``/tracks``
+for a run among obstacles the map does not show)."""
 
 _EXTRA = "MCAP export needs the optional extra: pip install 'wheelbase[foxglove]'"
 
@@ -260,6 +277,56 @@ def _obstacles(pb: dict[str, Any], world: Any) -> Any:
     return pb["SceneUpdate"](entities=[entity])
 
 
+_CIRCLE = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+AGENT_PERIOD = 0.1
+"""Seconds between two ``/world/agents`` updates."""
+
+
+def _discs(pb: dict[str, Any], t: float, name: str, rows: np.ndarray, color: Any) -> Any:
+    """Discs (x, y, v_x, v_y, radius) as line loops with velocity arrows, one entity each."""
+    entities = []
+    for j, (x, y, vx, vy, r) in enumerate(np.asarray(rows, dtype=np.float64)):
+        entity = pb["SceneEntity"](frame_id="map", id=f"{name}{j}")
+        circle = np.column_stack([x + r * np.cos(_CIRCLE), y + r * np.sin(_CIRCLE)])
+        entity.lines.append(_loop(pb, circle, color))
+        speed = math.hypot(vx, vy)
+        if speed > 1e-6:
+            arrow = entity.arrows.add()
+            arrow.pose.CopyFrom(_pose(pb, np.array([x, y, math.atan2(vy, vx)])))
+            arrow.shaft_length, arrow.shaft_diameter = speed, 0.03
+            arrow.head_length, arrow.head_diameter = 0.1, 0.08
+            arrow.color.CopyFrom(color)
+        _stamp(entity, t)
+        entities.append(entity)
+    return pb["SceneUpdate"](entities=entities)
+
+
+def _world_obstacles(pb: dict[str, Any], world: Any) -> Any:
+    """A world's static obstacles off the map as line loops in ``map``."""
+    entity = pb["SceneEntity"](frame_id="map", id="world_obstacles")
+    red = pb["Color"](r=0.55, g=0.0, b=0.0, a=1.0)
+    for ring in world.obstacles.polygons:
+        entity.lines.append(_loop(pb, np.asarray(ring), red))
+    for x, y, r in world.obstacles.discs:
+        circle = np.column_stack([x + r * np.cos(_CIRCLE), y + r * np.sin(_CIRCLE)])
+        entity.lines.append(_loop(pb, circle, red))
+    _stamp(entity, 0.0)
+    return pb["SceneUpdate"](entities=[entity])
+
+
+def _belief(pb: dict[str, Any], grid: Any, marks: np.ndarray, t: float) -> Any:
+    """The map with the cells the lidar marked, as a ``foxglove.Grid``."""
+    occupied = np.array(grid.occupied, dtype=bool)
+    if len(marks):
+        cells = grid.world_to_cell(np.asarray(marks, dtype=np.float64))
+        rows, cols = occupied.shape
+        ok = (cells[:, 0] >= 0) & (cells[:, 0] < rows) & (cells[:, 1] >= 0) & (cells[:, 1] < cols)
+        occupied[cells[ok, 0], cells[ok, 1]] = True
+    message = _grid(pb, type(grid)(occupied, grid.resolution, grid.origin))
+    _stamp(message, t)
+    return message
+
+
 def _markers(pb: dict[str, Any], footprint: np.ndarray | None, goals: np.ndarray, base: str) -> Any:
     entities = []
     if footprint is not None:
@@ -304,6 +371,7 @@ def write_log_mcap(
     metrics: list[dict[str, Any]] | dict[str, Any] | None = None,
     overwrite: bool = False,
     lidar: Any = None,
+    world: Any = None,
 ) -> Path:
     """Write a closed-loop :class:`~wheelbase.sim.Log` (one robot or N) to an MCAP file.
 
@@ -329,6 +397,9 @@ def write_log_mcap(
         Replace an existing file (default: raise FileExistsError).
     lidar : Lidar, optional
         The lidar of ``log.scans``: its scans go to ``/scan`` (without it they are left out).
+    world : World, optional
+        The world beyond the map: its obstacles to ``/world/obstacles`` and, when the log kept
+        them, its agents to ``/world/agents`` (the first world of the log).
 
     Returns
     -------
@@ -369,6 +440,19 @@ def write_log_mcap(
             grid = grid.grid
         if grid is not None:
             out.protobuf("/map", 0.0, _grid(pb, grid))
+        if world is not None:
+            out.protobuf("/world/obstacles", 0.0, _world_obstacles(pb, world))
+        if log.agents is not None and log.agents.shape[2]:
+            radius = (np.full(log.agents.shape[2], 0.3) if world is None
+                      else np.asarray(world.agent_radius, dtype=np.float64))  # fmt: skip
+            brown = pb["Color"](r=0.55, g=0.34, b=0.29, a=1.0)
+            last = -math.inf
+            for k, t in enumerate(log.t):
+                if t - last < AGENT_PERIOD - 1e-9:
+                    continue
+                last = float(t)
+                rows = np.column_stack([log.agents[0, k], radius])
+                out.protobuf("/world/agents", float(t), _discs(pb, float(t), "agent", rows, brown))
         if plan_poses is not None:
             message = pb["PosesInFrame"](
                 frame_id="map", poses=[_pose(pb, pose) for pose in plan_poses]
@@ -385,6 +469,15 @@ def write_log_mcap(
                 _markers(pb, polygon, np.zeros((0, 3)) if goal is None else goal, frames[1]),
             )
             _write_robot(out, log, i, prefix, frames, lidar)
+            belief_grid = grid if grid is not None and hasattr(grid, "occupied") else None
+            cyan = pb["Color"](r=0.09, g=0.75, b=0.81, a=1.0)
+            for (robot, k), seen in sorted(log.perceived.items()):
+                if robot != i:
+                    continue
+                t = float(log.t[k])
+                if belief_grid is not None:
+                    out.protobuf(f"{prefix}/costmap", t, _belief(pb, belief_grid, seen["marks"], t))
+                out.protobuf(f"{prefix}/tracks", t, _discs(pb, t, "track", seen["tracks"], cyan))
             end = float(log.t[int(log.length[i]) - 1])
             row = {key: _metric_value(value) for key, value in metrics[i].items()}
             row.setdefault("status", STATUSES[int(log.status[i])])
@@ -404,8 +497,10 @@ def _write_robot(
     clouds = {row: cloud for (robot, row), cloud in log.particles.items() if robot == i}
     rows = int(log.length[i])
     true, estimate = log.true_pose[i, :rows], log.estimated_pose[i, :rows]
-    # map → odom is the pose that carries the estimate onto the truth: true ∘ estimate⁻¹.
-    drift = compose(true, inverse_pose(estimate))
+    # REP 105: odom → base_link is the wheel odometry, map → odom the estimator's correction
+    # (estimate ∘ odometry⁻¹); without a filter the odometry is the estimate (identity).
+    odom = log.extras["odom_pose"][i, :rows] if "odom_pose" in log.extras else estimate
+    correction = compose(estimate, inverse_pose(odom))
     command_names = tuple(log.command_names)
     twist_names, wheel_names = ("u", "v", "r"), ("left", "right")
     for k in range(rows):
@@ -416,11 +511,15 @@ def _write_robot(
             out.protobuf(prefix + topic, t, message)
         tf = pb["FrameTransforms"](
             transforms=[
-                _transform(pb, t, "map", frames[0], drift[k]),
-                _transform(pb, t, frames[0], frames[1], estimate[k]),
+                _transform(pb, t, "map", frames[0], correction[k]),
+                _transform(pb, t, frames[0], frames[1], odom[k]),
             ]
         )
         out.protobuf(prefix + "/tf", t, tf)
+        truth = pb["FrameTransforms"](
+            transforms=[_transform(pb, t, "map", frames[1] + "_true", true[k])]
+        )
+        out.protobuf(prefix + "/tf_true", t, truth)
         if k in scans:
             scan = pb["LaserScan"](
                 frame_id=frames[1], pose=_pose(pb, mount), start_angle=float(angles[0]),
@@ -492,6 +591,7 @@ def write_mcap(result: Any, path: str | Path, *, overwrite: bool = False) -> Pat
         metrics=result.metrics,
         overwrite=overwrite,
         lidar=None if result.sensors is None else result.sensors.lidar,
+        world=getattr(result, "world", None),
     )
 
 

@@ -430,7 +430,7 @@ def animate(
     overwrite: bool = False,
     dpi: float = 80.0,
     max_robots: int = 20,
-    title: str | None = None,
+    title: str | Callable[[int], str] | None = None,
     center_offset: float = 0.0,
     background: Callable[[Axes], None] | None = None,
     overlay: Callable[[int], Sequence[np.ndarray] | Mapping[str, Sequence[np.ndarray]]]
@@ -461,8 +461,9 @@ def animate(
         Resolution [dots per inch] of the frames (5.5 inches along the longer side).
     max_robots : int
         For a batch, animate at most this many robots.
-    title : str, optional
-        Axes title, shown before the running time.
+    title : str or callable, optional
+        Axes title, shown before the running time; a callable ``title(k)`` gives the title of
+        the frame of recorded pose ``k`` (a run's status at that time, not its final one).
     center_offset : float
         Reference point to footprint centre [m] (see :func:`footprint_outline`).
     background : callable, optional
@@ -528,8 +529,12 @@ def animate(
         ax.add_patch(body)
     noses = [ax.plot([], [], "k-", lw=1.0)[0] for _ in range(n_robots)]
     ax.legend(loc="upper right")
-    prefix = f"{title}   " if title else ""
-    heading = ax.set_title(f"{prefix}t = {t[-1]:.1f} s")  # reserves room in the layout
+
+    def caption(k: int) -> str:
+        text = title(k) if callable(title) else title
+        return f"{text}   t = {t[k]:.1f} s" if text else f"t = {t[k]:.1f} s"
+
+    heading = ax.set_title(caption(int(frames[-1])))  # reserves room in the layout
 
     canvas = FigureCanvasAgg(fig)
     fig.set_dpi(positive("dpi", dpi, "dots/inch"))
@@ -549,7 +554,7 @@ def animate(
             bodies[i].set_xy(corners[k, i, :-1])
             front = 0.5 * (corners[k, i, 1] + corners[k, i, 2])
             noses[i].set_data([poses[k, i, 0], front[0]], [poses[k, i, 1], front[1]])
-        heading.set_text(f"{prefix}t = {t[k]:.1f} s")
+        heading.set_text(caption(int(k)))
         drawn = overlay(int(k)) if overlay is not None else []
         if isinstance(drawn, Mapping):
             lines = [(line, colour) for colour, group in drawn.items() for line in group]

@@ -21,6 +21,7 @@ __all__ = [
     "figure_errors",
     "figure_map",
     "sensing_overlay",
+    "status_at",
     "write_report",
 ]
 
@@ -273,6 +274,34 @@ def sensing_overlay(log: Log, lidar=None, *, robot: int = 0):
     return overlay
 
 
+def status_at(log: Log, step: int, robot: int = 0) -> str:
+    """What the animation's title says at recorded step ``step``: ``running`` (with the
+    controller's own status when it reports one other than ``ok``, e.g. ``all_collide``) until
+    the robot's last step, then its final status (``arrived``, ``collision``, …).
+
+    Parameters
+    ----------
+    log : Log
+        The recorded run.
+    step : int
+        Index into ``log.t``.
+    robot : int
+        Which robot.
+
+    Returns
+    -------
+    str
+    """
+    if step >= int(log.length[robot]) - 1:
+        return log.statuses[robot]
+    codes = log.controller_status
+    if codes is not None and codes[robot, step] >= 0:
+        name = log.controller_status_names[int(codes[robot, step])]
+        if name != "ok":
+            return f"running ({name})"
+    return "running"
+
+
 def animate_run(
     grid, plan_poses, log: Log, robot_footprint, path, *, frames: int = 120, fps: int = 15,
     lidar=None, world=None,
@@ -331,7 +360,8 @@ def animate_run(
     run = SimpleNamespace(t=log.t, poses=poses)
     return animate(
         run, path, footprint=(length, width), center_offset=offset, fps=fps, max_frames=frames,
-        overwrite=True, background=background, title=log.statuses[0], overlay=overlay,
+        overwrite=True, background=background, title=lambda k: status_at(log, k),
+        overlay=overlay,
     )  # fmt: skip
 
 

@@ -16,8 +16,12 @@ silent:
 - Multiple goals are planned leg by leg (each from the previous goal) and tracked as one
   trajectory that stops at every goal.
 - The run ends when the true pose is within the goal tolerance after the trajectory has ended
-  and the robot has (nearly) stopped, at a collision, or ``settle_time`` = 15 s after the
-  trajectory has ended (status ``timeout``), whichever comes first, and never after ``duration``.
+  and the robot has (nearly) stopped, at a collision, or at the time limit ``duration``
+  (status ``timeout``), whichever comes first: a robot slower than its reference (a path
+  follower, MPPI, one that waits for someone to pass) has until ``duration``. A scenario's
+  ``settle_time`` ends the run that long after the trajectory's end instead, when that comes
+  before ``duration``. ``arrival_delay_s`` says how much later than the reference's end the
+  robot stopped.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from wheelbase._validate import nonnegative
+from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
@@ -42,6 +46,7 @@ from wheelbase.timing import SpeedLimits, time_parametrize
 
 __all__ = [
     "LAWS",
+    "LOG_COPIES",
     "Prepared",
     "Robot",
     "RunResult",
@@ -50,9 +55,9 @@ __all__ = [
     "run",
     "run_metrics",
     "run_seeds",
+    "seeds_per_chunk",
 ]
 
-SETTLE_TIME = 15.0  # s after the end of the trajectory
 FAN_PERIOD = 1.0  # s between the sampled-rollout fans kept for the animation
 TURNING_MARGIN = 1.2
 
@@ -504,6 +509,9 @@ class Prepared:
     plans, references : tuple
         Every robot's plan and its time-parametrised reference (``plan`` and ``reference``
         are robot 0's).
+    follows_path : bool
+        The controller follows the path (its tracking error is the distance to the path),
+        not the timed trajectory.
     """
 
     scenario: Scenario
@@ -519,6 +527,7 @@ class Prepared:
     starts: np.ndarray | None = None
     plans: tuple = ()
     references: tuple = ()
+    follows_path: bool = False
 
 
 def prepare(
@@ -712,7 +721,7 @@ def prepare(
             np.array([robot_goals[-1] for _, robot_goals in robots]),
             (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1])),
             end_time=end_time,
-            settle_time=SETTLE_TIME,
+            settle_time=math.inf if scenario.settle_time is None else scenario.settle_time,
         ),
         collides=lambda poses: grid.in_collision(footprint, poses),
         reference_pose=reference_pose,
@@ -728,6 +737,7 @@ def prepare(
     return Prepared(
         scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,
         np.array([robot_start for robot_start, _ in robots]), tuple(plans), tuple(references),
+        reference_kind == "path",
     )  # fmt: skip
 
 
@@ -877,8 +887,8 @@ def run(
     The run ends as the engine's one arrival rule says (:class:`wheelbase.sim.Arrival`): the
     robot stops when its *estimate* is within the goal tolerance, at rest, after the
     trajectory has ended; the *true* pose then decides ``arrived`` or ``missed_goal``. A
-    collision, ``settle_time`` = 15 s after the trajectory's end, or ``duration`` end it
-    earlier (``collision``, ``timeout``).
+    collision or ``duration`` (or the scenario's ``settle_time`` after the trajectory's end,
+    when given and earlier) end it earlier (``collision``, ``timeout``).
 
     Parameters
     ----------
@@ -926,11 +936,23 @@ def run(
     )
 
 
-def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> list[dict[str, Any]]:
-    """Run one scenario over many noise seeds as one vectorised batch; metrics per seed.
+LOG_COPIES = 3
+"""A run's record is held about three times while it is made: the rows of every step, the
+stacked arrays of the log, and the per-robot copies its metrics are taken from."""
+
+
+def run_seeds(
+    scenario: Scenario | str | Path | dict[str, Any],
+    seeds: Any,
+    *,
+    memory_budget: float | None = None,
+) -> list[dict[str, Any]]:
+    """Run one scenario over many noise seeds in vectorised chunks; metrics per seed.
 
     The plan is made once (it does not depend on the seed); the engine then steps one robot
-    per seed in lockstep. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
+    per seed in lockstep, as many seeds at a time as :func:`seeds_per_chunk` lets into
+    ``memory_budget``, and keeps only each finished chunk's metrics: memory stays flat however
+    many seeds there are. Robot ``i`` equals :func:`run` with ``seed = seeds[i]``.
 
     Parameters
     ----------
@@ -938,30 +960,48 @@ def run_seeds(scenario: Scenario | str | Path | dict[str, Any], seeds: Any) -> l
         The scenario (its own ``seed`` is ignored).
     seeds : sequence of int
         Noise seeds, one run each.
+    memory_budget : float, optional
+        Bytes the logs of one chunk may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`, 512 MiB), > 0.
 
     Returns
     -------
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
+    from wheelbase.limits import BATCH_MEMORY
+
+    budget = BATCH_MEMORY if memory_budget is None else memory_budget
+    budget = positive("memory_budget", budget, "bytes")
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
     if scenario.world is not None and scenario.world.path_boxes is not None:
         # each seed drops its own boxes: its own world, run alone
-        return [row for seed in seeds for row in _run_batch(prepare(scenario, seed=seed), [seed])]
-    return _run_batch(prepare(scenario), seeds)
+        return [
+            row
+            for seed in seeds
+            for row in _run_batch(prepare(scenario, seed=seed), [seed], budget)
+        ]
+    return _run_batch(prepare(scenario), seeds, budget)
 
 
-def _run_batch(prepared: Prepared, seeds: list[int]) -> list[dict[str, Any]]:
-    """One engine run of a prepared scenario for ``seeds``: a world of R robots per seed."""
+def _run_batch(prepared: Prepared, seeds: list[int], budget: float) -> list[dict[str, Any]]:
+    """Engine runs of a prepared scenario for ``seeds`` (a world of R robots per seed), as many
+    worlds at a time as fit ``budget`` bytes (:func:`seeds_per_chunk`)."""
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
     fleet = len(prepared.starts)
-    starts = np.tile(prepared.starts, (len(seeds), 1))
     engine = replace(prepared.engine, record_sensors=False)  # metrics only: no scans kept
-    log = engine.run(starts, seeds=np.repeat(np.array(seeds, dtype=np.int64), fleet))
-    return [_world_metrics(prepared, log, k) for k in range(len(seeds))]
+    size = seeds_per_chunk(engine, prepared.starts, budget) if seeds else 1
+    rows: list[dict[str, Any]] = []
+    for first in range(0, len(seeds), size):
+        chunk = seeds[first : first + size]
+        starts = np.tile(prepared.starts, (len(chunk), 1))
+        log = engine.run(starts, seeds=np.repeat(np.array(chunk, dtype=np.int64), fleet))
+        rows.extend(_world_metrics(prepared, log, k) for k in range(len(chunk)))
+        del log  # only the rows outlive the chunk
+    return rows
 
 
 def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
@@ -974,6 +1014,50 @@ def _world_metrics(prepared: Prepared, log: Log, world: int) -> dict[str, Any]:
         worst = next((m["status"] for m in robots if m["status"] != "arrived"), "arrived")
         metrics = {**metrics, "status": worst, "robots": robots}
     return metrics
+
+
+def seeds_per_chunk(engine: Engine, starts: np.ndarray, budget: float) -> int:
+    """How many worlds (seeds) of ``engine`` one vectorised run can hold within ``budget``
+    bytes, a world being the robots of ``starts`` (one, or a fleet).
+
+    One step of one world is recorded (its rows' arrays: poses, command, wheel rates, ticks,
+    the estimator's and plant's signals) and counted :data:`LOG_COPIES` times for each of the
+    engine's ``steps`` (the longest a run can last).
+
+    Parameters
+    ----------
+    engine : Engine
+        The closed loop.
+    starts : numpy.ndarray, shape (3,) or (R, 3)
+        The start pose(s) of one world.
+    budget : float
+        Bytes.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    starts = np.asarray(starts, dtype=np.float64).reshape(-1, 3)
+    seeds = np.zeros(len(starts), dtype=np.int64)
+    _, row = engine.step(engine.reset(starts, seeds=seeds))
+    per_step = _nbytes(row) + 64  # and the row's own bookkeeping
+    return max(1, int(budget // (per_step * engine.steps * LOG_COPIES)))
+
+
+def _nbytes(value: Any) -> int:
+    """Bytes of the arrays in a value (a dataclass, dict, list or array), recursively."""
+    import dataclasses
+
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return sum(_nbytes(getattr(value, f.name)) for f in dataclasses.fields(value))
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value) + 8 * len(value)
+    return 0
 
 
 def _base_metrics(prepared: Prepared, seed: int) -> dict[str, Any]:
@@ -1001,6 +1085,8 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     metrics = {**_base_metrics(prepared, seed), **one.metrics()[0]}
     metrics.pop("controller_statuses", None)
     metrics["trajectory_duration_s"] = float(reference.t[-1])
+    if metrics["status"] in ("arrived", "missed_goal"):  # it stopped: how late
+        metrics["arrival_delay_s"] = metrics["duration_s"] - metrics["trajectory_duration_s"]
     counts = one.controller_status_counts(0)
     if counts:
         metrics["controller_statuses"] = counts
@@ -1008,6 +1094,14 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     deviation = distance_to_polyline(true_pose[:, :2], plan.poses[:, :2])
     metrics["path_deviation_rms_m"] = float(np.sqrt(np.mean(deviation**2)))
     metrics["path_deviation_max_m"] = float(np.max(deviation))
+    if prepared.follows_path:
+        # a path law is scored by its distance to the path; the error against the timed
+        # reference (where the trajectory would be at that time) keeps its own name
+        for name in ("rms_position_error_m", "max_position_error_m", "rms_heading_error_deg"):
+            metrics[f"timed_{name}"] = metrics.pop(f"tracking_{name}")
+        metrics["tracking_rms_position_error_m"] = metrics["path_deviation_rms_m"]
+        metrics["tracking_max_position_error_m"] = metrics["path_deviation_max_m"]
+    metrics["tracking_error_of"] = "path" if prepared.follows_path else "trajectory"
     if one.torques is not None:
         # Mechanical energy the wheels deliver: ∫ τ·ω dt, positive (motoring) parts only.
         power = np.sum(one.torques[0] * one.wheel_rates[0], axis=1)
@@ -1015,8 +1109,7 @@ def run_metrics(prepared: Prepared, log: Log, index: int) -> dict[str, Any]:
     from wheelbase.scenario_ground import terrain_metrics
 
     metrics.update(terrain_metrics(one))  # slip, sinkage and the energy budget on terrain
-    every = max(1, len(one.t) // 400)
-    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose[::every])
+    clearance = _min_clearance(prepared.grid, prepared.footprint, true_pose)  # every pose
     metrics["min_clearance_m"] = clearance if math.isfinite(clearance) else None  # no obstacle
     metrics["localization"] = prepared.scenario.localization.method
     for key, value in one.extras.items():  # a filter's cumulative counts, at the end

@@ -26,7 +26,13 @@ from wheelbase.scenario_terrain import (
     TerrainSpec,
     TractionSpec,
 )
-from wheelbase.scenario_world import FleetRobotSpec, RecoverySpec, ReplanningSpec, WorldSpec
+from wheelbase.scenario_world import (
+    FleetRobotSpec,
+    RecoverySpec,
+    ReplanningSpec,
+    WorldSpec,
+    goal_alias,
+)
 
 __all__ = [
     "EMPTY_MAP_MARGIN",
@@ -450,7 +456,14 @@ class Scenario(_Strict):
     goal_tolerance: tuple[float, float] = Field(
         (0.05, 5.0), description="Arrival tolerance (position [m], heading [deg])."
     )
-    duration: float = Field(120.0, gt=0, description="Longest run [s].")
+    duration: float = Field(
+        120.0, gt=0, description="Longest run [s]: the time limit (status timeout)."
+    )
+    settle_time: float | None = Field(
+        None, ge=0, description="End the run this long [s] after the reference trajectory "
+        "ends (status timeout), when that comes before duration (default: none, duration "
+        "governs)."
+    )  # fmt: skip
     dt: float = Field(0.01, gt=0, description="Simulation and control step [s].")
     resources: ResourceSpec = Field(
         default_factory=ResourceSpec, description="Resource limits (raise them on purpose)."
@@ -501,11 +514,7 @@ class Scenario(_Strict):
     @model_validator(mode="before")
     @classmethod
     def _goal_alias(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "goal" in data:
-            if "goals" in data:
-                raise ValueError("give either goal or goals, not both")
-            data = dict(data)
-            data["goals"] = [data.pop("goal")]
+        data = goal_alias(data)
         if isinstance(data, dict) and data.get("fleet"):
             fleet = data["fleet"]
             if "start" in data or "goals" in data:
@@ -572,10 +581,10 @@ class Scenario(_Strict):
             )
         return self
 
-    @field_validator("start", "goals", "goal_tolerance", "duration", "dt")
+    @field_validator("start", "goals", "goal_tolerance", "duration", "dt", "settle_time")
     @classmethod
     def _finite(cls, value):
-        if not all(math.isfinite(number) for number in _numbers(value)):
+        if value is not None and not all(math.isfinite(number) for number in _numbers(value)):
             raise ValueError(f"must be finite (got {value})")
         return value
 
@@ -793,6 +802,13 @@ def load_scenario(source: str | Path | dict[str, Any]) -> Scenario:
             beside = path.parent / map_name
             if beside.exists():
                 data = {**data, "map": str(beside)}
+        terrain = data.get("terrain")
+        raster = terrain.get("raster") if isinstance(terrain, dict) else None
+        image = raster.get("image") if isinstance(raster, dict) else None
+        if isinstance(image, str) and not Path(image).is_absolute():  # as the map
+            beside = path.parent / image
+            if beside.exists():
+                data = {**data, "terrain": {**terrain, "raster": {**raster, "image": str(beside)}}}
     try:
         return Scenario.model_validate(data)
     except ValidationError as error:

@@ -254,13 +254,46 @@ def build_terrain(scenario: Scenario, grid: Any) -> Any:
     rows, cols = cells.occupied.shape
     resolution = spec.resolution or cells.resolution
     bounds = (x0, y0, x0 + cols * cells.resolution, y0 + rows * cells.resolution)
+    base = None
+    if spec.raster is not None:
+        base = _raster(spec.raster, cells, scenario.resources.max_map_cells)
     try:
         return TerrainMap.from_regions(
             default, regions, bounds=bounds, resolution=resolution,
-            max_cells=scenario.resources.max_map_cells,
+            max_cells=scenario.resources.max_map_cells, base=base,
         )  # fmt: skip
     except ConfigError as error:
         raise ScenarioError(f"terrain: {error}") from None
+
+
+def _raster(spec: Any, cells: Any, max_cells: int) -> Any:
+    """The ``terrain.raster`` image as a :class:`~wheelbase.terrain.TerrainMap` (flat)."""
+    from wheelbase.errors import DataError, MapError
+    from wheelbase.planning.map_io import _read_gray
+    from wheelbase.terrain.map import TerrainMap
+
+    try:
+        gray = _read_gray(spec.image, max_cells)
+    except (DataError, MapError) as error:
+        raise ScenarioError(f"terrain.raster.image: {error}") from None
+    levels = np.unique(gray.astype(np.int64))
+    missing = [int(level) for level in levels if int(level) not in spec.legend]
+    if missing:
+        raise ScenarioError(
+            f"terrain.raster.legend: grey level {missing[0]} of the image has no surface "
+            f"(levels in the image: {', '.join(map(str, levels[:12]))})"
+        )
+    keys = sorted(spec.legend)
+    surfaces = [surface_of(spec.legend[k], f"terrain.raster.legend.{k}") for k in keys]
+    lookup = np.zeros(256, np.int32)
+    lookup[keys] = np.arange(len(keys))
+    codes = lookup[np.flipud(gray).astype(np.int64)]  # image row 0 is the top
+    origin = spec.origin if spec.origin is not None else cells.origin
+    try:
+        return TerrainMap(tuple(surfaces), codes, np.zeros((*codes.shape, 2)),
+                          spec.resolution or cells.resolution, origin)  # fmt: skip
+    except ConfigError as error:
+        raise ScenarioError(f"terrain.raster: {error}") from None
 
 
 def build_plant(

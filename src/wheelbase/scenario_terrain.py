@@ -1,7 +1,8 @@
 """A scenario's ground and loads: the schema of the ``terrain``, payload and coping-control keys.
 
 - ``terrain``: the surface everywhere (``surface``), polygon ``regions`` of other surfaces and
-  grades (a plane per region), wheel ``slip`` on or off, the ``stuck`` rule's time;
+  grades (a plane per region), a ``raster`` of surfaces (an image, a grey level per surface),
+  wheel ``slip`` on or off, the ``stuck`` rule's time;
 - ``robot.payload``: what the robot carries from the start; a goal may change it
   (``goals: [{pose: [x, y, deg], payload: {...}}, ...]``; ``payload: null`` drops it);
 - ``robot.contacts``: drive-wheel width and spin inertia, casters, load sharing, CG height;
@@ -29,6 +30,7 @@ from wheelbase.limits import MAX_COORDINATE
 __all__ = [
     "ContactsSpec",
     "PayloadSpec",
+    "RasterSpec",
     "RegionSpec",
     "SoilSpec",
     "SurfaceSpec",
@@ -174,6 +176,36 @@ class RegionSpec(_Strict):
         return value
 
 
+class RasterSpec(_Strict):
+    """Surfaces painted in an image: each grey level a surface (aligned with the map)."""
+
+    image: str = Field(..., description="An image file (PNG, PGM, ...); a path in a scenario "
+                       "file is relative to that file.")  # fmt: skip
+    legend: dict[int, Literal[SURFACE_NAMES] | SurfaceSpec] = Field(  # type: ignore[valid-type]
+        ..., min_length=1, description="Grey level (0..255) → surface; every level in the "
+        "image needs one."
+    )  # fmt: skip
+    resolution: float | None = Field(
+        None, gt=0, description="Pixel size [m] (default: the map's cell size)."
+    )
+    origin: tuple[float, float] | None = Field(
+        None, description="(x, y) of the image's lower-left corner [m] (default: the map's)."
+    )
+
+    @field_validator("legend")
+    @classmethod
+    def _levels(cls, value):
+        bad = [level for level in value if not 0 <= level <= 255]
+        if bad:
+            raise ValueError(f"grey levels must be in [0, 255] (got {bad[0]})")
+        return value
+
+    @field_validator("origin")
+    @classmethod
+    def _finite(cls, value):
+        return value if value is None else _finite_point(value)
+
+
 class TerrainSpec(_Strict):
     """The ground (wheelbase.terrain): a surface everywhere, regions of others, slip."""
 
@@ -182,8 +214,11 @@ class TerrainSpec(_Strict):
     )
     regions: tuple[RegionSpec, ...] = Field(
         (), description="Polygons of other surfaces or grades; where two overlap they must "
-        "agree."
+        "agree; they lie over the raster."
     )  # fmt: skip
+    raster: RasterSpec | None = Field(
+        None, description="Surfaces painted in an image aligned with the map (flat)."
+    )
     slip: bool = Field(
         True, description="Wheel slip (the wheels' own dynamics, friction or soil shear); "
         "false: the wheels roll without slipping."

@@ -26,11 +26,23 @@ __all__ = [
     "RecoverySpec",
     "ReplanningSpec",
     "WorldSpec",
+    "goal_alias",
 ]
 
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, validate_default=True)
+
+
+def goal_alias(data: Any) -> Any:
+    """A mapping's ``goal: pose`` as ``goals: [pose]`` (the one-goal spelling of scenarios and
+    of a fleet's robots); both given is an error."""
+    if isinstance(data, dict) and "goal" in data:
+        if "goals" in data:
+            raise ValueError("give either goal or goals, not both")
+        data = dict(data)
+        data["goals"] = [data.pop("goal")]
+    return data
 
 
 def _finite(values: Any) -> bool:
@@ -109,12 +121,7 @@ class FleetRobotSpec(_Strict):
     @model_validator(mode="before")
     @classmethod
     def _goal_alias(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "goal" in data:
-            if "goals" in data:
-                raise ValueError("give either goal or goals, not both")
-            data = dict(data)
-            data["goals"] = [data.pop("goal")]
-        return data
+        return goal_alias(data)
 
     @field_validator("start", "goals")
     @classmethod

@@ -27,7 +27,7 @@ from wheelbase._validate import integer
 from wheelbase.commands.options import out_option, point_option
 from wheelbase.errors import ConfigError
 
-__all__ = ["CALIBRATE_FILES", "GOTO_FILES", "register"]
+__all__ = ["CALIBRATE_FILES", "GOTO_FILES", "plot_calibration", "register"]
 
 GOTO_FILES: tuple[str, ...] = ("routes.png", "log.csv", "route.gif", "metrics.json")
 """What ``wheelbase goto`` writes: ``log.csv`` is the engine's long format (a ``robot`` column,
@@ -83,7 +83,16 @@ def _animate(log: Any, path: Path, overwrite: bool) -> None:
     animate(result, path, footprint=(0.2, 0.17), overwrite=overwrite, max_frames=60, title="goto")
 
 
-def _plot_calibration(cal: Any, path: Path) -> None:
+def plot_calibration(cal: Any, path: Path) -> None:
+    """Draw a UMBmark calibration (true paths before and after, return errors) into ``path``.
+
+    Parameters
+    ----------
+    cal : wheelbase.odometry.calibration.UMBmarkCalibration
+        What :func:`wheelbase.odometry.calibrate_umbmark` returns.
+    path : pathlib.Path
+        PNG file (replaced if it exists).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -219,7 +228,7 @@ def register(app: typer.Typer) -> None:
             ed, eb, side=side, runs=runs, slip_std=slip, iterations=iterations, seed=seed
         )
         paths = _prepare(out, CALIBRATE_FILES, force)
-        _plot_calibration(cal, paths["before_after.png"])
+        plot_calibration(cal, paths["before_after.png"])
         corr = cal.correction
         metrics = {
             "e_max_syst_before_m": cal.before.e_max_syst,

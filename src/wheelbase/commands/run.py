@@ -35,8 +35,12 @@ SUMMARY_KEYS = (
     ("tracking_rms_position_error_m", "tracking RMS error [m]", "{:.4f}"),
     ("tracking_max_position_error_m", "tracking max error [m]", "{:.4f}"),
     ("final_position_error_true_m", "final error, true [m]", "{:.4f}"),
-    ("final_position_error_estimated_m", "final error, odometry [m]", "{:.4f}"),
+    ("final_position_error_estimated_m", "final error, estimated [m]", "{:.4f}"),
     ("odometry_drift_m", "odometry drift [m]", "{:.4f}"),
+    ("localization_rms_error_m", "localisation RMS error [m]", "{:.4f}"),
+    ("localization_max_error_m", "localisation max error [m]", "{:.4f}"),
+    ("localization_final_error_m", "localisation final error [m]", "{:.4f}"),
+    ("arrival_delay_s", "arrived after the reference by [s]", "{:.1f}"),
     ("min_clearance_m", "min clearance [m]", "{:.3f}"),
     ("wheel_energy_j", "wheel energy [J]", "{:.1f}"),
 )
@@ -192,7 +196,15 @@ def register(app: typer.Typer) -> None:
         ),
         force: bool = typer.Option(False, help="Overwrite an existing batch table."),
         resume: bool = typer.Option(
-            False, help="Finish the batch in --out: run only the seeds missing from rows.jsonl."
+            False,
+            help="Finish the batch in --out: run only the seeds missing from rows.jsonl (and "
+            "again those that ended in error).",
+        ),
+        memory_mb: float = typer.Option(
+            None,
+            "--memory-mb",
+            help="Memory [MiB] the logs of the seeds one process runs together may take "
+            "(default 512): more seeds run in smaller vectorised parts.",
         ),
     ) -> None:
         """Run many scenarios (or one over many seeds) as vectorised batches; write one table.
@@ -209,6 +221,8 @@ def register(app: typer.Typer) -> None:
             raise WheelbaseError(f"--workers must be in [1, {MAX_WORKERS}] (got {workers})")
         if resume and force:
             raise WheelbaseError("--resume finishes the batch in --out; --force starts it again")
+        if memory_mb is not None and not 0 < memory_mb < float("inf"):
+            raise WheelbaseError(f"--memory-mb must be > 0 MiB (got {memory_mb:g})")
         for name in ("batch.csv", "batch.json", JOURNAL):
             if (out / name).exists() and not (force or resume):
                 raise FileExistsError(
@@ -242,6 +256,7 @@ def register(app: typer.Typer) -> None:
                     progress=lambda done, total: bar.update(task, completed=done, total=total),
                     journal=out / JOURNAL,
                     resume=resume,
+                    memory_budget=None if memory_mb is None else memory_mb * 2**20,
                 )
         finally:
             if client is not None:
@@ -249,15 +264,28 @@ def register(app: typer.Typer) -> None:
             elif executor is not None:
                 executor.shutdown()
         result.write(out, force=force or resume)
-        summary = result.summary()
-        table = Table(title=f"{plural(len(result.rows), 'run')} in {result.wall_time_s:.1f} s "
-                      f"({result.runs_per_second:.2f} runs/s)")  # fmt: skip
-        for column in ("metric", "mean", "p50", "p90", "max"):
-            table.add_column(column, justify="right" if column != "metric" else "left")
-        for key, _, form in SUMMARY_KEYS[1:]:
-            if key in summary:
-                stats = summary[key]
-                table.add_row(key, *(form.format(stats[s]) for s in ("mean", "p50", "p90", "max")))
-        table.add_row("success rate", f"{summary['success_rate']['mean']:.0%}", "", "", "")
-        console.print(table)
+        console.print(
+            f"{plural(len(result.rows), 'run')} in {result.wall_time_s:.1f} s "
+            f"({result.runs_per_second:.2f} runs/s)",
+            markup=False,
+        )
+        for _, name, rows in result.groups():  # one table per scenario: never averaged across
+            summary = result.summary(rows)
+            table = Table(title=f"{name}: {plural(len(rows), 'run')}")
+            for column in ("metric", "mean", "p50", "p90", "max"):
+                table.add_column(column, justify="right" if column != "metric" else "left")
+            for key, _, form in SUMMARY_KEYS[1:]:
+                if key in summary:
+                    stats = summary[key]
+                    values = (form.format(stats[s]) for s in ("mean", "p50", "p90", "max"))
+                    table.add_row(key, *values)
+            table.add_row("success rate", f"{summary['success_rate']['mean']:.0%}", "", "", "")
+            console.print(table)
+            if result.identical(rows):
+                console.print(
+                    f"{name}: the {len(rows)} seeds gave identical runs: the scenario has no "
+                    "randomness (give it encoder noise, odometry.tick_noise_std, or noisy "
+                    "sensors)",
+                    markup=False,
+                )
         console.print(f"wrote {out / 'batch.csv'} and {out / 'batch.json'}", markup=False)

@@ -110,6 +110,7 @@ def _lidar_slam(data: Path, paths: dict[str, Path], frames: int, mcap: bool,
     from wheelbase.mapping.evaluation import align_trajectory, lidar_metrics
     from wheelbase.mapping.lidar_slam import LidarSlam
     from wheelbase.mapping.plot import animate_map, plot_error, plot_map
+    from wheelbase.planning.map_io import write_ros_yaml
 
     log = read_scans(data)
     if max_scans is not None:
@@ -118,7 +119,7 @@ def _lidar_slam(data: Path, paths: dict[str, Path], frames: int, mcap: bool,
     every = max(1, log.n_scans // max(frames, 1))
     result = slam.run(log, snapshot_every=every)
     grid = slam.render(log, result.poses).to_grid()
-    grid.to_ros_yaml(paths["map.yaml"])
+    write_ros_yaml(grid, paths["map.yaml"])
     metrics = lidar_metrics(log, result)
     metrics["use_odometry"] = bool(use_odometry and log.odometry is not None)
     plot_map(grid, paths["map.png"], result.poses, result.loops, log.reference,
@@ -176,7 +177,9 @@ def register_slam(app: typer.Typer) -> None:
         data: Annotated[
             Path, typer.Argument(help="A CARMEN log, a ROS 2 bag, or an MRCLAM folder.")
         ],
-        out: Annotated[Path, typer.Option("--out", help="Output folder.")],
+        out: Annotated[
+            Path, out_option("slam", "metrics.json, the map, figures (an MCAP with --mcap)")
+        ] = "wheelbase-slam",
         robot: int = typer.Option(1, "--robot", help="MRCLAM robot number, 1-5."),
         method: str = typer.Option("smoothing", "--method", help="Landmarks: ekf or smoothing."),
         frames: int = typer.Option(24, "--frames", help="Frames of the animation (lidar)."),
@@ -236,6 +239,7 @@ def register_slam(app: typer.Typer) -> None:
         from wheelbase.errors import DataError
         from wheelbase.mapping.occupancy import OccupancyMapper
         from wheelbase.mapping.plot import plot_map
+        from wheelbase.planning.map_io import write_ros_yaml
 
         check_choice("poses", poses, ("reference", "odometry"))
         mapper = OccupancyMapper(resolution=resolution, max_range=max_range)
@@ -248,7 +252,7 @@ def register_slam(app: typer.Typer) -> None:
         built = mapper.build(chosen, log.ranges, log.angles, mount=log.mount,
                              sensor_max_range=log.max_range)  # fmt: skip
         grid = built.to_grid()
-        grid.to_ros_yaml(paths["map.yaml"])
+        write_ros_yaml(grid, paths["map.yaml"])
         plot_map(grid, paths["map.png"], chosen, title=f"{log.source}: {poses} poses")
         known = ~grid.unknown
         metrics = {"scans": log.n_scans, "cells": int(grid.occupied.size),

@@ -23,6 +23,7 @@ used: both sides through the same second-order low-pass filter H²(z), H the dis
 first-order filter of time constant T. A filter applied to both sides keeps the identity
 τ_f = Y_f·θ for constant θ, and H² keeps the quantisation noise of Δν/h out of the regressor
 (noise in a regressor biases least squares low). Each step
+
     K = P·Y_fᵀ·(λ·I + Y_f·P·Y_fᵀ)⁻¹,   θ̂ ← θ̂ + K·(τ_f − Y_f·θ̂),   P ← (P − K·Y_f·P)/λ,
 
 with the forgetting factor λ (1: none; below 1 it follows a payload that changes), and then

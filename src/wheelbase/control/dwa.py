@@ -14,28 +14,28 @@ where V_d does) are each held for ``sim_time`` (a circular arc,
 into a trajectory generator and critics (nav2_dwb_controller; weights from Nav2's
 ``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres):
 
-====================  ==========================================================  ==========
-critic (weight)       score of one trajectory                                     default
-====================  ==========================================================  ==========
-``path_dist``         distance [m] from its end to the path window (DWB           640 /m
-                      PathDist, 32 per cell)
-``goal_dist``         distance [m] from its end to the local goal: the window's   480 /m
+====================  ============================================================  ========
+critic (weight)       score of one trajectory                                       default
+====================  ============================================================  ========
+``path_dist``         distance [m] from its end to the path window (DWB PathDist,   640 /m
+                      32 per cell)
+``goal_dist``         distance [m] from its end to the local goal: the window's     480 /m
                       last point, ``lookahead`` ahead (DWB GoalDist, 24 per cell)
-``path_align``        ``path_dist`` of the point ``forward_point_distance``        640 /m
-                      ahead of its end (DWB PathAlign)
-``goal_align``        ``goal_dist`` of that point (DWB GoalAlign)                 480 /m
-``costmap``           mean over its steps of the costmap cost / 252 (DWB           3000
+``path_align``        ``path_dist`` of the point ``forward_point_distance`` ahead   640 /m
+                      of its end (DWB PathAlign)
+``goal_align``        ``goal_dist`` of that point (DWB GoalAlign)                   480 /m
+``costmap``           mean over its steps of the costmap cost / 252 (DWB            3000
                       BaseObstacle; see below)
-``obstacle``          mean over its steps of (r_infl − c)², c the footprint's      320 /m²
+``obstacle``          mean over its steps of (r_infl − c)², c the footprint's       320 /m²
                       clearance on the static map, as MPPI's (half ``path_dist``,
                       MPPI's balance)
-``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /       5000 /m²
-                      steps, g the scaled gap, against the tracks predicted
-                      at each step (shared with MPPI:
+``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /         5000 /m²
+                      steps, g the scaled gap, against the tracks predicted at
+                      each step (shared with MPPI:
                       :mod:`wheelbase.control.obstacle_critics`)
-``rotate_to_goal``    within the goal's position tolerance: |θ_end − θ_goal|       32 /rad
-                      [rad] (+ ``slowing_factor``·v² while still slowing down)
-====================  ==========================================================  ==========
+``rotate_to_goal``    within the goal's position tolerance: |θ_end − θ_goal| [rad]  32 /rad
+                      (+ ``slowing_factor``·v² while still slowing down)
+====================  ============================================================  ========
 
 Two defaults were set on the cases of ``tests/test_dwa.py``, not taken from Nav2: ``costmap``
 (DWB's BaseObstacle scale, 0.02 per cost unit summed over the 9 poses of its default
@@ -54,7 +54,7 @@ barred until the robot has moved ``oscillation_reset_distance`` or turned
 robot first slows down (|v| below the current |v|), then, once it can stop within a period,
 turns in place (v = 0) to the goal heading. When no legal trajectory is free of collision the
 legality rules are dropped; when none is free of collision at all the command is a stop
-(0, 0) and :attr:`DWA.status` is ``"all_collide"``: it never drives on blindly. Within both
+(0, 0) and :attr:`DWAPlan.status` is ``"all_collide"``: it never drives on blindly. Within both
 goal tolerances the command is a stop and the status ``"arrived"``.
 
 Backends: ``numba`` (the default, one parallel compiled loop over the samples) and ``numpy``

@@ -16,7 +16,7 @@ ICRA 2017; the form of Nav2's MPPI controller):
 6. U ← Savitzky–Golay(Σ w_i V_i) along the horizon, clipped; the command is U[0].
 
 When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
-warm start is cleared and :attr:`MPPI.status` is ``"all_collide"``.
+warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"``.
 
 With a ``perception=`` view (a :class:`wheelbase.perception.LocalView`: costmap, tracks of
 moving obstacles, time) the critics also score the costmap and the tracks predicted over the
@@ -183,7 +183,7 @@ class MPPI:
         Spacing [m] of the densified path the path critics use.
     goal_tolerance : (float, float)
         (position [m], heading [rad]): within both of the path's end the command is a stop and
-        :attr:`status` is ``"arrived"``.
+        :attr:`MPPIPlan.status` is ``"arrived"``.
     cusp_tolerance : float
         Distance [m] to a cusp at which the next path section becomes active.
     jax_float64 : bool
@@ -473,7 +473,7 @@ class MPPI:
         noise : array_like, shape (K, T, m), optional
             The perturbations ε to use instead of drawing them (cross-backend checks).
         perception : LocalView, optional
-            Costmap, tracks and time (see :meth:`__call__`).
+            Costmap, tracks and time (see ``MPPI.__call__``).
         t : float, optional
             The time [s] of the call (default: the view's time: no latency).
 

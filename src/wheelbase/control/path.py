@@ -6,16 +6,16 @@ as points in the order of travel with a direction (+1 forward, −1 reverse) per
 runs of one direction are *sections*, joined at cusps (as in the paths of Hybrid A*, document
 002). Four followers share one machinery:
 
-=========================  ==================================================================
-:class:`SegmentFollower`   reference path control of document 002 / Klančar et al. §3.2.3:
-                           segment progress u, normalised lateral offset d, φ_ref =
-                           φ_line + atan(K_r·d), ω = K_φ·wrap(φ_ref − φ)
-:class:`PurePursuit`       Coulter 1992: κ = 2 sin α / ℓ to a look-ahead point ℓ = k_v·v + ℓ_min
-                           ahead along the path
-:class:`Stanley`           Hoffmann et al. 2007: δ = θ_e + atan(k·e/(k_s + v)) at the front axle
-:class:`RearWheelFeedback` Samson 1993 / Paden et al. 2016 §V.B: ω = vκcos θ_e/(1 − κe)
-                           − K_θ|v|θ_e − K_e·v·(sin θ_e/θ_e)·e
-=========================  ==================================================================
+==========================  ==================================================================
+:class:`SegmentFollower`    reference path control of document 002 / Klančar et al. §3.2.3:
+                            segment progress u, normalised lateral offset d, φ_ref =
+                            φ_line + atan(K_r·d), ω = K_φ·wrap(φ_ref − φ)
+:class:`PurePursuit`        Coulter 1992: κ = 2 sin α / ℓ to a look-ahead point ℓ = k_v·v + ℓ_min
+                            ahead along the path
+:class:`Stanley`            Hoffmann et al. 2007: δ = θ_e + atan(k·e/(k_s + v)) at the front axle
+:class:`RearWheelFeedback`  Samson 1993 / Paden et al. 2016 §V.B: ω = vκcos θ_e/(1 − κe)
+                            − K_θ|v|θ_e − K_e·v·(sin θ_e/θ_e)·e
+==========================  ==================================================================
 
 How it works. Each follower keeps, per robot, the index of its active segment; the segment
 advances when the progress u = (P − A)·(B − A)/|B − A|² of the reference point P reaches 1

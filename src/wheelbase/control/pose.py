@@ -6,15 +6,15 @@ origin facing +x, the robot at (x, y) with heading θ. Document 002 lists the la
 reference pose", "… via an intermediate point", "… via an intermediate direction", "control by
 a straight line and a circular arc"); the formulas are those of its references:
 
-=====================  ===========================================================  ==========
-class                  law                                                          source
-=====================  ===========================================================  ==========
-:class:`PolarPose`     v = k_ρ ρ, ω = k_α α + k_β β in polar coordinates            [SN] §3.6.2
-:class:`Aicardi`       Lyapunov law on (e, α, θ)                                    [A95]
-:class:`ViaPoint`      go-to-point to T = goal − r·(cos θ_g, sin θ_g), then goal    [K] §3.2.2
-:class:`ViaDirection`  heading φ_T + α if |α| < |β| = atan(r/D), else φ_T + β·sgn α  [K] §3.2.2
-:class:`LineArc`       a line tangent to a circle through the goal, then the arc    [K] §3.2.2
-=====================  ===========================================================  ==========
+=====================  =============================================================  ==========
+class                  law                                                            source
+=====================  =============================================================  ==========
+:class:`PolarPose`     v = k_ρ ρ, ω = k_α α + k_β β in polar coordinates              [SN] §3.6.2
+:class:`Aicardi`       Lyapunov law on (e, α, θ)                                      [A95]
+:class:`ViaPoint`      go-to-point to T = goal − r·(cos θ_g, sin θ_g), then goal      [K] §3.2.2
+:class:`ViaDirection`  heading φ_T + α if |α| < |β| = atan(r/D), else φ_T + β·sgn α   [K] §3.2.2
+:class:`LineArc`       a line tangent to a circle through the goal, then the arc      [K] §3.2.2
+=====================  =============================================================  ==========
 
 [SN] Siegwart, Nourbakhsh & Scaramuzza, *Introduction to Autonomous Mobile Robots*, 2011.
 [A95] Aicardi, Casalino, Bicchi & Balestrino, "Closed loop steering of unicycle-like vehicles

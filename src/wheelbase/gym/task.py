@@ -8,6 +8,12 @@ moves the robots (its command hook), and the new poses are judged by the engine'
 objects: :class:`~wheelbase.sim.Arrival` (the one arrival rule) and the footprint collision
 check; then the lidar (:class:`~wheelbase.sensors.Lidar`) scans all N new poses in one call.
 
+With ``world=`` (a scenario's ``world`` section, :func:`wheelbase.world.world_from_spec`) every
+robot has a world of its own, seeded by its episode: obstacles off the map and agents that
+move as the robot does, that the lidar sees (:meth:`wheelbase.world.World.cast`) and that the
+robot collides with. The policy sees them through the lidar only; agents never spawn on the
+episode's start or goal.
+
 Observation (float32, flat, length ``beams + 5``)
     ``ranges / max_range`` (``beams`` values in [0, 1]; NaN readings below ``min_range`` read
     0), ``distance to goal / goal_scale`` (in [0, 1]; ``goal_scale`` is the map's diagonal),
@@ -163,6 +169,9 @@ class NavigateTask:
         Extra distance [m] between a sampled pose's footprint circle and obstacles.
     rewards : RewardWeights, optional
         Weights of the reward terms.
+    world : dict, optional
+        A scenario's ``world`` section: obstacles off the map and agents, one world per
+        robot (module docstring).
     """
 
     def __init__(
@@ -180,6 +189,7 @@ class NavigateTask:
         min_goal_distance: float = 1.0,
         clearance: float = 0.1,
         rewards: RewardWeights | None = None,
+        world: Any = None,
     ) -> None:
         self.n = integer("num_envs", n, minimum=1)
         self.grid = _grid(map)
@@ -238,6 +248,12 @@ class NavigateTask:
         rows, cols = self.grid.shape
         self.goal_scale = float(math.hypot(rows, cols) * self.grid.resolution)
         self.observation_size = self.lidar.beams + 5
+        self.world = None
+        if world is not None:
+            from wheelbase.world import world_from_spec
+
+            self.world = world_from_spec(world, self.grid)
+        self.world_state: Any = None
         self.state: EngineState | None = None
         self.goal = np.zeros((self.n, 3))
         self.elapsed = np.zeros(self.n, dtype=np.int64)
@@ -292,6 +308,8 @@ class NavigateTask:
         hit = self.grid.in_collision(self.footprint, start) | ~self.grid.contains(start[:, :2])
         if hit.any():
             raise InputError(f"start pose {start[np.argmax(hit)].tolist()} is in collision")
+        if self.world is not None:
+            self._restart_worlds(index, start, goal)
         fresh = self.engine.reset(start)
         if self.state is None:
             if index.size != self.n:
@@ -310,8 +328,45 @@ class NavigateTask:
         self.distance[index] = np.hypot(*(goal[:, :2] - start[:, :2]).T)
         self.ranges[index] = self._scan(start)
 
+    def _restart_worlds(self, index: np.ndarray, start, goal) -> None:
+        """New worlds for robots ``index``: agents placed clear of their start and goal, the
+        world's seed drawn from where the episode starts (reproducible with the episode)."""
+        from dataclasses import replace
+
+        keep = np.stack(
+            [np.column_stack([start[:, :2], np.full(len(start), self.footprint.max_radius + 0.1)]),
+             np.column_stack([goal[:, :2], np.full(len(goal), self.footprint.max_radius + 0.1)])],
+            axis=1,
+        )  # fmt: skip
+        seeds = np.abs(np.round(start[:, :2] * 1e6).astype(np.int64)).sum(axis=1) % (2**62)
+        fresh = self.world.start(seeds, keep, ("the start", "the goal"))
+        touching = self.world.collisions(
+            start, self.footprint, np.arange(len(start)), fresh, None, None
+        )
+        if touching.any():
+            raise InputError(
+                f"start pose {start[np.argmax(touching)].tolist()} touches an obstacle of the world"
+            )
+        if self.world_state is None:
+            if index.size != self.n:
+                raise InputError("the first reset starts every robot")
+            self.world_state = fresh
+            return
+        arrays = {}
+        for item in fields(fresh):
+            value = np.array(getattr(self.world_state, item.name))
+            value[index] = getattr(fresh, item.name)
+            arrays[item.name] = value
+        self.world_state = replace(self.world_state, **arrays)
+
     def _scan(self, poses: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
-        ranges = self.lidar.scan(self.grid, poses, rng, noise=rng is not None)
+        if self.world is not None and self.world_state is not None and len(poses) == self.n:
+            sensor = self.lidar.sensor_poses(poses)
+            true = self.world.cast(sensor, self.lidar.beam_angles, self.lidar.max_range,
+                                   np.arange(self.n), self.world_state)  # fmt: skip
+            ranges = self.lidar.readings(true, rng, noise=rng is not None)
+        else:
+            ranges = self.lidar.scan(self.grid, poses, rng, noise=rng is not None)
         return np.nan_to_num(ranges, nan=0.0).reshape(-1, self.lidar.beams)
 
     def step(
@@ -322,7 +377,7 @@ class NavigateTask:
         Parameters
         ----------
         action : numpy.ndarray, shape (N, 2)
-            Actions in [−1, 1] (checked by :func:`check_actions`).
+            Actions in [−1, 1] (checked by ``check_actions``).
         rng : numpy.random.Generator
             Randomness of the lidar noise.
 
@@ -336,6 +391,16 @@ class NavigateTask:
         state, _ = self.engine.step(self.state, action * self.action_scale)
         pose = state.pose
         collided = self.grid.in_collision(self.footprint, pose)
+        if self.world is not None:
+            from wheelbase.world import RobotBodies
+
+            c, s = np.cos(self.state.pose[:, 2]), np.sin(self.state.pose[:, 2])
+            velocity = np.column_stack([c * self.state.twist[:, 0], s * self.state.twist[:, 0]])
+            bodies = RobotBodies(self.state.pose[:, None], velocity[:, None], self.footprint)
+            self.world_state = self.world.step(self.world_state, self.dt, bodies)
+            collided |= self.world.collisions(
+                pose, self.footprint, np.arange(self.n), self.world_state, None, None
+            )
         arrived = self.arrival.within(pose, self.goal) & self.arrival.at_rest(state.twist)
         arrived &= ~collided
         distance = np.hypot(pose[:, 0] - self.goal[:, 0], pose[:, 1] - self.goal[:, 1])

@@ -74,6 +74,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import check_choice
+from wheelbase.datasets.mrclam import (
+    MrclamData,
+    MrclamMeasurements,
+    find_mrclam_files,
+    load_groundtruth,
+    load_landmarks,
+    load_measurements,
+    load_mrclam,
+)
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import compose, inverse_pose, relative_pose, wrap_angle
 from wheelbase.localization.amcl import AMCL
@@ -82,20 +91,14 @@ from wheelbase.localization.kalman import KalmanFilter
 from wheelbase.localization.motion import VelocityMotion, arc_move
 from wheelbase.localization.ukf import UKF
 from wheelbase.odometry.dead_reckoning import dead_reckon
-from wheelbase.odometry.mrclam import MrclamData, load_mrclam
 
 __all__ = [
     "FILTERS",
     "MRCLAM_PARAMETERS",
     "CameraRange",
     "LocalizationResult",
-    "MrclamLandmarks",
-    "MrclamMeasurements",
     "Sightings",
     "correlated_inflation",
-    "find_mrclam_files",
-    "load_landmarks",
-    "load_measurements",
     "localize",
     "position_nees",
 ]
@@ -182,160 +185,6 @@ ground truth (the motion noise is set above its fit, see the comment there); the
 is the lag of :func:`wheelbase.odometry.yaw_rate_fit` on that robot. Nothing here was tuned
 per robot: the camera's range scale, which differs from camera to camera, is estimated
 online."""
-
-
-@dataclass(frozen=True)
-class MrclamLandmarks:
-    """The landmarks of a data set.
-
-    Attributes
-    ----------
-    subjects : numpy.ndarray, shape (L,)
-        Subject numbers (6–20).
-    xy : numpy.ndarray, shape (L, 2)
-        Positions [m] from the Vicon survey.
-    """
-
-    subjects: np.ndarray
-    xy: np.ndarray
-
-
-@dataclass(frozen=True)
-class MrclamMeasurements:
-    """One robot's landmark measurements, identities resolved.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (K,)
-        Times [s].
-    landmark : numpy.ndarray, shape (K,)
-        Row of the landmark array, or −1 for a barcode that names no subject.
-    z : numpy.ndarray, shape (K, 2)
-        (range [m], bearing [rad]).
-    robot_sightings : int
-        Measurements of other robots, left out.
-    moved : numpy.ndarray or None, shape (K, 3)
-        How far the robot moved (x [m], y [m], θ [rad] in the frame of the pose the image was
-        taken at) between taking the image and the time stamp (set by :func:`localize`).
-    """
-
-    t: np.ndarray
-    landmark: np.ndarray
-    z: np.ndarray
-    robot_sightings: int
-    moved: np.ndarray | None = None
-
-
-def _table(path: Path, columns: int, what: str) -> np.ndarray:
-    if not path.is_file():
-        raise DataError(f"{what} file not found: {path}")
-    try:
-        data = np.loadtxt(path, comments="#", ndmin=2)
-    except ValueError as error:
-        raise DataError(f"{what} file {path} is malformed: {error}") from None
-    if data.size == 0:
-        return np.zeros((0, columns))
-    if data.shape[1] != columns or not np.all(np.isfinite(data)):
-        raise DataError(f"{what} file {path} must hold {columns} finite columns (got {data.shape})")
-    return data
-
-
-def find_mrclam_files(data_dir: str | Path, robot: int) -> dict[str, Path]:
-    """The files of one robot in a data set's folder, with or without the data set's prefix.
-
-    Parameters
-    ----------
-    data_dir : str or Path
-        The folder.
-    robot : int
-        Robot number, 1–5.
-
-    Returns
-    -------
-    dict
-        Paths under the keys ``odometry``, ``groundtruth``, ``measurement``, ``barcodes``,
-        ``landmarks``.
-
-    Raises
-    ------
-    DataError
-        A missing folder or file, or two candidates for one file.
-    """
-    folder = Path(data_dir)
-    if not folder.is_dir():
-        raise DataError(f"MRCLAM folder not found: {folder}")
-    if isinstance(robot, bool) or not isinstance(robot, int | np.integer) or not 1 <= robot <= 5:
-        raise ConfigError(f"robot must be 1, 2, 3, 4 or 5 (got {robot!r})")
-    wanted = {
-        "odometry": f"Robot{robot}_Odometry.dat",
-        "groundtruth": f"Robot{robot}_Groundtruth.dat",
-        "measurement": f"Robot{robot}_Measurement.dat",
-        "barcodes": "Barcodes.dat",
-        "landmarks": "Landmark_Groundtruth.dat",
-    }
-    found = {}
-    for key, name in wanted.items():
-        matches = sorted(
-            p for p in folder.iterdir() if p.name == name or p.name.endswith("_" + name)
-        )
-        if not matches:
-            raise DataError(f"{folder} holds no {name} (nor *_{name}) for robot {robot}")
-        if len(matches) > 1:
-            names = ", ".join(p.name for p in matches)
-            raise DataError(f"{folder} holds several files for {name}: {names}")
-        found[key] = matches[0]
-    return found
-
-
-def load_landmarks(path: str | Path) -> MrclamLandmarks:
-    """Read ``Landmark_Groundtruth.dat``.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file: subject, x [m], y [m], σ_x [m], σ_y [m].
-
-    Returns
-    -------
-    MrclamLandmarks
-    """
-    data = _table(Path(path), 5, "landmark")
-    if data.shape[0] == 0:
-        raise DataError(f"landmark file {path} holds no landmark")
-    return MrclamLandmarks(data[:, 0].astype(np.int64), data[:, 1:3].copy())
-
-
-def load_measurements(
-    measurement_path: str | Path, barcodes_path: str | Path, landmarks: MrclamLandmarks
-) -> MrclamMeasurements:
-    """Read a robot's measurements and resolve their barcodes to landmark rows.
-
-    Parameters
-    ----------
-    measurement_path : str or Path
-        ``RobotN_Measurement.dat``: time [s], barcode, range [m], bearing [rad].
-    barcodes_path : str or Path
-        ``Barcodes.dat``: subject, barcode.
-    landmarks : MrclamLandmarks
-        The landmarks (subjects 6–20).
-
-    Returns
-    -------
-    MrclamMeasurements
-        Sorted by time; other robots' sightings removed and counted.
-    """
-    data = _table(Path(measurement_path), 4, "measurement")
-    codes = _table(Path(barcodes_path), 2, "barcode").astype(np.int64)
-    subject_of = {int(code): int(subject) for subject, code in codes}
-    row_of = {int(s): i for i, s in enumerate(landmarks.subjects)}
-    subjects = np.array([subject_of.get(round(b), -1) for b in data[:, 1]], dtype=np.int64)
-    robots = (subjects >= 1) & (subjects <= 5)
-    data, subjects = data[~robots], subjects[~robots]
-    rows = np.array([row_of.get(int(s), -1) for s in subjects], dtype=np.int64)
-    order = np.argsort(data[:, 0], kind="stable")
-    return MrclamMeasurements(
-        data[order, 0], rows[order], data[order][:, 2:4].copy(), int(robots.sum())
-    )
 
 
 @dataclass
@@ -850,8 +699,7 @@ def _resample_odometry(
     at grid time τ the yaw rate logged at τ − ``lag`` and the speed logged at τ −
     ``speed_lag`` (zero-order holds), with the ground truth interpolated to τ (grid times
     outside the ground truth dropped)."""
-    truth = _table(Path(groundtruth), 4, "ground-truth")
-    truth = truth[np.argsort(truth[:, 0], kind="stable")]
+    truth = load_groundtruth(groundtruth)
     t = np.arange(data.t[0] + max(lag, speed_lag), data.t[-1] + lag, RESAMPLE_STEP_S)
     t = t[(t >= truth[0, 0]) & (t <= truth[-1, 0])]
     if t.size < 2:

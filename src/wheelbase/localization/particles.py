@@ -3,15 +3,16 @@
 Low-variance resampling (Thrun, Burgard and Fox, Table 4.4)
     One random offset r ∈ [0, 1/n) and the n points r + k/n on the cumulative weights pick the
     new particles: O(n), and a set of equal weights comes back unchanged.
-KLD sampling (Fox, "Adapting the sample size in particle filters through KLD-sampling", IJRR
-2003; the book's Table 8.4)
-    With k histogram bins occupied by the particles, n = (k − 1)/(2ε)·(1 − 2/(9(k − 1)) +
-    √(2/(9(k − 1)))·z_{1−δ})³ particles keep the KL divergence between the particle set and the
-    true posterior below ε with probability 1 − δ. Fox draws particles one by one until n
-    exceeds the bound for the bins they fill; here the bound is met for the *expected* number of
-    bins that n draws from the weighted set fill, k(n) = Σ_b 1 − (1 − w_b)^n (w_b the weight in
-    bin b), which fixes n before one low-variance pass draws them. (Nav2 passes its ``pf_z`` =
-    0.99 as z itself; here z = Φ⁻¹(1 − δ), 2.33 for δ = 0.01.)
+KLD sampling
+    (Fox, "Adapting the sample size in particle filters through KLD-sampling", IJRR 2003;
+    the book's Table 8.4.) With k histogram bins occupied by the particles, n = (k −
+    1)/(2ε)·(1 − 2/(9(k − 1)) + √(2/(9(k − 1)))·z_{1−δ})³ particles keep the KL divergence
+    between the particle set and the true posterior below ε with probability 1 − δ. Fox
+    draws particles one by one until n exceeds the bound for the bins they fill; here the
+    bound is met for the *expected* number of bins that n draws from the weighted set fill,
+    k(n) = Σ_b 1 − (1 − w_b)^n (w_b the weight in bin b), which fixes n before one
+    low-variance pass draws them. (Nav2 passes its ``pf_z`` = 0.99 as z itself; here z =
+    Φ⁻¹(1 − δ), 2.33 for δ = 0.01.)
 Clusters
     The occupied bins (x, y, θ), connected through faces, edges and corners and across the ±π
     cut, form clusters, as the k-d tree of Nav2's AMCL does; each has its weight, weighted mean

@@ -192,18 +192,18 @@ def _inverse_observe(pose, c, kappa, z):
 
 def _prepare(data_dir, robot, p):
     """The MRCLAM recording on the filters' grid, as :func:`localize` prepares it."""
+    from wheelbase.datasets import mrclam as reader
     from wheelbase.localization import mrclam as lm
     from wheelbase.odometry.dead_reckoning import dead_reckon
-    from wheelbase.odometry.mrclam import load_mrclam
 
-    files = lm.find_mrclam_files(data_dir, robot)
-    data = load_mrclam(files["odometry"], files["groundtruth"])
+    files = reader.find_mrclam_files(data_dir, robot)
+    data = reader.load_mrclam(files["odometry"], files["groundtruth"])
     data = lm._resample_odometry(data, files["groundtruth"], p["odometry_lag_s"],
                                  p["speed_lag_s"])  # fmt: skip
-    landmarks = lm.load_landmarks(files["landmarks"])
-    meas = lm.load_measurements(files["measurement"], files["barcodes"], landmarks)
+    landmarks = reader.load_landmarks(files["landmarks"])
+    meas = reader.load_measurements(files["measurement"], files["barcodes"], landmarks)
     inside = (meas.t >= data.t[0]) & (meas.t <= data.t[-1])
-    meas = lm.MrclamMeasurements(meas.t[inside], meas.landmark[inside], meas.z[inside],
+    meas = reader.MrclamMeasurements(meas.t[inside], meas.landmark[inside], meas.z[inside],
                                  meas.robot_sightings)  # fmt: skip
     odom = dead_reckon(data.t, data.v, data.omega, data.true_pose[0])
     moved = relative_pose(lm._odometry_at(data, odom, meas.t - p["camera_lag_s"]),

@@ -21,9 +21,11 @@ For each scan, in time order:
    Each candidate's submap (its neighbours along the path) is searched by branch and bound
    over the wide window ``loop_linear_window`` × ``loop_angular_window`` around the current
    estimate, pruned below ``loop_min_score``; a found pose is refined by ICP and gated: at least
-   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance and an RMS
-   point-to-line distance at most ``loop_max_rms``. An accepted closure is an edge between
-   the candidate and the current keyframe, and the graph is optimised
+   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance, an RMS
+   point-to-line distance at most ``loop_max_rms``, and a correction of the current estimate
+   within ``loop_max_correction`` of the path driven since the candidate. An accepted
+   closure is an edge between the candidate and the current keyframe, and the graph is
+   optimised
    (:func:`optimize_pose_graph`, dynamic covariance scaling on the loop edges against false
    closures). The scans after the last keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
@@ -71,6 +73,9 @@ class LidarSlam:
     prior_std : tuple of float
         Standard deviations of the prediction as a prior of the match (translation [m],
         rotation [rad]).
+    odometry_gate : tuple of float
+        With odometry, a match farther than this from the odometry's prediction (translation
+        [m], rotation [rad]) is not believed: the prediction is kept (``failed_matches``).
     keyframe_distance, keyframe_angle : float
         Motion that makes a keyframe [m], [rad].
     submap_keyframes : int
@@ -99,6 +104,10 @@ class LidarSlam:
         Keyframes on each side of a candidate in its submap.
     loop_std : tuple of float
         Standard deviations of a loop edge (x [m], y [m], θ [rad]).
+    loop_max_correction : tuple of float
+        A closure may move the current keyframe by at most a + b·(path length between the
+        candidate and it) [m, m/m]: drift grows with the distance driven, and a repetitive
+        building (a maze's corridors) offers twins farther than that.
     robust_scale : float
         Φ of dynamic covariance scaling on the loop edges.
     optimize_every : int
@@ -113,6 +122,7 @@ class LidarSlam:
     max_range: float = 30.0
     min_score: float = 0.2
     prior_std: tuple[float, float] = (0.2, math.radians(15.0))
+    odometry_gate: tuple[float, float] = (0.05, math.radians(2.0))
     keyframe_distance: float = 0.2
     keyframe_angle: float = math.radians(10.0)
     submap_keyframes: int = 12
@@ -129,6 +139,7 @@ class LidarSlam:
     loop_max_rms: float = 0.05
     loop_submap: int = 6
     loop_std: tuple[float, float, float] = (0.05, 0.05, math.radians(1.0))
+    loop_max_correction: tuple[float, float] = (0.5, 0.1)
     robust_scale: float = 1.0
     optimize_every: int = 1
     mapper: OccupancyMapper = field(default_factory=OccupancyMapper)
@@ -198,10 +209,9 @@ class LidarSlam:
 
         def rebuild_submap():
             first_kf = max(0, len(kf_scan) - self.submap_keyframes)
-            world = np.vstack([_transform(kf_pose[k], points[kf_scan[k]])
-                               for k in range(first_kf, len(kf_scan))])  # fmt: skip
-            return (LikelihoodTable.build(world, self.matcher.resolution, self.matcher.sigma),
-                    PointReference.build(world))  # fmt: skip
+            keys = range(first_kf, len(kf_scan))
+            world = np.vstack([_transform(kf_pose[k], points[kf_scan[k]]) for k in keys])
+            return self._tables(world)
 
         def add_keyframe(scan: int, p: np.ndarray, cov: np.ndarray | None) -> None:
             kf_scan.append(scan)
@@ -229,8 +239,15 @@ class LidarSlam:
                 table, reference = rebuild_submap()
                 cov = None
             else:
+                # the same window with odometry: a narrower one (±0.3 m, ±10°, prior 5 cm)
+                # was measured worse on the maze (ATE 0.095 m against 0.016 m)
                 result = self.matcher.match(table, reference, points[k], guess,
                                             prior_std=self.prior_std)  # fmt: skip
+                if result is not None and odometry is not None:
+                    jump = relative_pose(guess, result.pose)
+                    if (np.hypot(jump[0], jump[1]) > self.odometry_gate[0]
+                            or abs(jump[2]) > self.odometry_gate[1]):  # fmt: skip
+                        result = None  # farther from the odometry than it drifts in a scan
                 if result is None or result.score < self.min_score:
                     stats["failed_matches"] += 1
                     pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
@@ -316,6 +333,13 @@ class LidarSlam:
         return self.mapper.build(poses, log.ranges, log.angles, mount=log.mount,
                                  sensor_max_range=log.max_range, **kwargs)  # fmt: skip
 
+    def _tables(self, world):
+        """The matcher's tables of a submap's points. (Penalising the points that land in
+        the free space the submap's scans saw was measured worse on Intel: local relations
+        0.061 m against 0.056 m, loop relations 2.9 m against 1.7 m.)"""
+        table = LikelihoodTable.build(world, self.matcher.resolution, self.matcher.sigma)
+        return table, PointReference.build(world)
+
     def _edge_information(self, cov: np.ndarray, theta: float) -> np.ndarray:
         """Ω of an edge from a world-frame covariance of the new pose: rotated into the pose's
         frame (that of the residual Log(Z⁻¹X_i⁻¹X_j)), floored at ``min_std``."""
@@ -349,10 +373,9 @@ class LidarSlam:
             stats["loop_candidates"] += 1
             lo, hi = max(0, c - self.loop_submap), min(j - self.loop_min_separation,
                                                        c + self.loop_submap)  # fmt: skip
-            world = np.vstack([_transform(kf_pose[i], points[kf_scan[i]])
-                               for i in range(lo, hi + 1)])  # fmt: skip
-            table = LikelihoodTable.build(world, matcher.resolution, matcher.sigma)
-            reference = PointReference.build(world)
+            keys = range(lo, hi + 1)
+            world = np.vstack([_transform(kf_pose[i], points[kf_scan[i]]) for i in keys])
+            table, reference = self._tables(world)
             found = matcher.match(table, reference, points[kf_scan[j]], current,
                                   linear_window=self.loop_linear_window,
                                   angular_window=self.loop_angular_window,

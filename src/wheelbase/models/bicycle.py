@@ -6,10 +6,10 @@ has no lateral component (v = 0 in ζ = (u, v, r)).
 
 Steering limits. ``max_steering`` (0 < max_steering < π/2) is a mechanical stop: a steering
 input beyond it, but still inside (−π/2, π/2), is clipped to ±max_steering by the model (in
-:meth:`twist`, :meth:`icc_radius` and the Ackermann wheel angles), as a real steering rack would
+``twist``, ``icc_radius`` and the Ackermann wheel angles), as a real steering rack would
 stop there. A steering input with |steering| >= π/2 is not a steering angle at all (the wheel
 would be across or behind its axle) and raises :class:`~wheelbase.errors.InputError`, as does
-asking :meth:`inverse` for a turn that needs more steering than ``max_steering``.
+asking ``inverse`` for a turn that needs more steering than ``max_steering``.
 """
 
 from __future__ import annotations

@@ -30,13 +30,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
         unwrap_ticks,
     )
     from wheelbase.odometry.error_model import OdometryErrors
-    from wheelbase.odometry.mrclam import (
-        MrclamData,
-        command_response,
-        dead_reckoning_errors,
-        load_mrclam,
-        yaw_rate_fit,
-    )
+    from wheelbase.odometry.mrclam import command_response, dead_reckoning_errors, yaw_rate_fit
 
 _EXPORTS = {
     "UMBmarkCalibration": "wheelbase.odometry.calibration",
@@ -59,9 +53,7 @@ _EXPORTS = {
     "ticks_to_rpm": "wheelbase.odometry.encoder",
     "unwrap_ticks": "wheelbase.odometry.encoder",
     "OdometryErrors": "wheelbase.odometry.error_model",
-    "MrclamData": "wheelbase.odometry.mrclam",
     "dead_reckoning_errors": "wheelbase.odometry.mrclam",
-    "load_mrclam": "wheelbase.odometry.mrclam",
     "yaw_rate_fit": "wheelbase.odometry.mrclam",
     "command_response": "wheelbase.odometry.mrclam",
 }
@@ -71,7 +63,6 @@ __all__ = [
     "DEAD_RECKONING_METHODS",
     "CurvyDrive",
     "Encoder",
-    "MrclamData",
     "OdometryErrors",
     "UMBmarkCalibration",
     "UMBmarkCorrection",
@@ -83,7 +74,6 @@ __all__ = [
     "dead_reckoning_errors",
     "drift_table",
     "integrate_increments",
-    "load_mrclam",
     "pose_increment",
     "rad_per_s_to_rpm",
     "rpm_to_rad_per_s",

@@ -1,141 +1,25 @@
 """Real odometry against motion capture: the UTIAS MRCLAM dataset (Leung et al., IJRR 2011).
 
-The files of one robot (e.g. ``Dataset6_Robot1_Odometry.dat`` and ``…_Groundtruth.dat``) hold,
-after ``#`` comment lines,
-
-- odometry: time [s], forward velocity [m/s], angular velocity [rad/s] at about 100 Hz (the
-  robot's wheel-encoder odometry, already turned into v and ω);
-- ground truth: time [s], x [m], y [m], orientation [rad] from a Vicon system.
-
-:func:`load_mrclam` aligns them: odometry samples outside the ground-truth span are dropped and
-the ground truth is interpolated linearly to the odometry times, the heading through
-``numpy.unwrap`` so that interpolation never crosses the ±π cut. :func:`dead_reckoning_errors`
-dead-reckons windows of given lengths from several start times, each started from the true pose,
-and measures the error at the end of the window.
+The records come from :func:`wheelbase.datasets.mrclam.load_mrclam` (odometry and ground truth
+aligned on the odometry times). :func:`dead_reckoning_errors` dead-reckons windows of given
+lengths from several start times, each started from the true pose, and measures the error at
+the end of the window; :func:`yaw_rate_fit` and :func:`command_response` compare the logged
+command with the motion the robot made.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from wheelbase._validate import check_choice, positive
+from wheelbase.datasets.mrclam import MrclamData
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import wrap_angle
 from wheelbase.odometry.dead_reckoning import DEAD_RECKONING_METHODS, dead_reckon
 
-__all__ = [
-    "MrclamData",
-    "command_response",
-    "dead_reckoning_errors",
-    "load_mrclam",
-    "yaw_rate_fit",
-]
-
-
-@dataclass(frozen=True)
-class MrclamData:
-    """Time-aligned odometry and ground truth of one MRCLAM robot.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-        Odometry times [s] (Unix time, as in the files), strictly increasing.
-    v : numpy.ndarray, shape (T,)
-        Odometry forward velocity [m/s], held until the next sample.
-    omega : numpy.ndarray, shape (T,)
-        Odometry yaw rate [rad/s], held until the next sample.
-    true_pose : numpy.ndarray, shape (T, 3)
-        Ground truth (x [m], y [m], θ [rad]) interpolated to ``t``.
-    """
-
-    t: np.ndarray
-    v: np.ndarray
-    omega: np.ndarray
-    true_pose: np.ndarray
-
-    @property
-    def duration(self) -> float:
-        """Time covered [s]."""
-        return float(self.t[-1] - self.t[0])
-
-    def window(self, start: float, length: float) -> MrclamData:
-        """The samples with ``start <= t − t[0] <= start + length`` (times in seconds).
-
-        Parameters
-        ----------
-        start : float
-            Start of the window, relative to the first sample [s].
-        length : float
-            Length of the window [s], > 0.
-        """
-        rel = self.t - self.t[0]
-        keep = (rel >= start) & (rel <= start + positive("length", length, "s"))
-        if keep.sum() < 2:
-            raise DataError(f"the window [{start:g}, {start + length:g}] s holds < 2 samples")
-        return MrclamData(self.t[keep], self.v[keep], self.omega[keep], self.true_pose[keep])
-
-
-def _read(path: str | Path, columns: int, what: str) -> np.ndarray:
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{what} file not found: {path}")
-    try:
-        data = np.loadtxt(path, comments="#", ndmin=2)
-    except ValueError as error:
-        raise DataError(f"{what} file {path} is malformed: {error}") from None
-    if data.shape[1] != columns or data.shape[0] < 2:
-        raise DataError(
-            f"{what} file {path} must have {columns} columns and >= 2 rows (got {data.shape})"
-        )
-    if not np.all(np.isfinite(data)):
-        raise DataError(f"{what} file {path} holds non-finite values")
-    order = np.argsort(data[:, 0], kind="stable")
-    data = data[order]
-    keep = np.concatenate([[True], np.diff(data[:, 0]) > 0])  # drop repeated time stamps
-    return data[keep]
-
-
-def load_mrclam(odometry_path: str | Path, groundtruth_path: str | Path) -> MrclamData:
-    """Read one MRCLAM robot's odometry and ground truth, aligned on the odometry times.
-
-    Parameters
-    ----------
-    odometry_path : str or Path
-        ``…_Odometry.dat``: time [s], v [m/s], ω [rad/s].
-    groundtruth_path : str or Path
-        ``…_Groundtruth.dat``: time [s], x [m], y [m], θ [rad].
-
-    Returns
-    -------
-    MrclamData
-        Odometry samples within the ground-truth time span, with the ground truth linearly
-        interpolated to their times (heading unwrapped, interpolated, wrapped to (−π, π]).
-
-    Raises
-    ------
-    DataError
-        A missing or malformed file, or files whose times do not overlap.
-    """
-    odometry = _read(odometry_path, 3, "odometry")
-    truth = _read(groundtruth_path, 4, "ground-truth")
-    inside = (odometry[:, 0] >= truth[0, 0]) & (odometry[:, 0] <= truth[-1, 0])
-    if inside.sum() < 2:
-        raise DataError("the odometry and ground-truth files do not overlap in time")
-    odometry = odometry[inside]
-    t = odometry[:, 0]
-    heading = np.unwrap(truth[:, 3])
-    pose = np.column_stack(
-        [
-            np.interp(t, truth[:, 0], truth[:, 1]),
-            np.interp(t, truth[:, 0], truth[:, 2]),
-            wrap_angle(np.interp(t, truth[:, 0], heading)),
-        ]
-    )
-    return MrclamData(t=t, v=odometry[:, 1], omega=odometry[:, 2], true_pose=pose)
+__all__ = ["command_response", "dead_reckoning_errors", "yaw_rate_fit"]
 
 
 def dead_reckoning_errors(
@@ -149,7 +33,7 @@ def dead_reckoning_errors(
     Parameters
     ----------
     data : MrclamData
-        Aligned odometry and ground truth (:func:`load_mrclam`).
+        Aligned odometry and ground truth (:func:`wheelbase.datasets.mrclam.load_mrclam`).
     horizons : sequence of float
         Window lengths [s], > 0.
     n_starts : int

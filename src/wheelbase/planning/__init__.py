@@ -16,8 +16,19 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     from wheelbase.planning.dubins import dubins_candidates, dubins_length, dubins_path
     from wheelbase.planning.footprint import Footprint
     from wheelbase.planning.hybrid_astar import HybridAStar
-    from wheelbase.planning.maps import BUNDLED_MAPS, PlanningScenario, bundled_scenarios, load_map
-    from wheelbase.planning.movingai import MovingAIScenario, read_movingai_scenarios
+    from wheelbase.planning.map_io import read_image, read_ros_yaml, write_ros_yaml
+    from wheelbase.planning.maps import (
+        BUNDLED_MAPS,
+        PlanningScenario,
+        bundled_scenarios,
+        load_map,
+        load_world,
+    )
+    from wheelbase.planning.movingai import (
+        MovingAIScenario,
+        read_movingai_map,
+        read_movingai_scenarios,
+    )
     from wheelbase.planning.occupancy import OccupancyGrid
     from wheelbase.planning.path import CurvePath, PlannedPath, PlanningStats
     from wheelbase.planning.reeds_shepp import (
@@ -38,7 +49,12 @@ _EXPORTS = {
     "PlanningScenario": "wheelbase.planning.maps",
     "bundled_scenarios": "wheelbase.planning.maps",
     "load_map": "wheelbase.planning.maps",
+    "load_world": "wheelbase.planning.maps",
+    "read_image": "wheelbase.planning.map_io",
+    "read_ros_yaml": "wheelbase.planning.map_io",
+    "write_ros_yaml": "wheelbase.planning.map_io",
     "MovingAIScenario": "wheelbase.planning.movingai",
+    "read_movingai_map": "wheelbase.planning.movingai",
     "read_movingai_scenarios": "wheelbase.planning.movingai",
     "OccupancyGrid": "wheelbase.planning.occupancy",
     "CurvePath": "wheelbase.planning.path",
@@ -71,9 +87,14 @@ __all__ = [
     "dubins_length",
     "dubins_path",
     "load_map",
+    "load_world",
+    "read_image",
+    "read_movingai_map",
     "read_movingai_scenarios",
+    "read_ros_yaml",
     "reeds_shepp_candidates",
     "reeds_shepp_length",
     "reeds_shepp_path",
     "smooth_path",
+    "write_ros_yaml",
 ]

@@ -1,6 +1,6 @@
 """Numba kernels for footprint collision and clearance in a world of cells and convex pieces.
 
-A world reaches the kernels as one tuple (see :func:`_world_tuple`): an occupancy raster with its
+A world reaches the kernels as one tuple (see ``_world_tuple``): an occupancy raster with its
 distance field, the exact occupied cells (an :class:`~wheelbase.planning.OccupancyGrid`'s own,
 or none), and exact convex pieces (the triangles of polygons and the discs of a
 :class:`~wheelbase.planning.PolygonWorld`) filed in a uniform grid of buckets (the broad phase).
@@ -11,9 +11,9 @@ clear cases; a row-band scan with per-row prefix sums decides the cells exactly,
 axes (triangles) or a point-to-polygon distance (discs) decide the pieces found in the buckets
 under the footprint's bounding box. The clearance is the exact polygon-to-square and
 polygon-to-piece distance. The public entry points are the worlds' ``in_collision`` and
-``footprint_clearance``; Hybrid A* calls :func:`_collides_one` inside its compiled search.
+``footprint_clearance``; Hybrid A* calls ``_collides_one`` inside its compiled search.
 
-The per-pose kernels (:func:`_circles_clearance`, :func:`_collides_one` and what it calls) are
+The per-pose kernels (``_circles_clearance``, ``_collides_one`` and what it calls) are
 compiled without Numba's reference counting (``_nrt=False``): they allocate nothing (the caller
 passes scratch buffers) and keep no array, while with it every call took and released a
 reference, with an atomic instruction, to each array of the world tuple and each array
@@ -58,7 +58,7 @@ def _place_polygon(poly, x, y, th, out):
 @numba.njit(cache=True, inline="always")
 def _bounds(wp):
     """``(xmin, xmax, ymin, ymax)`` [m] of the vertices ``wp`` (loops, not ``wp[:, 0].min()``:
-    the exact check runs without reference counting, see :func:`_collides_one`)."""
+    the exact check runs without reference counting, see ``_collides_one``)."""
     xmin = xmax = wp[0, 0]
     ymin = ymax = wp[0, 1]
     for k in range(1, wp.shape[0]):
@@ -377,7 +377,7 @@ def _polygon_hits_pieces(world, wp, near):
 
 @numba.njit(cache=True)
 def _scratch(world, poly):
-    """Scratch buffers for :func:`_collides_one`: a placed polygon and the broad phase's list."""
+    """Scratch buffers for ``_collides_one``: a placed polygon and the broad phase's list."""
     return np.empty_like(poly), np.empty(world[_PIECES].shape[0], dtype=np.int64)
 
 
@@ -445,6 +445,18 @@ def _poly_piece_distance(wp, piece, nv, rad):
 
 @numba.njit(cache=True)
 def _clearance_batch(world, poly, circles, radius, poses):
+    wp, near = _scratch(world, poly)
+    out = np.empty(poses.shape[0])
+    for n in range(poses.shape[0]):
+        x, y, th = poses[n, 0], poses[n, 1], poses[n, 2]
+        out[n] = _clearance_one(world, poly, circles, radius, x, y, th, wp, near)
+    return out
+
+
+@numba.njit(cache=True)
+def _clearance_one(world, poly, circles, radius, x, y, th, wp, near):
+    """Distance [m] from the footprint ``poly`` at pose ``(x, y, th)`` to the nearest obstacle
+    (0 in collision; ``wp``, ``near``: scratch of :func:`_scratch`)."""
     occ = world[_OCC]
     dist = world[_DIST]
     res = world[_RES]
@@ -454,56 +466,49 @@ def _clearance_batch(world, poly, circles, radius, poses):
     pieces = world[_PIECES]
     nverts = world[_NVERTS]
     prad = world[_PRAD]
-    wp, near = _scratch(world, poly)
     rows, cols = occ.shape
-    out = np.empty(poses.shape[0])
     slack = math.sqrt(2.0) * res
-    for n in range(poses.shape[0]):
-        x, y, th = poses[n, 0], poses[n, 1], poses[n, 2]
-        if _collides_one(world, poly, circles, radius, x, y, th, wp, near):
-            out[n] = 0.0
-            continue
-        _place_polygon(poly, x, y, th, wp)  # (the check may return before placing it)
-        # search radius: an upper bound on the clearance from points of the polygon (its first
-        # vertex and the covering-circle centres that lie inside it)
-        j = min(cols - 1, max(0, math.floor((wp[0, 0] - x0) / res)))
-        i = min(rows - 1, max(0, math.floor((wp[0, 1] - y0) / res)))
-        reach = dist[i, j] + slack
-        c, s = math.cos(th), math.sin(th)
-        for k in range(circles.shape[0]):
-            cx = x + c * circles[k, 0] - s * circles[k, 1]
-            cy = y + s * circles[k, 0] + c * circles[k, 1]
-            if _point_in_polygon(wp, cx, cy):
-                j = min(cols - 1, max(0, math.floor((cx - x0) / res)))
-                i = min(rows - 1, max(0, math.floor((cy - y0) / res)))
-                reach = min(reach, dist[i, j] + slack)
-        if not np.isfinite(reach):
-            out[n] = np.inf
-            continue
-        xmin, xmax, ymin, ymax = _bounds(wp)
-        xlo, xhi, ylo, yhi = xmin - reach, xmax + reach, ymin - reach, ymax + reach
-        best = np.inf
-        if has_cells:
-            j0 = max(0, math.floor((xlo - x0) / res))
-            j1 = min(cols - 1, math.floor((xhi - x0) / res))
-            i0 = max(0, math.floor((ylo - y0) / res))
-            i1 = min(rows - 1, math.floor((yhi - y0) / res))
-            for a in range(i0, i1 + 1):
-                for b in range(j0, j1 + 1):
-                    if occ[a, b]:
-                        d = _poly_square_distance(wp, x0 + b * res, y0 + a * res, res)
-                        best = min(best, d)
-        for m in range(_pieces_in_box(world, xlo, xhi, ylo, yhi, near)):
-            k = near[m]
-            best = min(best, _poly_piece_distance(wp, pieces[k], nverts[k], prad[k]))
-        out[n] = best
-    return out
+    if _collides_one(world, poly, circles, radius, x, y, th, wp, near):
+        return 0.0
+    _place_polygon(poly, x, y, th, wp)  # (the check may return before placing it)
+    # search radius: an upper bound on the clearance from points of the polygon (its first
+    # vertex and the covering-circle centres that lie inside it)
+    j = min(cols - 1, max(0, math.floor((wp[0, 0] - x0) / res)))
+    i = min(rows - 1, max(0, math.floor((wp[0, 1] - y0) / res)))
+    reach = dist[i, j] + slack
+    c, s = math.cos(th), math.sin(th)
+    for k in range(circles.shape[0]):
+        cx = x + c * circles[k, 0] - s * circles[k, 1]
+        cy = y + s * circles[k, 0] + c * circles[k, 1]
+        if _point_in_polygon(wp, cx, cy):
+            j = min(cols - 1, max(0, math.floor((cx - x0) / res)))
+            i = min(rows - 1, max(0, math.floor((cy - y0) / res)))
+            reach = min(reach, dist[i, j] + slack)
+    if not np.isfinite(reach):
+        return np.inf
+    xmin, xmax, ymin, ymax = _bounds(wp)
+    xlo, xhi, ylo, yhi = xmin - reach, xmax + reach, ymin - reach, ymax + reach
+    best = np.inf
+    if has_cells:
+        j0 = max(0, math.floor((xlo - x0) / res))
+        j1 = min(cols - 1, math.floor((xhi - x0) / res))
+        i0 = max(0, math.floor((ylo - y0) / res))
+        i1 = min(rows - 1, math.floor((yhi - y0) / res))
+        for a in range(i0, i1 + 1):
+            for b in range(j0, j1 + 1):
+                if occ[a, b]:
+                    d = _poly_square_distance(wp, x0 + b * res, y0 + a * res, res)
+                    best = min(best, d)
+    for m in range(_pieces_in_box(world, xlo, xhi, ylo, yhi, near)):
+        k = near[m]
+        best = min(best, _poly_piece_distance(wp, pieces[k], nverts[k], prad[k]))
+    return best
 
 
 class FootprintChecks:
     """Footprint collision and clearance queries shared by every kind of world.
 
-    A world provides ``_kernel_world`` (its arrays packed by :func:`_world_tuple`) and
+    A world provides ``_kernel_world`` (its arrays packed by ``_world_tuple``) and
     ``is_occupied(xy)`` (exact point test); these methods do the rest.
     """
 

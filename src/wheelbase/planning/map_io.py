@@ -20,12 +20,12 @@ from wheelbase.errors import ConfigError, DataError, MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 
-__all__: list[str] = []
+__all__ = ["read_image", "read_ros_yaml", "write_ros_yaml"]
 
 _ROS_MODES = ("trinary", "scale", "raw")
 
 
-def _read_image(
+def read_image(
     path: str | FilePath,
     resolution: float,
     origin: ArrayLike = (0.0, 0.0),
@@ -33,7 +33,28 @@ def _read_image(
     threshold: float = 0.5,
     max_cells: int = MAX_MAP_CELLS,
 ) -> OccupancyGrid:
-    """The implementation of :meth:`OccupancyGrid.from_image` (documented there)."""
+    """Load a plain image (PNG, PGM, BMP…): dark pixels are occupied.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Image file; its top row is the highest y.
+    resolution : float
+        Cell side [m/pixel].
+    origin : array_like
+        ``(x0, y0)`` [m] of the lower-left corner of the image.
+    threshold : float
+        A pixel is occupied when its darkness ``1 − gray/255`` exceeds this value, in
+        [0, 1).
+    max_cells : int
+        Most pixels accepted, checked before decoding (default
+        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8); PIL itself refuses more than
+        ``2 × PIL.Image.MAX_IMAGE_PIXELS`` (1.8e8).
+
+    Returns
+    -------
+    OccupancyGrid
+    """
     threshold = finite("threshold", threshold)
     if not 0.0 <= threshold < 1.0:
         raise ConfigError(f"threshold must be in [0, 1) (got {threshold:g})")
@@ -42,10 +63,38 @@ def _read_image(
     return OccupancyGrid(np.flipud(darkness > threshold), resolution, tuple(np.ravel(origin)[:2]))
 
 
-def _read_ros_yaml(
+def read_ros_yaml(
     path: str | FilePath, *, unknown_as_occupied: bool = True, max_cells: int = MAX_MAP_CELLS
 ) -> OccupancyGrid:
-    """The implementation of :meth:`OccupancyGrid.from_ros_yaml` (documented there)."""
+    """Load a ROS ``map_server`` map: a YAML file naming a PGM/PNG image.
+
+    Follows the ``map_server`` rules: ``p = (255 − v)/255`` (or ``v/255`` when
+    ``negate: 1``); in ``trinary`` and ``scale`` modes a pixel with ``p > occupied_thresh``
+    is occupied, ``p < free_thresh`` free and anything else unknown (trinary) or a partial
+    cost that is treated as free (scale); in ``raw`` mode the value is the occupancy in
+    percent and values above 100 are unknown. The origin yaw is ignored, as Nav2's costmap
+    does.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The YAML file.
+    unknown_as_occupied : bool
+        Treat unknown cells as occupied (default) or as free.
+    max_cells : int
+        Most pixels accepted (see :func:`read_image`).
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    MapError
+        If the YAML is missing a field or has an invalid value.
+    DataError
+        If a file cannot be read.
+    """
     path = FilePath(path)
     text = read_text(path, "map YAML")
     try:
@@ -109,10 +158,28 @@ def _read_ros_yaml(
     return OccupancyGrid(np.flipud(occ), resolution, tuple(origin_xy), np.flipud(unknown))
 
 
-def _write_ros_yaml(
+def write_ros_yaml(
     grid: OccupancyGrid, path: str | FilePath, *, image: str | None = None
 ) -> FilePath:
-    """The implementation of :meth:`OccupancyGrid.to_ros_yaml` (documented there)."""
+    """Write the grid as a ROS ``map_server`` YAML + binary PGM pair (trinary mode).
+
+    Occupied cells are written 0, free 254 and unknown free cells 205, as ``map_saver``
+    does, so that :func:`read_ros_yaml` reads back the same grid.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The grid to write.
+    path : str or pathlib.Path
+        The YAML file to write; the image goes beside it.
+    image : str or None
+        Image file name (``.pgm`` or ``.png``); default: the YAML's stem + ``.pgm``.
+
+    Returns
+    -------
+    pathlib.Path
+        The image path.
+    """
     path = FilePath(path)
     image_path = path.parent / (image or path.with_suffix(".pgm").name)
     pixels = np.full(grid.shape, 254, np.uint8)

@@ -14,18 +14,41 @@ from wheelbase.errors import DataError, MapError
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.occupancy import OccupancyGrid
 
-__all__ = ["MovingAIScenario", "read_movingai_scenarios"]
+__all__ = ["MovingAIScenario", "read_movingai_map", "read_movingai_scenarios"]
 
 _MOVINGAI_PASSABLE = frozenset(".GS")
 
 
-def _read_movingai_map(
+def read_movingai_map(
     path: str | FilePath,
     resolution: float = 1.0,
     origin: ArrayLike = (0.0, 0.0),
+    *,
     max_cells: int = MAX_MAP_CELLS,
 ) -> OccupancyGrid:
-    """The implementation of :meth:`OccupancyGrid.from_movingai` (documented there)."""
+    """Load a Moving AI benchmark ``.map`` file (Sturtevant 2012).
+
+    ``.``, ``G`` and ``S`` are passable; every other terrain (``@``, ``O``, ``T``, ``W``) is
+    blocked. The file's first row (Moving AI y = 0) becomes the highest grid row, so Moving
+    AI cell ``(x, y)`` is grid cell ``(height − 1 − y, x)``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.map`` file. Text after the ``height`` map rows (e.g. a BibTeX entry) is
+        ignored.
+    resolution : float
+        Cell side [m/cell].
+    origin : array_like
+        ``(x0, y0)`` [m] of the lower-left corner.
+    max_cells : int
+        Most cells accepted, checked from the header before the rows are read (default
+        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
+
+    Returns
+    -------
+    OccupancyGrid
+    """
     path = FilePath(path)
     lines = read_text(path, "Moving AI map").splitlines()
     header: dict[str, str] = {}
@@ -87,7 +110,7 @@ class MovingAIScenario:
     optimal_length: float
 
     def grid_cells(self) -> tuple[tuple[int, int], tuple[int, int]]:
-        """Start and goal as grid cells ``(row, col)`` of :meth:`OccupancyGrid.from_movingai`.
+        """Start and goal as grid cells ``(row, col)`` of :func:`read_movingai_map`.
 
         Returns
         -------

@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from pathlib import Path as FilePath
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,7 +31,6 @@ from scipy import ndimage
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.errors import InputError, MapError
-from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning.collision import FootprintChecks, _world_tuple
 
 __all__ = ["OccupancyGrid"]
@@ -125,142 +123,6 @@ class OccupancyGrid(FootprintChecks):
         with np.errstate(invalid="ignore"):
             occ = (values >= occupied_thresh) | unknown
         return cls(occ, resolution, tuple(np.ravel(origin)[:2]), unknown)
-
-    @classmethod
-    def from_image(
-        cls,
-        path: str | FilePath,
-        resolution: float,
-        origin: ArrayLike = (0.0, 0.0),
-        *,
-        threshold: float = 0.5,
-        max_cells: int = MAX_MAP_CELLS,
-    ) -> OccupancyGrid:
-        """Load a plain image (PNG, PGM, BMP…): dark pixels are occupied.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            Image file; its top row is the highest y.
-        resolution : float
-            Cell side [m/pixel].
-        origin : array_like
-            ``(x0, y0)`` [m] of the lower-left corner of the image.
-        threshold : float
-            A pixel is occupied when its darkness ``1 − gray/255`` exceeds this value, in
-            [0, 1).
-        max_cells : int
-            Most pixels accepted, checked before decoding (default
-            :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8); PIL itself refuses more than
-            ``2 × PIL.Image.MAX_IMAGE_PIXELS`` (1.8e8).
-
-        Returns
-        -------
-        OccupancyGrid
-        """
-        from wheelbase.planning.map_io import _read_image
-
-        return _read_image(path, resolution, origin, threshold=threshold, max_cells=max_cells)
-
-    @classmethod
-    def from_ros_yaml(
-        cls,
-        path: str | FilePath,
-        *,
-        unknown_as_occupied: bool = True,
-        max_cells: int = MAX_MAP_CELLS,
-    ) -> OccupancyGrid:
-        """Load a ROS ``map_server`` map: a YAML file naming a PGM/PNG image.
-
-        Follows the ``map_server`` rules: ``p = (255 − v)/255`` (or ``v/255`` when
-        ``negate: 1``); in ``trinary`` and ``scale`` modes a pixel with ``p > occupied_thresh``
-        is occupied, ``p < free_thresh`` free and anything else unknown (trinary) or a partial
-        cost that is treated as free (scale); in ``raw`` mode the value is the occupancy in
-        percent and values above 100 are unknown. The origin yaw is ignored, as Nav2's costmap
-        does.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The YAML file.
-        unknown_as_occupied : bool
-            Treat unknown cells as occupied (default) or as free.
-        max_cells : int
-            Most pixels accepted (see :meth:`from_image`).
-
-        Returns
-        -------
-        OccupancyGrid
-
-        Raises
-        ------
-        MapError
-            If the YAML is missing a field or has an invalid value.
-        DataError
-            If a file cannot be read.
-        """
-        from wheelbase.planning.map_io import _read_ros_yaml
-
-        return _read_ros_yaml(path, unknown_as_occupied=unknown_as_occupied, max_cells=max_cells)
-
-    @classmethod
-    def from_movingai(
-        cls,
-        path: str | FilePath,
-        resolution: float = 1.0,
-        origin: ArrayLike = (0.0, 0.0),
-        *,
-        max_cells: int = MAX_MAP_CELLS,
-    ) -> OccupancyGrid:
-        """Load a Moving AI benchmark ``.map`` file (Sturtevant 2012).
-
-        ``.``, ``G`` and ``S`` are passable; every other terrain (``@``, ``O``, ``T``, ``W``) is
-        blocked. The file's first row (Moving AI y = 0) becomes the highest grid row, so Moving
-        AI cell ``(x, y)`` is grid cell ``(height − 1 − y, x)``: see :meth:`movingai_cell`.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The ``.map`` file. Text after the ``height`` map rows (e.g. a BibTeX entry) is
-            ignored.
-        resolution : float
-            Cell side [m/cell].
-        origin : array_like
-            ``(x0, y0)`` [m] of the lower-left corner.
-        max_cells : int
-            Most cells accepted, checked from the header before the rows are read (default
-            :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
-
-        Returns
-        -------
-        OccupancyGrid
-        """
-        from wheelbase.planning.movingai import _read_movingai_map
-
-        return _read_movingai_map(path, resolution, origin, max_cells)
-
-    # ------------------------------------------------------------------ writer
-    def to_ros_yaml(self, path: str | FilePath, *, image: str | None = None) -> FilePath:
-        """Write the grid as a ROS ``map_server`` YAML + binary PGM pair (trinary mode).
-
-        Occupied cells are written 0, free 254 and unknown free cells 205, as ``map_saver``
-        does, so that :meth:`from_ros_yaml` reads back the same grid.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The YAML file to write; the image goes beside it.
-        image : str or None
-            Image file name (``.pgm`` or ``.png``); default: the YAML's stem + ``.pgm``.
-
-        Returns
-        -------
-        pathlib.Path
-            The image path.
-        """
-        from wheelbase.planning.map_io import _write_ros_yaml
-
-        return _write_ros_yaml(self, path, image=image)
 
     # ------------------------------------------------------------------ geometry
     @property

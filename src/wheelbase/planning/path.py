@@ -14,7 +14,6 @@ import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -22,10 +21,6 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, positive
 from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
-
-if TYPE_CHECKING:
-    from wheelbase.planning.footprint import Footprint
-    from wheelbase.planning.occupancy import OccupancyGrid
 
 __all__ = ["CurvePath", "PlannedPath", "PlanningStats"]
 
@@ -246,37 +241,6 @@ class PlannedPath:
                     [f"{s:.6f}", f"{x:.6f}", f"{y:.6f}", f"{th:.8f}", int(d), f"{k:.8g}"]
                 )
         return path
-
-    def plot(
-        self,
-        ax: Any = None,
-        *,
-        grid: OccupancyGrid | None = None,
-        footprint: Footprint | None = None,
-        footprint_every: float = 2.0,
-    ) -> Any:
-        """Draw the path (and optionally the map and footprints) with matplotlib.
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes or None
-            Axes to draw on; a new figure when ``None``.
-        grid : OccupancyGrid or None
-            Map drawn underneath.
-        footprint : Footprint or None
-            Robot outline drawn every ``footprint_every`` metres.
-        footprint_every : float
-            Spacing of the drawn footprints [m].
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
-        from wheelbase.planning.plot import plot_path
-
-        return plot_path(
-            self, ax=ax, grid=grid, footprint=footprint, footprint_every=footprint_every
-        )
 
 
 @dataclass(frozen=True, eq=False)

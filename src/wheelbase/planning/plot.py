@@ -1,6 +1,6 @@
 """Matplotlib figures of maps and planned paths (no plotting inside the algorithms).
 
-:meth:`wheelbase.planning.PlannedPath.plot` delegates here.
+Above the paths and maps it draws: they never import it (``plot_path(path, grid=...)``).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""World files: polygon worlds from YAML or GeoJSON, and one loader for every kind of world.
+"""World files: polygon worlds from YAML or GeoJSON (:func:`~wheelbase.planning.load_world` loads
+any kind of world).
 
 **YAML** (schema: ``wheelbase/data/schemas/world.schema.json``; lengths in metres)::
 
@@ -24,6 +25,7 @@ A ``grid`` path in a file is relative to that file.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path as FilePath
 from typing import Any
 
@@ -33,10 +35,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from wheelbase._validate import read_text
 from wheelbase.errors import MapError
 from wheelbase.limits import MAX_MAP_CELLS
+from wheelbase.planning.map_io import read_ros_yaml
 from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.world import PolygonWorld
 
-__all__ = ["WorldFile", "is_world_mapping", "load_world", "read_world_file", "world_schema"]
+__all__ = [
+    "WorldFile",
+    "is_world_mapping",
+    "read_world_file",
+    "world_from_mapping",
+    "world_schema",
+]
 
 _WORLD_KEYS = frozenset({"bounds", "resolution", "grid", "polygons", "discs"})
 Point = tuple[float, float]
@@ -104,49 +113,11 @@ def is_world_mapping(data: object) -> bool:
     return bool(data) and set(data) <= _WORLD_KEYS and "image" not in data
 
 
-def load_world(
-    spec: Any, *, base: FilePath | None = None, max_cells: int = MAX_MAP_CELLS
-) -> OccupancyGrid | PolygonWorld:
-    """Any world: a grid or polygon world object, a bundled map name, a map or world file, or a
-    parsed world mapping.
-
-    The result answers ``in_collision``, ``footprint_clearance``, ``clearance``, ``contains``
-    and ``extent`` either way, and Hybrid A* and the scenario runner take it.
-
-    Parameters
-    ----------
-    spec : OccupancyGrid, PolygonWorld, str, pathlib.Path or dict
-        The world; names and files go to :func:`~wheelbase.planning.load_map`
-        (``.geojson``/``.json``: GeoJSON; ``.yaml``/``.yml``: a world, or a ROS
-        ``map_server`` map when it names an ``image``; ``.map``: Moving AI; images).
-    base : pathlib.Path or None
-        Folder that relative ``grid`` paths inside a mapping are relative to.
-    max_cells : int
-        Most cells of a grid map or a polygon world's raster (default
-        :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
-
-    Returns
-    -------
-    OccupancyGrid or PolygonWorld
-
-    Raises
-    ------
-    MapError
-        A malformed world (the message names the field or polygon).
-    DataError
-        A file that cannot be read.
-    """
-    if isinstance(spec, OccupancyGrid | PolygonWorld):
-        return spec
-    if isinstance(spec, dict):
-        return _from_mapping(spec, base or FilePath.cwd(), "world", max_cells)
-    from wheelbase.planning.maps import load_map
-
-    return load_map(spec, max_cells=max_cells)
-
-
 def read_world_file(
-    path: str | FilePath, *, max_cells: int = MAX_MAP_CELLS
+    path: str | FilePath,
+    *,
+    max_cells: int = MAX_MAP_CELLS,
+    load_grid: Callable[..., OccupancyGrid | PolygonWorld] | None = None,
 ) -> OccupancyGrid | PolygonWorld:
     """Read a ``.geojson``/``.json`` world, or a ``.yaml``/``.yml`` file that holds either a
     world or a ROS ``map_server`` map (one that names an ``image``).
@@ -158,6 +129,11 @@ def read_world_file(
     max_cells : int
         Most cells of a grid map (pixels, checked before decoding) or of a polygon world's
         raster (default :data:`wheelbase.limits.MAX_MAP_CELLS` = 1e8).
+    load_grid : callable or None
+        ``load_grid(name_or_path, max_cells=...)`` loads the map a world's ``grid`` names (a
+        bundled map or a map file): :func:`~wheelbase.planning.load_map`, which reads world
+        files through this function and passes itself. Without one, a world that names a
+        grid is refused (this module reads files; the names and kinds of maps live above it).
 
     Returns
     -------
@@ -179,15 +155,43 @@ def read_world_file(
         # ValueError: an integer of more than 4300 digits; RecursionError: lists nested deep
         raise MapError(f"{path}: not valid {suffix[1:].upper()}: {exc}") from None
     if is_world_mapping(data):
-        return _from_mapping(data, path.parent, str(path), max_cells)
+        return world_from_mapping(data, path.parent, str(path), max_cells, load_grid)
     if suffix in (".geojson", ".json"):
         raise MapError(f"{path}: expected a GeoJSON FeatureCollection, Feature or Polygon")
-    return OccupancyGrid.from_ros_yaml(path, max_cells=max_cells)
+    return read_ros_yaml(path, max_cells=max_cells)
 
 
-def _from_mapping(
-    data: dict, base: FilePath, label: str, max_cells: int = MAX_MAP_CELLS
+def world_from_mapping(
+    data: dict,
+    base: FilePath,
+    label: str,
+    max_cells: int = MAX_MAP_CELLS,
+    load_grid: Callable[..., OccupancyGrid | PolygonWorld] | None = None,
 ) -> PolygonWorld:
+    """A polygon world from a parsed world mapping (YAML or GeoJSON, see the module docstring).
+
+    Parameters
+    ----------
+    data : dict
+        The mapping.
+    base : pathlib.Path
+        Folder that a relative ``grid`` path is relative to.
+    label : str
+        What the mapping is, for messages (a file name).
+    max_cells : int
+        Most cells of the grid map or of the world's raster.
+    load_grid : callable or None
+        Loads the map ``grid`` names (see :func:`read_world_file`).
+
+    Returns
+    -------
+    PolygonWorld
+
+    Raises
+    ------
+    MapError
+        A malformed world (the message names the field or polygon).
+    """
     if data.get("type") is not None:
         data = _from_geojson(data, label)
     try:
@@ -198,12 +202,15 @@ def _from_mapping(
         raise MapError(f"{label}: {where}: {first['msg']}") from None
     grid = None
     if spec.grid is not None:
-        from wheelbase.planning.maps import load_map
-
+        if load_grid is None:
+            raise MapError(
+                f"{label}: grid {spec.grid!r} names a map; read the world with "
+                "wheelbase.planning.load_map, which loads it"
+            )
         target = FilePath(spec.grid)
         if target.suffix and not target.is_absolute():
             target = base / target
-        grid = load_map(target if target.suffix else spec.grid, max_cells=max_cells)
+        grid = load_grid(target if target.suffix else spec.grid, max_cells=max_cells)
         if not isinstance(grid, OccupancyGrid):
             raise MapError(f"{label}: grid must name a grid map (got a polygon world)")
     polygons = [(p.exterior, p.holes) if isinstance(p, PolygonSpec) else p for p in spec.polygons]

@@ -3,12 +3,14 @@
 A reading z of a beam whose true range is z* (the distance to the first obstacle, or z_max when
 nothing is in range) comes from one of four causes, with probabilities that add up to 1:
 
+=========  ==========================================================================
 ``hit``    the obstacle, seen with Gaussian noise: N(z*, σ_hit²) truncated to [0, z_max]
            (eq. 6.4–6.6);
 ``short``  an unexpected object in front of it: exponential with rate λ_short truncated to
            [0, z*] (eq. 6.7–6.9);
 ``max``    a missed return: exactly z_max (eq. 6.10);
 ``rand``   an unexplained reading: uniform on [0, z_max) (eq. 6.11).
+=========  ==========================================================================
 
 The weights carry the names Nav2 gives them (``z_hit``, ``z_short``, ``z_max``, ``z_rand``); the
 largest range itself is called ``max_range``. The density of eq. 6.12 is :meth:`BeamModel.pdf`

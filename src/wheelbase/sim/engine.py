@@ -74,6 +74,10 @@ class Arrival:
         Planar speed [m/s] below which a robot is at rest.
     rest_yaw_rate : float
         Yaw rate [rad/s] below which a robot is at rest (turning on the spot is moving).
+    judge_at_limit : bool
+        At the time limit, a robot still running is judged instead of timing out: its true
+        pose within tolerance of the goal → ``arrived``, else ``missed_goal``. For tracking a
+        timed reference, whose end is the arrival (the robot need not have come to rest).
     """
 
     goal: Any
@@ -82,6 +86,7 @@ class Arrival:
     settle_time: float = math.inf
     rest_speed: float = 0.01
     rest_yaw_rate: float = 0.1
+    judge_at_limit: bool = False
 
     def __post_init__(self) -> None:
         goal = as_float_array("goal", self.goal, 3, min_ndim=1, max_ndim=2)
@@ -571,7 +576,12 @@ class Engine:
             status[active & stuck] = STUCK
             active &= ~stuck
         if state.step >= self.steps or t >= limit - 1e-12:
-            status[active] = TIMEOUT
+            if self.arrival is not None and self.arrival.judge_at_limit:
+                truly = self.arrival.within(state.pose, state.goal)
+                status[active & truly] = ARRIVED
+                status[active & ~truly] = MISSED_GOAL
+            else:
+                status[active] = TIMEOUT
             active[:] = False
 
         pose, twist = state.pose.copy(), state.twist.copy()

@@ -131,7 +131,8 @@ class _FusesOdometry:
         return self.odometry.encoder
 
     def signals(self, state: Any) -> dict[str, np.ndarray]:
-        """Every robot's covariance and cumulative counts (and particles held), for the log.
+        """Every robot's covariance, odometry pose (``odom_pose``, in the odometry frame) and
+        cumulative counts (and particles held), for the log.
 
         Parameters
         ----------
@@ -139,6 +140,7 @@ class _FusesOdometry:
             The filter's state.
         """
         out = covariance_signals(state.cov)
+        out["odom_pose"] = state.odom.copy()
         if hasattr(state, "particles"):
             out["loc_particles"] = state.particles.copy()
             out["loc_converged"] = state.converged.astype(np.int64)
@@ -157,10 +159,14 @@ class KalmanState:
         Pose covariances.
     counts : numpy.ndarray of int64, shape (N, len(COUNTS))
         Cumulative counts (:data:`COUNTS`).
+    odom : numpy.ndarray, shape (N, 3)
+        The wheel odometry dead-reckoned alone in the odometry frame (which starts at the
+        start pose): with the mean, it gives the correction map ← odom (REP 105).
     """
 
     cov: np.ndarray
     counts: np.ndarray
+    odom: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,7 +206,8 @@ class KalmanLocalizer(_FusesOdometry):
         """
         n = poses.shape[0]
         _, cov = _initial_cov(self.initial_std, n)
-        return KalmanState(cov.copy(), np.zeros((n, len(COUNTS)), dtype=np.int64))
+        counts = np.zeros((n, len(COUNTS)), dtype=np.int64)
+        return KalmanState(cov.copy(), counts, poses.copy())
 
     def update(self, estimate, ticks, dt, pose, twist, *, state, index, readings=None):
         """Predict with the step's odometry; correct with landmark readings when there are any.
@@ -230,7 +237,9 @@ class KalmanLocalizer(_FusesOdometry):
             The odometry's twist over the step.
         state : KalmanState
         """
-        _, odo_twist, _ = self.odometry.update(estimate, ticks, dt, pose, twist)
+        odom_now, odo_twist, _ = self.odometry.update(state.odom[index], ticks, dt, pose, twist)
+        odom = state.odom.copy()
+        odom[index] = odom_now
         control = odo_twist[:, [0, 2]]
         ids = z = None
         if readings is not None and readings.landmark_ids is not None:
@@ -253,7 +262,7 @@ class KalmanLocalizer(_FusesOdometry):
                     counts[i] += found[0]
                 except (EstimationError, InputError):
                     mean[row] = np.nan
-        return mean, odo_twist, KalmanState(cov, counts)
+        return mean, odo_twist, KalmanState(cov, counts, odom)
 
     def _step(self, mean, cov, control, dt, ids, z):
         found = np.zeros((mean.shape[0], len(COUNTS)), dtype=np.int64)

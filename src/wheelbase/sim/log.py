@@ -19,7 +19,7 @@ from wheelbase._io import write_csv
 from wheelbase.errors import InputError
 from wheelbase.geometry import wrap_angle
 
-__all__ = ["STATUSES", "Log", "status_code"]
+__all__ = ["REVERSAL_BAND", "STATUSES", "Log", "status_code"]
 
 STATUSES: tuple[str, ...] = (
     "running",
@@ -241,13 +241,16 @@ class Log:
         -------
         list of dict
             ``status``, ``collision``, ``duration_s``, ``distance_travelled_m``,
-            ``reversals`` (changes of the direction of travel; speeds under 1e-6 m/s do not
-            count as a direction), the largest and RMS wheel torque on a dynamic plant, tracking
-            errors against the reference (RMS and max of the position error, RMS heading error
-            in degrees), the final pose errors of the true and the estimated pose against the
-            goal (when there is one), the odometry drift at the end (|true − estimated|) and
-            per metre travelled, and the localisation error |true − estimated| (position) over
-            the run, RMS and max.
+            ``reversals`` (changes of the direction of travel, :data:`REVERSAL_BAND`), the
+            largest and RMS wheel torque on a dynamic plant, tracking errors against the
+            log's time-indexed reference (RMS and max of the position error, RMS heading
+            error in degrees), the final pose errors of the true pose against the goal (when
+            there is one). The errors of the estimate, only where the controller did not see
+            the truth: the estimated pose's final error against the goal, and the position
+            error |true − estimated| over the run, RMS and max (``localization_rms_error_m``,
+            ``localization_max_error_m``); at the end, ``odometry_drift_m`` and
+            ``odometry_drift_per_m`` (per metre travelled) for dead reckoning, or
+            ``localization_final_error_m`` for a filter (a log with ``loc_`` signals).
         """
         rows = []
         for i in range(self.n_robots):
@@ -261,6 +264,7 @@ class Log:
             heading_error = np.degrees(wrap_angle(true[:, 2] - ref[:, 2]))
             travelled = float(np.sum(np.hypot(*np.diff(true[:, :2], axis=0).T)))
             drift = float(np.hypot(*(true[-1, :2] - est[-1, :2])))
+            perfect = np.array_equal(true, est)  # the controller saw the truth: no estimate
             status = STATUSES[int(self.status[i])]
             row: dict[str, Any] = {
                 "status": status,
@@ -278,18 +282,25 @@ class Log:
                     final_heading_error_true_deg=float(
                         np.degrees(abs(wrap_angle(true[-1, 2] - goal[2])))
                     ),
-                    final_position_error_estimated_m=float(np.hypot(*(est[-1, :2] - goal[:2]))),
                 )
+                if not perfect:
+                    row["final_position_error_estimated_m"] = float(
+                        np.hypot(*(est[-1, :2] - goal[:2]))
+                    )
             row["reversals"] = _reversals(self.twist[i, : max(n - 1, 0), 0])
             if self.torques is not None:
                 torques = self.torques[i, :n]
                 row["max_wheel_torque_nm"] = float(np.max(np.abs(torques)))
                 row["rms_wheel_torque_nm"] = float(np.sqrt(np.mean(torques**2)))
-            row["odometry_drift_m"] = drift
-            row["odometry_drift_per_m"] = drift / travelled if travelled > 0 else 0.0
-            error = np.hypot(*(true[:, :2] - est[:, :2]).T)
-            row["localization_rms_error_m"] = float(np.sqrt(np.mean(error**2)))
-            row["localization_max_error_m"] = float(np.max(error))
+            if not perfect:
+                if "loc_updates" in self.extras:  # a filter: its error, not a drift
+                    row["localization_final_error_m"] = drift
+                else:  # dead reckoning
+                    row["odometry_drift_m"] = drift
+                    row["odometry_drift_per_m"] = drift / travelled if travelled > 0 else 0.0
+                error = np.hypot(*(true[:, :2] - est[:, :2]).T)
+                row["localization_rms_error_m"] = float(np.sqrt(np.mean(error**2)))
+                row["localization_max_error_m"] = float(np.max(error))
             counts = self.controller_status_counts(i)
             if counts:
                 row["controller_statuses"] = counts
@@ -391,7 +402,16 @@ class Log:
         return fig
 
 
+REVERSAL_BAND = 0.05
+"""A direction of travel counts where the forward speed exceeds this fraction of the run's
+peak speed (and 1e-6 m/s): the band between is hysteresis, so that a robot turning in place,
+its forward speed flickering by 1e-5 m/s, does not reverse."""
+
+
 def _reversals(speed: np.ndarray) -> int:
-    """How often the sign of the forward speed changes (|u| <= 1e-6 m/s: no direction)."""
-    sign = np.sign(speed[np.abs(speed) > 1e-6])
+    """How often the direction of travel changes (:data:`REVERSAL_BAND`)."""
+    if speed.size == 0:
+        return 0
+    band = max(1e-6, REVERSAL_BAND * float(np.max(np.abs(speed))))
+    sign = np.sign(speed[np.abs(speed) > band])
     return int(np.count_nonzero(sign[1:] != sign[:-1]))

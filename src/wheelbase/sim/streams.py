@@ -10,7 +10,10 @@ draws what the single run with seed ``i`` draws.
 
 The three integers seed a :class:`numpy.random.SeedSequence` as its entropy and spawn key
 (the key is mixed in after the seed, so (seed, stream, counter) triples never collide, as
-plain lists of words can: ``[s, 1]`` and ``[s, 1, 0]`` seed the same generator).
+plain lists of words can: ``[s, 1]`` and ``[s, 1, 0]`` seed the same generator). A generator
+serves the draws of NumPy (normals, binomials, choices) outside the kernels; the world's agents,
+which draw inside Numba kernels, hash their counters to uniforms instead
+(:mod:`wheelbase.world.counter_rng`), on the same principle.
 """
 
 from __future__ import annotations

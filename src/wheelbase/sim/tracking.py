@@ -26,7 +26,7 @@ from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import time_grid
 from wheelbase.models.path import PoseTrajectory
-from wheelbase.sim.engine import Engine
+from wheelbase.sim.engine import Arrival, Engine
 from wheelbase.sim.log import Log, status_code
 from wheelbase.sim.plants import DynamicPlant
 
@@ -42,12 +42,16 @@ def track_trajectory(
     dt: float = 0.01,
     state0: ArrayLike | None = None,
     t_end: float | None = None,
+    tolerance: tuple[float, float] = (0.05, math.radians(5.0)),
 ) -> Log:
     """Drive ``plant`` along ``reference``: open loop (document 000 §5.3.1) or with a controller.
 
     A thin use of the engine (:class:`wheelbase.sim.Engine` on a
-    :class:`~wheelbase.sim.DynamicPlant`, perfect state, no arrival rule): torques are held
-    over each control period and the plant is integrated by RK4 with the same step.
+    :class:`~wheelbase.sim.DynamicPlant`, perfect state): torques are held over each control
+    period and the plant is integrated by RK4 with the same step. The reference's end is the
+    arrival: a run that reaches it ends ``arrived`` when the robot is within ``tolerance`` of
+    the reference's last pose, ``missed_goal`` when it is not (an open loop that drifted
+    away); a run stopped earlier by ``t_end`` ends ``timeout``.
 
     Parameters
     ----------
@@ -67,6 +71,8 @@ def track_trajectory(
         (one robot).
     t_end : float, optional
         Stop after this time [s]; default the reference's duration.
+    tolerance : tuple of float
+        (position [m], heading [rad]) of arrival at the reference's last pose.
 
     Returns
     -------
@@ -92,12 +98,18 @@ def track_trajectory(
     s0 = s0.reshape(-1, 6)
     duration = reference.duration if t_end is None else positive("t_end", t_end, "s")
     rows = TimedRows.from_pose_trajectory(reference, time_grid(duration, dt))
+    arrival = None
+    if duration >= reference.duration - 1e-9:  # the run reaches the reference's end
+        arrival = Arrival(
+            reference.poses[-1], tolerance, end_time=reference.duration, judge_at_limit=True
+        )
     engine = Engine(
         DynamicPlant(plant),
         controller,
         rows,  # sampled once, exactly at the control times: no evaluation per step
         dt=dt,
         duration=duration,
+        arrival=arrival,
         reference_pose=lambda t: rows.at(t)[:3],
     )
     return engine.run(s0[:, :3], twists=s0[:, 3:])

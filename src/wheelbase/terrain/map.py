@@ -13,6 +13,7 @@ and presses it with m·g·√(1 − |s|²) = m·g·cos α onto it.
 
 Overlapping regions with different surfaces or grades are refused (the error names both and a
 point of the overlap): where two regions disagree, nothing would say which one is the ground.
+Regions may lie over a raster of surfaces (``base``): there they are the ground.
 """
 
 from __future__ import annotations
@@ -188,13 +189,14 @@ class TerrainMap:
         bounds: tuple[float, float, float, float] | None = None,
         resolution: float = 0.05,
         max_cells: int = MAX_MAP_CELLS,
+        base: TerrainMap | None = None,
     ) -> TerrainMap:
         """Rasterise regions over a rectangle (a cell takes the region its centre lies in).
 
         Parameters
         ----------
         default : Surface
-            The ground outside every region (flat).
+            The ground outside every region (flat) and outside ``base``.
         regions : sequence of Region
             The regions; where two overlap they must agree (surface and grade), else
             ConfigError.
@@ -204,6 +206,9 @@ class TerrainMap:
             Cell size [m].
         max_cells : int
             Most cells allowed.
+        base : TerrainMap, optional
+            A raster of surfaces under the regions (each cell takes the surface under its
+            centre); the regions lie over it.
         """
         regions = list(regions)
         if not all(isinstance(region, Region) for region in regions):
@@ -211,7 +216,7 @@ class TerrainMap:
         resolution = positive("resolution", resolution, "m")
         if bounds is None:
             if not regions:
-                return cls.uniform(default)
+                return cls.uniform(default) if base is None else base
             points = np.vstack([region.polygon for region in regions])
             bounds = (*points.min(0), *points.max(0))
         x0, y0, x1, y1 = (finite("bounds", value, "m") for value in bounds)
@@ -225,6 +230,17 @@ class TerrainMap:
         surfaces: list[Surface] = [default]
         cells = np.zeros((rows, cols), np.int32)
         slope = np.zeros((rows, cols, 2))
+        if base is not None:  # each cell the base's surface under its centre
+            cx = x0 + (np.arange(cols) + 0.5) * resolution
+            cy = y0 + (np.arange(rows) + 0.5) * resolution
+            centres = np.stack(np.meshgrid(cx, cy), -1)
+            inside = base.inside(centres)
+            codes = base.index(centres)
+            for code, surface in enumerate(base.surfaces):
+                if surface not in surfaces:
+                    surfaces.append(surface)
+                cells[inside & (codes == code)] = surfaces.index(surface)
+            slope[inside] = base.slope_at(centres)[inside]
         owner = np.full((rows, cols), -1, np.int64)
         for index, region in enumerate(regions):
             mask = np.zeros((rows, cols), np.bool_)
@@ -271,6 +287,20 @@ class TerrainMap:
         out = np.zeros(xy.shape[:-1], np.int64)
         out[inside] = self.cells[row[inside], col[inside]]
         return out
+
+    def inside(self, points: ArrayLike) -> np.ndarray:
+        """Whether points ``(..., 2)`` [m] lie on the raster.
+
+        Parameters
+        ----------
+        points : array_like, shape (..., 2)
+            Positions in the map frame [m].
+        """
+        xy = as_float_array("points", points, 2)
+        col = np.floor((xy[..., 0] - self.origin[0]) / self.resolution)
+        row = np.floor((xy[..., 1] - self.origin[1]) / self.resolution)
+        rows, cols = self.cells.shape
+        return (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
 
     def slope_at(self, points: ArrayLike) -> np.ndarray:
         """Slope vectors ``(..., 2)`` under points (zeros outside the raster).

@@ -6,6 +6,7 @@ per world (every world has the same agents, placed by its own seed), R robots pe
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -18,9 +19,10 @@ __all__ = ["Distances", "RobotBodies", "WorldState"]
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
-    array = np.ascontiguousarray(array)
-    array.setflags(write=False)
-    return array
+    """A read-only view (the caller's own array stays writeable)."""
+    view = np.ascontiguousarray(array).view()
+    view.setflags(write=False)
+    return view
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,10 +57,11 @@ class WorldState:
     step: np.ndarray
 
     def __post_init__(self) -> None:
+        # copies: a state never changes, even when the caller changes the arrays it gave
         for name in ("position", "velocity", "goal", "goal_time"):
-            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), np.float64)))
+            object.__setattr__(self, name, _frozen(np.array(getattr(self, name), np.float64)))
         for name in ("waypoint", "seed", "step"):
-            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), np.int64)))
+            object.__setattr__(self, name, _frozen(np.array(getattr(self, name), np.int64)))
         shape = self.position.shape
         if len(shape) != 3 or shape[2] != 2:
             raise InputError(f"position must have shape (B, A, 2) (got {shape})")
@@ -111,6 +114,14 @@ class WorldState:
             np.array_equal(getattr(self, name), getattr(other, name))
             for name in ("position", "velocity", "goal", "waypoint", "goal_time", "seed", "step")
         )
+
+
+@functools.cache
+def _placeholder_footprint():
+    """The outline of :meth:`RobotBodies.none` (no robot has it; built once)."""
+    from wheelbase.planning import Footprint
+
+    return Footprint.rectangle(0.2, 0.2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -177,8 +188,7 @@ class RobotBodies:
         batch : int
             Number of worlds B.
         """
-        square = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
-        return cls(np.zeros((batch, 0, 3)), np.zeros((batch, 0, 2)), square)
+        return cls(np.zeros((batch, 0, 3)), np.zeros((batch, 0, 2)), _placeholder_footprint())
 
     @property
     def polygon(self) -> np.ndarray:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wheelbase.planning import OccupancyGrid
+from wheelbase.planning import OccupancyGrid, write_ros_yaml
 
 __all__: list[str] = []
 
@@ -42,7 +42,7 @@ def cluttered() -> np.ndarray:
 def main() -> None:
     """Write ``cluttered.yaml`` and ``cluttered.png`` beside this script."""
     grid = OccupancyGrid.from_array(cluttered(), RESOLUTION)
-    grid.to_ros_yaml(HERE / "cluttered.yaml", image="cluttered.png")
+    write_ros_yaml(grid, HERE / "cluttered.yaml", image="cluttered.png")
 
 
 if __name__ == "__main__":

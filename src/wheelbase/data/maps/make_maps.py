@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from wheelbase.planning import OccupancyGrid
+from wheelbase.planning import OccupancyGrid, write_ros_yaml
 
 HERE = Path(__file__).resolve().parent
 
@@ -308,7 +308,7 @@ def main() -> None:
     for name, build in MAPS.items():
         occ, res, scen = build()
         grid = OccupancyGrid.from_array(occ, res)
-        grid.to_ros_yaml(HERE / f"{name}.yaml", image=f"{name}.png")
+        write_ros_yaml(grid, HERE / f"{name}.yaml", image=f"{name}.png")
         scenarios[name] = [
             {
                 k: ([round(v, 3) for v in val] if isinstance(val, list) else val)
