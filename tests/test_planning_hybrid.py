@@ -381,7 +381,7 @@ def test_holonomic_heuristic_never_exceeds_the_path_found():
 def test_full_heuristic_never_exceeds_the_cost_of_the_path_found():
     """With the default costs (arcs ×1.2, reverse ×2, 2 m a cusp) the heuristic, heading term
     included, is below the cost of every path found: it is admissible there too."""
-    from wheelbase.planning.hybrid_astar import _MODE_RS, _heuristic
+    from wheelbase.planning.hybrid_heuristic import _MODE_RS, _heuristic
     from wheelbase.planning.reeds_shepp import _FAMILIES
 
     sc = next(s for s in bundled_scenarios() if s.name == "bay_to_bay")
@@ -610,14 +610,21 @@ def test_load_map_by_name_and_path(tmp_path):
 def test_search_kernel_takes_no_int_of_infinity(monkeypatch):
     # Compiled, int(inf) is undefined behaviour (LLVM's fptosi of inf is poison); run the
     # kernel's Python code, where it raises OverflowError, on a start boxed in away from the
-    # goal: its heuristic is inf, and the search must still end cleanly.
+    # goal: its heuristic is inf, and the search must still end cleanly. (The planner does
+    # not even start the search there: the holonomic bound already says no path exists.)
     from wheelbase.planning import hybrid_astar
+    from wheelbase.planning.hybrid_heuristic import _MODE_POINT
 
     monkeypatch.setattr(hybrid_astar, "_search", hybrid_astar._search.py_func)
     occ = np.zeros((40, 40), bool)
     occ[5:15, 5] = occ[5:15, 15] = occ[5, 5:16] = occ[15, 5:16] = True  # a closed box
     planner = HybridAStar(OccupancyGrid.from_array(occ, 0.1), (0.3, 0.2), 0.0)
-    path = planner.plan((1.0, 1.0, 0.0), (3.0, 3.0, 0.0))
+    start, goal = np.array([1.0, 1.0, 0.0]), np.array([3.0, 3.0, 0.0])
+    hgrid, hres = planner._holonomic_heuristic(goal)
+    assert np.isinf(hgrid[int(start[1] // hres), int(start[0] // hres)])
+    out = planner._lattice(start, goal, hgrid, hres, planner._prims, _MODE_POINT, 5.0, 10**6, True)
+    assert out.status == 1 and out.expanded == 1
+    path = planner.plan(start, goal)
     assert not path.success and path.stats.message == "search space exhausted"
 
 

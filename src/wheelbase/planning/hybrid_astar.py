@@ -18,7 +18,7 @@ ROS 2 Nav2's Smac Hybrid-A* planner:
   ``change_penalty`` × distance when the curvature changes and ``switch_penalty`` [m] at each
   change of driving direction (defaults are Nav2's: 1.2, 2.0, 0.0; Nav2 has no separate cusp
   penalty, here 2 m);
-* heuristic (admissible: see ``HybridAStar._holonomic_heuristic``): max(Reeds–Shepp
+* heuristic (admissible: see :mod:`~wheelbase.planning.hybrid_heuristic`): max(Reeds–Shepp
   length — Dubins without reverse, Euclidean distance for turning in place — ignoring
   obstacles, a lower bound on the distance around the obstacles for the reference point)
   plus the least cost of turning to the goal's heading (``turn_in_place_cost`` per radian, or
@@ -46,16 +46,18 @@ first half sample interval is then covered only by the samples around it.)
 
 Poses are those of the footprint's reference point: the **rear-axle centre** for car-like
 robots (use ``rear_axle_to_center``), the wheel-axle centre for differential drive.
+
+The planner is split by job: :mod:`~wheelbase.planning.lattice` (the motion primitives and the
+sampling of segments), :mod:`~wheelbase.planning.hybrid_heuristic` (the admissible
+cost-to-go), :mod:`~wheelbase.planning.hybrid_search` (the compiled search) and this module
+(the planner's parameters and checks, the stages of a plan and the path it returns).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
-from typing import NamedTuple
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -70,79 +72,30 @@ from wheelbase._validate import (
 )
 from wheelbase.errors import ConfigError, PlanningError
 from wheelbase.geometry import wrap_angle
-from wheelbase.limits import MAX_PRIMITIVE_SAMPLES, MAX_STATE_BINS
-from wheelbase.planning._heap import _heap_pop, _heap_push
-from wheelbase.planning.astar import _dijkstra_kernel
-from wheelbase.planning.collision import _circles_clearance, _collides_one, _scratch
-from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
-from wheelbase.planning.dubins import _dubins_all
+from wheelbase.limits import MAX_STATE_BINS
 from wheelbase.planning.escape import escape
 from wheelbase.planning.footprint import Footprint
+from wheelbase.planning.hybrid_heuristic import (
+    _MODE_DUBINS,
+    _MODE_POINT,
+    _MODE_RS,
+    _holonomic_heuristic,
+)
+from wheelbase.planning.hybrid_search import _FINITE, _NO_LIMIT, _STATUS, _Search, _search
+from wheelbase.planning.lattice import _build_primitives, _compose, _Primitives, _sample_segment
 from wheelbase.planning.occupancy import OccupancyGrid
 from wheelbase.planning.path import PlannedPath, PlanningStats
-from wheelbase.planning.reeds_shepp import _FAMILIES, _best, _min_length, _normalise
+from wheelbase.planning.reeds_shepp import _FAMILIES
 from wheelbase.planning.smoothing import smooth_path
 from wheelbase.planning.world import PolygonWorld
 
 __all__ = ["HybridAStar"]
 
-_NO_LIMIT = 2**62  # an iteration limit above this is none (the kernel counts in int64)
-_FINITE = 1.0e300  # below this a cost is finite: the kernels compare with it, never with inf
-_DEEPER = 1.0e-6
-"""The queue key is ``(1 − _DEEPER)·g + w·h``: of two states whose f = g + w·h differ by less
-than 1e-6 of the cost, the deeper (larger g) comes first. The search meets many such near-ties
-(equal-cost detours on the lattice); breaking them towards depth cut the PythonRobotics maze's
-expansions from 77k to 61k. It is A* with the heuristic weighted by 1/(1 − 1e-6): a path at
-most 1e-6 of its cost dearer than the best on the lattice."""
-_OCTILE_RATIO = math.sqrt(4.0 - 2.0 * math.sqrt(2.0))
-"""Largest ratio of the 8-connected (octile) distance to the straight-line one (at 22.5°)."""
-_HEURISTIC_NORMS = (
-    (1.0 / _OCTILE_RATIO, math.sqrt(2.0) / _OCTILE_RATIO),  # octile / worst ratio
-    (1.0, 1.0),  # Chebyshev
-    (1.0 / math.sqrt(2.0), math.sqrt(2.0)),  # (|x| + |y|) / √2
-)
-"""(axis, diagonal) move costs of three grid norms that never exceed the Euclidean length."""
-_ROTATE = 2  # segment type code for a turn in place (length = signed angle [rad])
-_MODE_RS, _MODE_DUBINS, _MODE_POINT = 0, 1, 2
 _ESCAPE_EXITS = 3
 """Ways out of a tight end (:func:`~wheelbase.planning.escape.escape`) the lattice is tried from
 before the plan fails."""
 _ESCAPE_STEPS = 4
 """The escape samples its moves this many times finer than ``collision_step``."""
-_STATUS = {
-    0: "goal reached",
-    1: "search space exhausted",
-    2: "iteration limit reached",
-    3: "time limit reached",
-}
-
-
-class _Search(NamedTuple):
-    """What the search kernel returns: its status (a key of ``_STATUS``), the goal's node and
-    the node arrays (pose, parent, primitive, samples of it driven), and the curve shot."""
-
-    status: int
-    goal_node: int
-    xs: np.ndarray
-    ys: np.ndarray
-    ths: np.ndarray
-    parents: np.ndarray
-    prim_of: np.ndarray
-    used_of: np.ndarray
-    expanded: int
-    shot_types: np.ndarray
-    shot_lengths: np.ndarray
-
-
-@dataclass(frozen=True)
-class _Primitives:
-    offsets: np.ndarray  # (P, S, 3) poses relative to the node, padded
-    nsamples: np.ndarray  # (P,)
-    direction: np.ndarray  # (P,) +1/-1, 0 for turns in place
-    kappa: np.ndarray  # (P,) steering curvature, ±inf for turns in place
-    length: np.ndarray  # (P,) distance travelled [m]
-    cost: np.ndarray  # (P,) base cost [m]
-    sweep: np.ndarray  # (P,) farthest any covering-circle centre moves [m]
 
 
 class HybridAStar:
@@ -383,74 +336,29 @@ class HybridAStar:
             if self.turning_radius == 0.0
             else (self.non_straight_penalty - 1.0) * self.turning_radius
         )
-        self._prims = self._build_primitives()
-        self._prims_swapped = self._build_primitives(swap_directions=True) if self.reverse else None
+        table = {
+            "turning_radius": self.turning_radius,
+            "reverse": self.reverse,
+            "curvatures": self.curvatures,
+            "headings": self.headings,
+            "length": self.primitive_length,
+            "step": self.collision_step,
+            "non_straight_penalty": self.non_straight_penalty,
+            "reverse_penalty": self.reverse_penalty,
+            "turn_in_place_cost": self.turn_in_place_cost,
+            "footprint": fp,
+            "checked": self._checked,
+        }
+        self._prims = _build_primitives(**table)
+        self._prims_swapped = (
+            _build_primitives(**table, swap_directions=True) if self.reverse else None
+        )
         # The search works in the grid's own frame (origin (0, 0)): 4.5e9 m from the world
         # origin, absolute float64 keeps only micrometres (see ``plan``).
         self._local = grid.with_origin((0.0, 0.0))
         self._heuristic_blocked = self._local.reference_blocked(fp.inscribed_radius)
 
     # ------------------------------------------------------------------ setup
-    def _build_primitives(self, swap_directions: bool = False) -> _Primitives:
-        step = self.collision_step
-        ds = self.primitive_length
-        rows: list[tuple[np.ndarray, int, float, float, float]] = []
-        dirs = (1, -1) if self.reverse else (1,)
-        # Every primitive is sampled every collision_step and tried at every expansion: refuse
-        # a table that would not fit (curvatures=3e7 hung, collision_step=1e-9 m alike).
-        arcs = len(dirs) * (self.curvatures if self.turning_radius > 0 else 1)
-        samples = arcs * max(1, math.ceil(min(ds / step, 1e15)))
-        if samples > MAX_PRIMITIVE_SAMPLES:
-            raise ConfigError(
-                f"{arcs} motion primitives of {ds:.3g} m sampled every {step:.3g} m need "
-                f"{samples:.3g} samples: more than {MAX_PRIMITIVE_SAMPLES:g}; use fewer "
-                "curvatures or a larger collision_step"
-            )
-        if self.turning_radius > 0:
-            kmax = 1.0 / self.turning_radius
-            kappas = np.linspace(-kmax, kmax, self.curvatures)
-        else:
-            kappas = np.array([0.0])
-        for d in dirs:
-            for k in kappas:
-                n = max(1, math.ceil(ds / step))
-                s = d * ds * np.arange(1, n + 1) / n
-                offs = _arc_offsets(float(k), s)
-                cost = ds * (self.non_straight_penalty if k != 0 else 1.0)
-                cost *= self.reverse_penalty if (d > 0 if swap_directions else d < 0) else 1.0
-                rows.append((offs, d, float(k), ds, cost))
-        if self.turning_radius == 0:
-            bin_angle = 2.0 * math.pi / self.headings
-            rho = self.footprint.max_radius
-            for nb in sorted({1, max(1, self.headings // 8), max(1, self.headings // 4)}):
-                for sign in (1.0, -1.0):
-                    angle = sign * nb * bin_angle
-                    n = max(1, math.ceil(abs(angle) * rho / step))
-                    offs = np.zeros((n, 3))
-                    offs[:, 2] = angle * np.arange(1, n + 1) / n
-                    rows.append(
-                        (offs, 0, sign * math.inf, 0.0, self.turn_in_place_cost * nb * bin_angle)
-                    )
-        rho_c = float(np.max(np.hypot(*self._checked.circles.T)))
-        sweep = [
-            r[3] * (1.0 + (abs(r[2]) if np.isfinite(r[2]) else 0.0) * rho_c)
-            + abs(r[0][-1, 2] if not np.isfinite(r[2]) else 0.0) * rho_c
-            for r in rows
-        ]
-        nmax = max(r[0].shape[0] for r in rows)
-        offsets = np.zeros((len(rows), nmax, 3))
-        for i, r in enumerate(rows):
-            offsets[i, : len(r[0])] = r[0]
-        return _Primitives(
-            offsets,
-            np.array([len(r[0]) for r in rows], dtype=np.int64),
-            np.array([r[1] for r in rows], dtype=np.int64),
-            np.array([r[2] for r in rows]),
-            np.array([r[3] for r in rows]),
-            np.array([r[4] for r in rows]),
-            np.array(sweep),
-        )
-
     def _check_pose(self, name: str, pose: ArrayLike) -> np.ndarray:
         pose = as_float_array(name, pose, 3, min_ndim=1, max_ndim=1).copy()
         pose[2] = float(wrap_angle(pose[2]))
@@ -693,54 +601,11 @@ class HybridAStar:
         )
 
     def _holonomic_heuristic(self, goal: np.ndarray) -> tuple[np.ndarray, float]:
-        """Admissible cost-to-go [m] around the obstacles on cells of ``xy_resolution``.
-
-        Why it never overestimates:
-
-        1. The reference point keeps at least the footprint's inscribed radius from every
-           obstacle, so it never lies in a cell of ``reference_blocked``; a coarse cell is free
-           when any of its fine cells is, so every feasible path stays in free coarse cells.
-        2. The shortest curve in that free region is a taut polyline bending at cell corners.
-           A straight piece spanning ``a >= b`` cells in x and y crosses cells that an
-           8-connected walk of ``a − b`` axis and ``b`` diagonal moves follows (diagonal moves
-           may cut corners here, as the piece may). With move costs ``α`` (axis) and ``β``
-           (diagonal) the walk costs ``N(a, b) = (a − b)·α + b·β``, a norm of the piece.
-        3. Three such norms never exceed the Euclidean length: the octile norm divided by its
-           worst ratio ``√(4 − 2√2) ≈ 1.0824`` (exact at 22.5°), the Chebyshev norm (α = β =
-           1, exact along the axes) and ``(|x| + |y|)/√2`` (α = 1/√2, β = √2, exact at 45°).
-           Their maximum is within 2 % of the straight-line distance in every direction (the
-           octile distance alone overestimates it by up to 8.2 %).
-        4. A corner-to-corner piece saves one move at its ends, which pays for the step
-           between the cells around a bend; the two ends of the path may cost one diagonal
-           ``√2·hres`` each, which is subtracted.
-
-        So each Dijkstra distance ``D`` obeys ``D − 2√2·hres <= L`` for every feasible path of
-        length ``L``, and every motion costs at least its length: the maximum of the three is
-        admissible. The search adds a heading term that stays admissible: a path that turns
-        the heading by ``Δθ`` (wrapped) turns at least ``|Δθ|`` in all; a car does so on arcs
-        of curvature at most 1/R, at least ``R·|Δθ|`` metres of them, each costing
-        ``non_straight_penalty − 1`` more than its length; a differential drive pays
-        ``turn_in_place_cost`` per radian. So A* with ``heuristic_weight=1`` returns
-        least-cost paths on its lattice; a weight above 1 gives this up on purpose, for speed.
-        """
-        blocked = self._heuristic_blocked
-        rows, cols = blocked.shape
-        # a coarse cell wider than the map is the map (and keeps the padding finite)
-        f = max(1, min(round(self.xy_resolution / self.grid.resolution), max(rows, cols)))
-        pr, pc = (-rows) % f, (-cols) % f
-        free = np.pad(~blocked, ((0, pr), (0, pc)), constant_values=False)
-        coarse_free = free.reshape(free.shape[0] // f, f, free.shape[1] // f, f).any(axis=(1, 3))
-        hres = self.grid.resolution * f
-        gr = int((goal[1] - self._local.origin[1]) // hres)
-        gc = int((goal[0] - self._local.origin[0]) // hres)
-        coarse_free[gr, gc] = True
-        occ = (~coarse_free).astype(np.uint8)
-        dist = np.zeros(occ.size)
-        for axis, diagonal in _HEURISTIC_NORMS:
-            d = _dijkstra_kernel(occ, gr, gc, 8, True, axis, diagonal)
-            np.maximum(dist, d, out=dist)
-        bound = dist.reshape(occ.shape) * hres - 2.0 * math.sqrt(2.0) * hres
-        return np.maximum(bound, 0.0), hres
+        """The admissible obstacle bound to ``goal`` (grid frame) for this planner's footprint
+        and bins (``hybrid_heuristic._holonomic_heuristic``)."""
+        return _holonomic_heuristic(
+            self._heuristic_blocked, self.grid.resolution, self.xy_resolution, goal
+        )
 
     def _search_ends(self, start: np.ndarray, goal: np.ndarray) -> list[bool]:
         """The ends the search grows from, in turn (True: from the goal): ``search_from``'s
@@ -838,40 +703,6 @@ def _driven_backwards(path: PlannedPath) -> PlannedPath:
     )
 
 
-def _arc_offsets(kappa: float, s: np.ndarray) -> np.ndarray:
-    """Poses after signed distances ``s`` along an arc of curvature ``kappa`` from the origin."""
-    if kappa == 0.0:
-        return np.stack([s, np.zeros_like(s), np.zeros_like(s)], -1)
-    th = kappa * s
-    return np.stack([np.sin(th) / kappa, (1.0 - np.cos(th)) / kappa, th], -1)
-
-
-def _compose(base: np.ndarray, offs: np.ndarray) -> np.ndarray:
-    c, s = math.cos(base[2]), math.sin(base[2])
-    out = np.empty_like(offs)
-    out[:, 0] = base[0] + c * offs[:, 0] - s * offs[:, 1]
-    out[:, 1] = base[1] + s * offs[:, 0] + c * offs[:, 1]
-    out[:, 2] = base[2] + offs[:, 2]
-    return out
-
-
-def _sample_segment(
-    pose: np.ndarray, kind: int, length: float, radius: float, step: float, rho: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    if kind == _ROTATE:
-        n = max(1, math.ceil(abs(length) * rho / step))
-        offs = np.zeros((n, 3))
-        offs[:, 2] = length * np.arange(1, n + 1) / n
-        kappa = math.copysign(math.inf, length)
-        return _compose(pose, offs), np.zeros(n, np.int64), np.full(n, kappa), np.zeros(n)
-    n = max(1, math.ceil(abs(length) / step))
-    s = length * np.arange(1, n + 1) / n
-    kappa = kind / radius if kind != 0 else 0.0
-    seg = _compose(pose, _arc_offsets(kappa, s))
-    d = 1 if length > 0 else -1
-    return seg, np.full(n, d), np.full(n, kappa), np.full(n, abs(length) / n)
-
-
 def _fill_direction(d: np.ndarray) -> np.ndarray:
     d = d.copy()
     nonzero = np.nonzero(d)[0]
@@ -899,492 +730,3 @@ def _ensure_compiled() -> None:
 
 
 # ---------------------------------------------------------------------- Numba kernels
-@numba.njit(cache=True)
-def _now():
-    with numba.objmode(t="float64"):
-        t = time.perf_counter()
-    return t
-
-
-@numba.njit(cache=True, inline="always")
-def _wrap(a):
-    """``a`` wrapped to (−π, π] [rad], by arithmetic (no trigonometric calls)."""
-    if -math.pi < a <= math.pi:
-        return a
-    return a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))
-
-
-@numba.njit(cache=True)
-def _advance(x, y, th, kind, s, radius):
-    if kind == _ROTATE:
-        return x, y, th + s
-    if kind == 0:
-        return x + s * math.cos(th), y + s * math.sin(th), th
-    k = kind / radius
-    th1 = th + k * s
-    return x + (math.sin(th1) - math.sin(th)) / k, y + (math.cos(th) - math.cos(th1)) / k, th1
-
-
-@numba.njit(cache=True)
-def _shot_word(x, y, th, gx, gy, gth, mode, radius, families, reverse_ok):
-    """Segment types and signed lengths (m, or rad for turns in place) of the curve shot."""
-    types = np.zeros(5, dtype=np.int64)
-    lengths = np.zeros(5)
-    if mode == _MODE_RS:
-        nx, ny, nphi = _normalise(x, y, th, gx, gy, gth, radius)
-        t, ell, total = _best(nx, ny, nphi, families)
-        if not np.isfinite(total):
-            return False, types, lengths
-        for i in range(5):
-            types[i] = t[i]
-            lengths[i] = ell[i] * radius
-        return True, types, lengths
-    if mode == _MODE_DUBINS:
-        segs = _dubins_all(x, y, th, gx, gy, gth, radius)
-        best = -1
-        best_len = np.inf
-        for w in range(6):
-            if not np.isnan(segs[w, 0]):
-                total = segs[w, 0] + segs[w, 1] + segs[w, 2]
-                if total < best_len:
-                    best_len = total
-                    best = w
-        if best < 0:
-            return False, types, lengths
-        for i in range(3):
-            types[i] = _DUBINS_WORDS[best, i]
-            lengths[i] = segs[best, i] * radius
-        return True, types, lengths
-    # rotate - straight - rotate
-    dx = gx - x
-    dy = gy - y
-    d = math.hypot(dx, dy)
-    heading = math.atan2(dy, dx) if d > 1e-12 else th
-    sign = 1.0
-    a1 = _wrap(heading - th)
-    if reverse_ok:
-        a1b = _wrap(heading + math.pi - th)
-        a2b = _wrap(gth - heading - math.pi)
-        a2 = _wrap(gth - heading)
-        if abs(a1b) + abs(a2b) < abs(a1) + abs(a2):
-            a1 = a1b
-            sign = -1.0
-    a2 = _wrap(gth - (th + a1))
-    types[0] = _ROTATE
-    lengths[0] = a1
-    types[1] = 0
-    lengths[1] = sign * d
-    types[2] = _ROTATE
-    lengths[2] = a2
-    return True, types, lengths
-
-
-@numba.njit(cache=True, inline="always")
-def _next_sample(k, clear, per):
-    """The first sample after ``k`` that the clearance ``clear`` [m] at sample ``k`` does not
-    vouch for, when no covering circle moves more than ``per`` [m] from one sample to the
-    next (conservative advancement: the samples in between are clear)."""
-    if clear <= 0.0:
-        return k + 1
-    if per <= 0.0:
-        return 1 << 62
-    return k + max(1, math.ceil(min(clear / per, 1.0e15)))
-
-
-@numba.njit(cache=True, _nrt=False)
-def _shot_free(
-    x,
-    y,
-    th,
-    types,
-    lengths,
-    radius,
-    step,
-    rho,
-    world,
-    poly,
-    circles,
-    cradius,
-    wp,
-    near,
-):
-    for i in range(5):
-        ell = lengths[i]
-        if ell == 0.0:
-            continue
-        kind = types[i]
-        span = abs(ell) * rho if kind == _ROTATE else abs(ell)
-        n = max(1, math.ceil(span / step))
-        # the most any covering circle (within rho of the reference point) moves per sample
-        per = (
-            span / n
-            if kind == _ROTATE
-            else abs(ell) / n * (1.0 + (rho / radius if kind != 0 else 0.0))
-        )
-        dist, res, x0, y0 = world[2], world[3], world[4], world[5]
-        k = _next_sample(0, _circles_clearance(dist, res, x0, y0, circles, cradius, x, y, th), per)
-        while k <= n:
-            px, py, pth = _advance(x, y, th, kind, ell * k / n, radius)
-            clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
-            if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth, wp, near):
-                return False
-            k = _next_sample(k, clear, per)
-        x, y, th = _advance(x, y, th, kind, ell, radius)
-    return True
-
-
-@numba.njit(cache=True, _nrt=False)
-def _free_prefix(
-    world, dist, res, x0, y0, poly, circles, cradius, x, y, th, offsets, p, ns, sweep, clear0,
-    wp, near,
-):  # fmt: skip
-    """How many leading samples ``offsets[p, :ns]`` of primitive ``p`` from pose ``(x, y, th)``
-    are free (``ns``: all). Not inlined and without reference counting, as the collision
-    kernels (see :mod:`wheelbase.planning.collision`): inlined, it took and released a
-    reference to each of its 15 array arguments at every call. ``sweep`` bounds how far a
-    covering circle moves along the whole primitive and ``clear0`` is the clearance of the
-    circles at the pose (see ``_circles_clearance``; ``dist``, ``res``, ``x0``, ``y0``
-    are the world's distance field and raster geometry; ``wp``, ``near``: scratch)."""
-    c = math.cos(th)
-    s = math.sin(th)
-    per = sweep / ns
-    k = _next_sample(-1, clear0, per)
-    while k < ns:
-        px = x + c * offsets[p, k, 0] - s * offsets[p, k, 1]
-        py = y + s * offsets[p, k, 0] + c * offsets[p, k, 1]
-        pth = th + offsets[p, k, 2]
-        clear = _circles_clearance(dist, res, x0, y0, circles, cradius, px, py, pth)
-        if clear <= 0.0 and _collides_one(world, poly, circles, cradius, px, py, pth, wp, near):
-            return k
-        k = _next_sample(k, clear, per)
-    return ns
-
-
-@numba.njit(cache=True, inline="always")
-def _bin(x, y, th, x0, y0, xy_res, nx, ny, nh):
-    ix = math.floor((x - x0) / xy_res)
-    iy = math.floor((y - y0) / xy_res)
-    if ix < 0 or ix >= nx or iy < 0 or iy >= ny:
-        return -1
-    ih = math.floor(_wrap(th) / (2.0 * math.pi / nh) + 0.5) % nh
-    return (iy * nx + ix) * nh + ih
-
-
-@numba.njit(cache=True, inline="always")
-def _cheap_heuristic(x, y, th, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost):
-    """A lower bound on :func:`_heuristic` without the curve length (a table look-up): the
-    holonomic cost-to-go or the straight-line distance, plus the least cost of turning to the
-    goal's heading (for turning in place, this is the whole heuristic)."""
-    j = math.floor((x - x0) / hres)
-    i = math.floor((y - y0) / hres)
-    if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
-        return np.inf
-    return max(math.hypot(gx - x, gy - y), hgrid[i, j]) + turn_cost * abs(_wrap(gth - th))
-
-
-@numba.njit(cache=True)
-def _heuristic(x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost):
-    """Admissible cost-to-go: max(curve length without obstacles, holonomic cost-to-go with
-    them) + ``turn_cost`` × |heading change| (see ``HybridAStar._holonomic_heuristic``)."""
-    j = math.floor((x - x0) / hres)
-    i = math.floor((y - y0) / hres)
-    if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
-        return np.inf
-    h2 = hgrid[i, j]
-    turn = turn_cost * abs(_wrap(gth - th))
-    d = math.hypot(gx - x, gy - y)
-    if mode == _MODE_POINT or (mode == _MODE_RS and h2 >= d + math.pi * radius):
-        # turning in place: the Euclidean distance is the curve length. Reeds–Shepp: turning
-        # to face the goal (or away), a straight line and turning to the goal's heading is a
-        # path of at most d + πR (each turn in place costs |angle|·R, e.g. by L+R−L+, and
-        # the two turns add up to at most π for one of the two driving directions): the
-        # curve length cannot exceed h2, and its microseconds are saved
-        return max(d, h2) + turn
-    if mode == _MODE_RS:
-        nx, ny, nphi = _normalise(x, y, th, gx, gy, gth, radius)
-        h1 = _min_length(nx, ny, nphi, families) * radius
-    else:
-        segs = _dubins_all(x, y, th, gx, gy, gth, radius)
-        h1 = np.inf
-        for w in range(6):
-            if not np.isnan(segs[w, 0]):
-                h1 = min(h1, (segs[w, 0] + segs[w, 1] + segs[w, 2]) * radius)
-    return max(h1, h2) + turn
-
-
-@numba.njit(cache=True)
-def _grown(a, n, capacity):
-    """A copy of ``a[:n]`` in a new array of ``capacity`` entries."""
-    out = np.empty(capacity, dtype=a.dtype)
-    out[:n] = a[:n]
-    return out
-
-
-@numba.njit(cache=True)
-def _search(
-    world,
-    poly,
-    circles,
-    cradius,
-    hgrid,
-    hres,
-    start,
-    goal,
-    offsets,
-    nsamples,
-    pdir,
-    pkappa,
-    pcost,
-    psweep,
-    nx,
-    ny,
-    nh,
-    xy_res,
-    radius,
-    mode,
-    families,
-    rho,
-    switch_penalty,
-    change_penalty,
-    hweight,
-    ratio,
-    step,
-    xy_tol,
-    yaw_tol,
-    max_iter,
-    time_limit,
-    turn_cost,
-    cut_moves,
-):
-    t_start = _now()
-    dist = world[2]
-    res = world[3]
-    x0 = world[4]
-    y0 = world[5]
-    capacity = 4096
-    xs = np.empty(capacity)
-    ys = np.empty(capacity)
-    ths = np.empty(capacity)
-    gs = np.empty(capacity)
-    parents = np.empty(capacity, dtype=np.int64)
-    prim_of = np.empty(capacity, dtype=np.int64)
-    used_of = np.empty(capacity, dtype=np.int64)  # samples of the primitive driven (a cut move)
-    last_dir = np.empty(capacity, dtype=np.int64)
-    # whether a node's queue key holds the full heuristic or only the cheap bound: the curve
-    # length (microseconds) is computed when a node first reaches the top of the queue, so
-    # children that are never expanded never pay for it (the key only grows: still A*)
-    exact_h = np.empty(capacity, dtype=np.bool_)
-    nbins = nx * ny * nh
-    best_g = np.full(nbins, np.inf)
-    gx, gy, gth = goal[0], goal[1], goal[2]
-    reverse_ok = False
-    for p in range(pdir.shape[0]):
-        if pdir[p] < 0:
-            reverse_ok = True
-
-    xs[0], ys[0], ths[0], gs[0] = start[0], start[1], start[2], 0.0
-    parents[0] = -1
-    prim_of[0] = -1
-    used_of[0] = 0
-    last_dir[0] = 0
-    exact_h[0] = True
-    n_nodes = 1
-    b0 = _bin(start[0], start[1], start[2], x0, y0, xy_res, nx, ny, nh)
-    best_g[b0] = 0.0
-    h0 = _heuristic(
-        start[0],
-        start[1],
-        start[2],
-        gx,
-        gy,
-        gth,
-        mode,
-        radius,
-        families,
-        hgrid,
-        hres,
-        x0,
-        y0,
-        turn_cost,
-    )
-    # the open list: a binary heap of (key, node) in two arrays (numba's heapq on a list costs
-    # atomic reference counts at every push and pop, a quarter of the search's time); the
-    # order is that of the tuples, so the search is the same
-    hcap = 2 * capacity
-    hkeys = np.empty(hcap)
-    hids = np.empty(hcap, dtype=np.int64)
-    hsize = _heap_push(hkeys, hids, 0, hweight * h0, 0)
-    expanded = 0
-    since_shot = 1 << 30
-    status = 1
-    goal_node = -1
-    shot_types = np.zeros(5, dtype=np.int64)
-    shot_lengths = np.zeros(5)
-    n_prims = pdir.shape[0]
-    placed, listed = _scratch(world, poly)  # scratch buffers of the exact collision check
-
-    # The node arrays grow in the outer loop only: reassigning them inside the search loop
-    # makes Numba reference-count all eight at every accepted child (a third of the time).
-    while True:
-        grow = False
-        if n_nodes + n_prims > capacity:
-            capacity *= 2
-            xs = _grown(xs, n_nodes, capacity)
-            ys = _grown(ys, n_nodes, capacity)
-            ths = _grown(ths, n_nodes, capacity)
-            gs = _grown(gs, n_nodes, capacity)
-            parents = _grown(parents, n_nodes, capacity)
-            prim_of = _grown(prim_of, n_nodes, capacity)
-            used_of = _grown(used_of, n_nodes, capacity)
-            last_dir = _grown(last_dir, n_nodes, capacity)
-            exact_h = _grown(exact_h, n_nodes, capacity)
-        if hsize + n_prims + 1 > hcap:
-            hcap *= 2
-            hkeys = _grown(hkeys, hsize, hcap)
-            hids = _grown(hids, hsize, hcap)
-        while hsize > 0:
-            if n_nodes + n_prims > capacity or hsize + n_prims + 1 > hcap:
-                grow = True  # room for every child of the next node: grow outside this loop
-                break
-            f, node, hsize = _heap_pop(hkeys, hids, hsize)
-            x, y, th, g = xs[node], ys[node], ths[node], gs[node]
-            b = _bin(x, y, th, x0, y0, xy_res, nx, ny, nh)
-            if g > best_g[b] + 1e-9:  # closed (-inf) or reached more cheaply since
-                continue
-            if not exact_h[node]:
-                exact_h[node] = True
-                hfull = _heuristic(
-                    x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y0, turn_cost
-                )
-                if not hfull < _FINITE:
-                    continue
-                if (1.0 - _DEEPER) * g + hweight * hfull > f:
-                    key = (1.0 - _DEEPER) * g + hweight * hfull
-                    hsize = _heap_push(hkeys, hids, hsize, key, node)
-                    continue
-            best_g[b] = -np.inf  # closed
-            expanded += 1
-            if expanded > max_iter:
-                status = 2
-                break
-            if (expanded & 255) == 0 and _now() - t_start > time_limit:
-                status = 3
-                break
-            # goal tolerance
-            if (
-                xy_tol > 0.0
-                and math.hypot(x - gx, y - gy) <= xy_tol
-                and abs(_wrap(th - gth)) <= yaw_tol
-            ):
-                status = 0
-                goal_node = node
-                break
-            # analytic expansion
-            h = (f - (1.0 - _DEEPER) * g) / hweight
-            since_shot += 1
-            # An infinite heuristic (no free way to the goal even for a point) means no shot can
-            # succeed either: none is tried, and int() never sees inf (undefined when compiled).
-            shots = h < _FINITE
-            interval = int(min(max(h, 0.0) / (ratio * xy_res), 1.0e18)) if shots else 0
-            if shots and since_shot >= interval:
-                since_shot = 0
-                ok, types, lengths = _shot_word(
-                    x, y, th, gx, gy, gth, mode, radius, families, reverse_ok
-                )
-                if ok and _shot_free(
-                    x,
-                    y,
-                    th,
-                    types,
-                    lengths,
-                    radius,
-                    step,
-                    rho,
-                    world,
-                    poly,
-                    circles,
-                    cradius,
-                    placed,
-                    listed,
-                ):
-                    status = 0
-                    goal_node = node
-                    shot_types = types
-                    shot_lengths = lengths
-                    break
-            c = math.cos(th)
-            s = math.sin(th)
-            parent_prim = prim_of[node]
-            # lower bound on how far every covering circle may move and stay clear
-            free_sweep = _circles_clearance(dist, res, x0, y0, circles, cradius, x, y, th)
-            for p in range(n_prims):
-                ns = nsamples[p]
-                d = pdir[p]
-                ld = last_dir[node]
-                extra = switch_penalty if (d != 0 and ld != 0 and d != ld) else 0.0
-                pc = pcost[p]
-                if (
-                    parent_prim >= 0
-                    and pdir[p] != 0
-                    and pdir[parent_prim] != 0
-                    and pkappa[p] != pkappa[parent_prim]
-                ):
-                    extra += change_penalty * pcost[p]  # the whole primitive's, cut or not
-                nxp = x + c * offsets[p, ns - 1, 0] - s * offsets[p, ns - 1, 1]
-                nyp = y + s * offsets[p, ns - 1, 0] + c * offsets[p, ns - 1, 1]
-                nth = _wrap(th + offsets[p, ns - 1, 2])
-                nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-                full_open = nb >= 0 and g + (pc + extra) < best_g[nb]
-                near = psweep[p] >= free_sweep
-                if not full_open and not (cut_moves and near):
-                    continue
-                use = ns
-                if near:
-                    use = _free_prefix(
-                        world, dist, res, x0, y0, poly, circles, cradius, x, y, th,
-                        offsets, p, ns, psweep[p], free_sweep, placed, listed,
-                    )  # fmt: skip
-                    if use == 0 or (use < ns and not cut_moves) or (use == ns and not full_open):
-                        continue
-                    if use < ns:  # the move until contact: up to the last free sample
-                        nxp = x + c * offsets[p, use - 1, 0] - s * offsets[p, use - 1, 1]
-                        nyp = y + s * offsets[p, use - 1, 0] + c * offsets[p, use - 1, 1]
-                        nth = _wrap(th + offsets[p, use - 1, 2])
-                        nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
-                        if nb < 0 or best_g[nb] == -np.inf:
-                            continue
-                ng = g + ((pc if use == ns else pc * use / ns) + extra)
-                if ng >= best_g[nb]:
-                    continue
-                hn = _cheap_heuristic(
-                    nxp, nyp, nth, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost
-                )
-                if not hn < _FINITE:
-                    continue
-                best_g[nb] = ng
-                xs[n_nodes] = nxp
-                ys[n_nodes] = nyp
-                ths[n_nodes] = nth
-                gs[n_nodes] = ng
-                parents[n_nodes] = node
-                prim_of[n_nodes] = p
-                used_of[n_nodes] = use
-                last_dir[n_nodes] = d if d != 0 else ld
-                exact_h[n_nodes] = mode == _MODE_POINT  # there the cheap bound is the heuristic
-                hsize = _heap_push(hkeys, hids, hsize, (1.0 - _DEEPER) * ng + hweight * hn, n_nodes)
-                n_nodes += 1
-        if not grow:
-            break
-    return (
-        status,
-        goal_node,
-        xs[:n_nodes],
-        ys[:n_nodes],
-        ths[:n_nodes],
-        parents[:n_nodes],
-        prim_of[:n_nodes],
-        used_of[:n_nodes],
-        expanded,
-        shot_types,
-        shot_lengths,
-    )
