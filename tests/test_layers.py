@@ -9,7 +9,18 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "wheelbase"
 
 # bottom to top; a module may import its own layer and the layers below it
 LAYERS = (
-    {"errors", "_validate", "_io", "_lazy", "_jax", "geometry", "polyline", "limits", "plot"},
+    {
+        "errors",
+        "_validate",
+        "_io",
+        "_lazy",
+        "_jax",
+        "geometry",
+        "geometry_numba",
+        "polyline",
+        "limits",
+        "plot",
+    },
     {"models", "planning"},
     {
         "integrate",

@@ -80,6 +80,7 @@ from scipy.integrate import solve_ivp
 from wheelbase._validate import as_float_array, check_choice, nonnegative, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import to_world_frame, wrap_angle
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.integrate import time_grid
 
 __all__ = [
@@ -354,7 +355,7 @@ def _step_many(states, torques, p, h):
     for i in range(states.shape[0]):
         s = states[i]
         _step(s, torques[i, 0], torques[i, 1], p, h, 1, k1, k2, k3, k4, tmp)
-        s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
+        s[2] = wrap_angle_scalar(s[2])
 
 
 @numba.njit(cache=True, parallel=True)
@@ -374,7 +375,7 @@ def _roll(states, torques, times, p, method, out, fy_out):
                 method, k1, k2, k3, k4, tmp,
             )  # fmt: skip
             fy_out[k, i] = fy
-            s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
+            s[2] = wrap_angle_scalar(s[2])
             for j in range(6):
                 out[k + 1, i, j] = s[j]
         last = n_steps - 1 if torques.shape[0] > 1 else 0
@@ -852,7 +853,7 @@ def _simulate_callable(dynamics, function, times, s0, method, rtol, atol):
             used[step] = torque_at(times[step], state)
             _step(state, used[step, 0], used[step, 1], p, times[step + 1] - times[step],
                   _FIXED.index(method), *k)  # fmt: skip
-            state[2] = math.atan2(math.sin(state[2]), math.cos(state[2]))
+            state[2] = wrap_angle_scalar(state[2])
             out[step + 1] = state
     else:
         buf = np.empty(6)

@@ -10,13 +10,9 @@ import math
 
 import numba
 
+from wheelbase.geometry_numba import wrap_angle_scalar
+
 __all__ = ["roll_constant", "step_batch", "step_batch_serial"]
-
-
-@numba.njit(cache=True, inline="always")
-def _wrap(angle: float) -> float:
-    wrapped = math.atan2(math.sin(angle), math.cos(angle))
-    return math.pi if wrapped <= -math.pi else wrapped
 
 
 @numba.njit(cache=True, inline="always")
@@ -98,7 +94,7 @@ def roll_constant(pose0, twist, times, method, record_index, out):
         weighted_rate = r + 4.0 * r + r
         slot = 0
         if record_index[0] == 0:
-            out[0, i, 0], out[0, i, 1], out[0, i, 2] = x, y, _wrap(th)
+            out[0, i, 0], out[0, i, 1], out[0, i, 2] = x, y, wrap_angle_scalar(th)
             slot = 1
         for k in range(n_steps):
             h = times[k + 1] - times[k]
@@ -110,9 +106,9 @@ def roll_constant(pose0, twist, times, method, record_index, out):
             else:
                 x, y, th = _step_scalar(x, y, th, u, v, r, u, v, r, u, v, r, h, method)
             if th > math.pi or th <= -math.pi:  # keep θ small, as the NumPy backend does
-                th = _wrap(th)
+                th = wrap_angle_scalar(th)
             if slot < record_index.shape[0] and record_index[slot] == k + 1:
-                out[slot, i, 0], out[slot, i, 1], out[slot, i, 2] = x, y, _wrap(th)
+                out[slot, i, 0], out[slot, i, 1], out[slot, i, 2] = x, y, wrap_angle_scalar(th)
                 slot += 1
 
 
@@ -127,9 +123,9 @@ def step_batch(pose, z0, zm, z1, h, method):
             z1[i, 0], z1[i, 1], z1[i, 2],
             h, method,
         )  # fmt: skip
-        # atan2(sin θ, cos θ) returns θ itself (to rounding) inside (−π, π]: skip it there.
+        # an angle inside (−π, π] is returned as it is: skip the call there
         if th > math.pi or th <= -math.pi:
-            th = _wrap(th)
+            th = wrap_angle_scalar(th)
         pose[i, 0], pose[i, 1], pose[i, 2] = x, y, th
 
 

@@ -36,6 +36,7 @@ import numpy as np
 
 from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError, DataError, MapError, PlanningError, ScenarioError
+from wheelbase.geometry import wrap_angle
 from wheelbase.models import Bicycle, DiffDrive, RearWheelBicycle, Unicycle
 from wheelbase.models.bicycle import Ackermann
 from wheelbase.models.path import PoseTrajectory
@@ -660,7 +661,7 @@ def prepare(
 
     def reference_pose(t: float) -> np.ndarray:
         rows = np.array([interpolate_rows(times, table, t) for times, table in tables])
-        rows[:, 2] = np.arctan2(np.sin(rows[:, 2]), np.cos(rows[:, 2]))
+        rows[:, 2] = wrap_angle(rows[:, 2])
         return rows[0] if len(rows) == 1 else rows
 
     footprint = _footprint(robot)

@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite, positive
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
 from wheelbase.models.base import KinematicModel
 
 __all__ = [
@@ -384,7 +385,7 @@ class GoalController:
         dx, dy = pose[..., 0] - goal[..., 0], pose[..., 1] - goal[..., 1]
         c, s = np.cos(goal[..., 2]), np.sin(goal[..., 2])
         x, y = c * dx + s * dy, -s * dx + c * dy
-        theta = np.arctan2(np.sin(pose[..., 2] - goal[..., 2]), np.cos(pose[..., 2] - goal[..., 2]))
+        theta = wrap_angle(pose[..., 2] - goal[..., 2])
         if self._state.get("shape") != x.shape:
             self._state.clear()
             self._state["shape"] = x.shape

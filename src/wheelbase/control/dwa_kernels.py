@@ -32,6 +32,7 @@ from wheelbase.control.obstacle_critics import (
     track_costs,
 )
 from wheelbase.geometry import wrap_angle
+from wheelbase.geometry_numba import wrap_angle_scalar
 
 __all__ = ["SCORES", "arc_poses", "dwa_kernel", "dwa_scores_numpy", "goal_distance_field"]
 
@@ -222,7 +223,7 @@ def dwa_kernel(
         scores[i, 4] = soft_cost / steps
         scores[i, 5] = soft_map / steps
         scores[i, 6] = soft_dyn / steps
-        turn = math.atan2(math.sin(th - goal[2]), math.cos(th - goal[2]))
+        turn = wrap_angle_scalar(th - goal[2])
         scores[i, 7] = abs(turn)
         collided[i] = hit
 

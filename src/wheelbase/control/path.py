@@ -65,10 +65,6 @@ __all__ = [
 OUTPUTS: tuple[str, ...] = ("velocity", "steering")
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(angle), np.cos(angle))
-
-
 # --------------------------------------------------------------------------- polyline
 @dataclass(frozen=True)
 class _Polyline:
@@ -182,7 +178,7 @@ class _Polyline:
         for first, end in self.sections:
             if end - first < 2:
                 continue
-            turn = _wrap(np.diff(heading[first:end]))
+            turn = wrap_angle(np.diff(heading[first:end]))
             mean = 0.5 * (lengths[first : end - 1] + lengths[first + 1 : end])
             inner = turn / mean
             kappa[first + 1 : end] = inner
@@ -498,7 +494,7 @@ class SegmentFollower(PathFollower):
         scale = tab["length"][seg] if self.length_scale is None else self.length_scale
         d = _offset_right(point, seg, tab) / scale
         heading_ref = tab["heading"][seg] + np.arctan(self.k_r * d)
-        return self.k_heading * _wrap(heading_ref - heading), None
+        return self.k_heading * wrap_angle(heading_ref - heading), None
 
 
 @dataclass(frozen=True)
@@ -543,7 +539,7 @@ class PurePursuit(PathFollower):
         goal = goal + np.maximum(beyond, 0.0)[:, None] * last_dir
         rel = goal - point
         distance = np.maximum(np.hypot(rel[:, 0], rel[:, 1]), 1e-9)
-        alpha = _wrap(np.arctan2(rel[:, 1], rel[:, 0]) - heading)
+        alpha = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - heading)
         curvature = 2.0 * np.sin(alpha) / distance
         return speed * curvature, None
 
@@ -591,7 +587,7 @@ class Stanley(PathFollower):
             if not move.any():
                 break
             seg = np.where(move, seg + 1, seg)
-        theta_e = _wrap(tab["heading"][seg] - heading)
+        theta_e = wrap_angle(tab["heading"][seg] - heading)
         e = _offset_right(front, seg, tab)
         delta = theta_e + np.arctan(self.k * e / (self.k_soft + speed))
         return None, np.clip(delta, -self.max_steering, self.max_steering)
@@ -629,7 +625,7 @@ class RearWheelFeedback(PathFollower):
         frac = np.clip(u, 0.0, 1.0)
         kappa = (1.0 - frac) * tab["curvature"][seg] + frac * tab["curvature"][seg + 1]
         e = -_offset_right(point, seg, tab)
-        theta_e = _wrap(heading - tab["heading"][seg])
+        theta_e = wrap_angle(heading - tab["heading"][seg])
         margin = np.maximum(1.0 - kappa * e, 0.1)
         omega = (
             speed * kappa * np.cos(theta_e) / margin

@@ -30,6 +30,7 @@ import numpy as np
 from wheelbase._validate import positive
 from wheelbase.control.base import GoalController
 from wheelbase.errors import ConfigError
+from wheelbase.geometry import wrap_angle
 
 __all__ = ["GoToPoint", "check_point_gains", "go_to_point_law"]
 
@@ -94,7 +95,7 @@ def go_to_point_law(
         Reverse when the goal is behind (e_φ' = atan(tan e_φ), v·sgn(cos e_φ)).
     """
     distance = np.hypot(dx, dy)
-    error = np.arctan2(np.sin(np.arctan2(dy, dx) - heading), np.cos(np.arctan2(dy, dx) - heading))
+    error = wrap_angle(np.arctan2(dy, dx) - heading)
     if bidirectional:
         # atan(tan e) without the poles of tan: the error folded into [−π/2, π/2].
         sign = np.where(np.cos(error) >= 0.0, 1.0, -1.0)

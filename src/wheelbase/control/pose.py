@@ -41,6 +41,7 @@ from wheelbase._validate import check_choice, finite, positive
 from wheelbase.control.base import GoalController
 from wheelbase.control.point import GoToPoint, check_point_gains, go_to_point_law
 from wheelbase.errors import ConfigError
+from wheelbase.geometry import wrap_angle
 
 __all__ = [
     "POSE_LAWS",
@@ -51,10 +52,6 @@ __all__ = [
     "ViaPoint",
     "make_pose_law",
 ]
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(angle), np.cos(angle))
 
 
 # --------------------------------------------------------------------------- law 2
@@ -123,15 +120,15 @@ class PolarPose(GoalController):
             object.__setattr__(self, name, value)
 
     def _start(self, x, y, theta):
-        alpha = _wrap(np.arctan2(-y, -x) - theta)
+        alpha = wrap_angle(np.arctan2(-y, -x) - theta)
         behind = (alpha <= -0.5 * np.pi) | (alpha > 0.5 * np.pi)
         self._state["sign"] = np.where(behind & self.bidirectional, -1.0, 1.0)
 
     def _law(self, t, x, y, theta):
         sign = self._state["sign"]
         rho = np.hypot(x, y)
-        alpha = _wrap(np.arctan2(-sign * y, -sign * x) - theta)
-        beta = _wrap(-theta - alpha)
+        alpha = wrap_angle(np.arctan2(-sign * y, -sign * x) - theta)
+        beta = wrap_angle(-theta - alpha)
         return sign * self.k_rho * rho, self.k_alpha * alpha + self.k_beta * beta
 
 
@@ -173,7 +170,7 @@ class Aicardi(GoalController):
     def _law(self, t, x, y, theta):
         e = np.hypot(x, y)
         psi = np.arctan2(-y, -x)
-        alpha = _wrap(psi - theta)
+        alpha = wrap_angle(psi - theta)
         sinc = np.sinc(alpha / np.pi)  # sin α / α, 1 at α = 0
         v = self.gamma * np.cos(alpha) * e
         omega = self.k * alpha + self.gamma * np.cos(alpha) * sinc * (alpha + self.h * psi)
@@ -200,7 +197,7 @@ class _Aligning(GoalController):
             np.hypot(x, y) < self.align_distance
         )
         self._state["align"] = near
-        return np.where(near, 0.0, v), np.where(near, self.k_align * _wrap(-theta), omega)
+        return np.where(near, 0.0, v), np.where(near, self.k_align * wrap_angle(-theta), omega)
 
 
 @dataclass(frozen=True)
@@ -296,7 +293,7 @@ class ViaDirection(_Aligning):
         heading_ref = np.where(
             np.abs(alpha) < beta, bearing + alpha, bearing + beta * np.sign(alpha)
         )
-        error = _wrap(heading_ref - theta)
+        error = wrap_angle(heading_ref - theta)
         v = self.k_speed * distance * np.maximum(np.cos(error), 0.0)
         return self._aligned(x, y, theta, v, self.k_heading * error)
 
@@ -441,7 +438,7 @@ class LineArc(_Aligning):
         line_heading = np.arctan2(seg[..., 1], seg[..., 0])
         offset_right = (rel_x * seg[..., 1] - rel_y * seg[..., 0]) / np.sqrt(seg_len2)
         heading_ref = line_heading + np.arctan(self.k_r * offset_right)
-        error = _wrap(heading_ref - theta)
+        error = wrap_angle(heading_ref - theta)
         v_line = self.speed * np.maximum(np.cos(error), 0.0)
         omega_line = self.k_heading * error
         on_arc = st["on_arc"] | (progress >= 1.0)
@@ -452,14 +449,14 @@ class LineArc(_Aligning):
         angle = np.arctan2(wy, wx)
         last = st["last_angle"]
         started = ~np.isnan(last)
-        step = np.where(started, _wrap(angle - np.where(started, last, 0.0)), 0.0)
+        step = np.where(started, wrap_angle(angle - np.where(started, last, 0.0)), 0.0)
         remaining = np.where(on_arc & started, st["remaining"] - sigma * step, st["remaining"])
         st["remaining"] = remaining
         st["last_angle"] = np.where(on_arc, angle, np.nan)
         st["on_arc"] = on_arc
         kappa = sigma / self.radius
         lateral = sigma * (self.radius - dist)
-        theta_e = _wrap(theta - (angle + sigma * 0.5 * np.pi))
+        theta_e = wrap_angle(theta - (angle + sigma * 0.5 * np.pi))
         v_arc = np.minimum(self.speed, self.k_speed * self.radius * remaining)
         omega_arc = (
             v_arc * kappa * np.cos(theta_e) / (1.0 - kappa * lateral)

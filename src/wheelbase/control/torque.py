@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.dynamics import DiffDriveDynamics
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.models.path import PoseTrajectory
 
 __all__ = [
@@ -127,7 +128,7 @@ def _control(ref, s, mp, g, tf, max_torque, ff, clamp, cst, dt):
     dx, dy = ref[0] - s[0], ref[1] - s[1]
     ex = c * dx + sn * dy
     ey = -sn * dx + c * dy
-    epsi = math.atan2(math.sin(ref[2] - s[2]), math.cos(ref[2] - s[2]))
+    epsi = wrap_angle_scalar(ref[2] - s[2])
     cr, sr = math.cos(ref[2]), math.sin(ref[2])
     vxr = cr * ref[3] - sr * ref[4]
     vyr = sr * ref[3] + cr * ref[4]
@@ -241,7 +242,7 @@ class TimedRows:
             Time [s].
         """
         row = interpolate_rows(self.times, self.rows, t)
-        row[2] = math.atan2(math.sin(row[2]), math.cos(row[2]))
+        row[2] = wrap_angle_scalar(row[2])
         return row
 
 

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
 from wheelbase.control.base import VELOCITY_COMMAND, VelocityLimits, saturate_velocity
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
 
 __all__ = ["Kanayama", "LinearTracker", "sample_reference", "tracking_errors"]
 
@@ -62,7 +63,7 @@ def sample_reference(reference: Any, t: float) -> tuple[np.ndarray, np.ndarray, 
         x = np.interp(t, times, poses[:, 0])
         y = np.interp(t, times, poses[:, 1])
         theta = np.interp(t, times, heading)
-        pose = np.array([x, y, np.arctan2(np.sin(theta), np.cos(theta))])
+        pose = np.array([x, y, float(wrap_angle(theta))])
         v = np.interp(t, times, np.asarray(reference.v, dtype=np.float64))
         omega = np.interp(t, times, np.asarray(reference.omega, dtype=np.float64))
         return pose, np.asarray(v), np.asarray(omega)
@@ -95,7 +96,7 @@ def tracking_errors(pose: ArrayLike, reference_pose: ArrayLike) -> np.ndarray:
     ref = as_float_array("reference pose", reference_pose, 3)
     dx, dy = ref[..., 0] - pose[..., 0], ref[..., 1] - pose[..., 1]
     c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
-    e_theta = np.arctan2(np.sin(ref[..., 2] - pose[..., 2]), np.cos(ref[..., 2] - pose[..., 2]))
+    e_theta = wrap_angle(ref[..., 2] - pose[..., 2])
     return np.stack(np.broadcast_arrays(c * dx + s * dy, -s * dx + c * dy, e_theta), -1)
 
 

@@ -68,7 +68,7 @@ from wheelbase._validate import (
     positive,
 )
 from wheelbase.errors import ConfigError, EstimationError, InputError, MapError
-from wheelbase.geometry import compose, relative_pose
+from wheelbase.geometry import compose, relative_pose, wrap_angle
 from wheelbase.limits import MAX_BEAMS, MAX_PARTICLES
 from wheelbase.localization.likelihood import (
     LikelihoodField,
@@ -498,7 +498,7 @@ class AMCL:
             raise InputError("cov must be a 3×3 positive semi-definite matrix")
         rng = as_rng(rng)
         particles = rng.multivariate_normal(pose, cov, self.max_particles, method="eigh")
-        particles[:, 2] = np.arctan2(np.sin(particles[:, 2]), np.cos(particles[:, 2]))
+        particles[:, 2] = wrap_angle(particles[:, 2])
         return self._state(particles, odom)
 
     def global_state(

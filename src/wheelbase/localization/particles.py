@@ -27,6 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage, special
 
+from wheelbase.geometry import wrap_angle
+
 __all__ = ["Cluster", "clusters", "kld_particles", "low_variance_resample"]
 
 
@@ -157,7 +159,7 @@ def _weighted_pose(particles: np.ndarray, weights: np.ndarray) -> tuple[np.ndarr
     theta = math.atan2(float(w @ np.sin(particles[:, 2])), float(w @ np.cos(particles[:, 2])))
     mean = np.array([w @ particles[:, 0], w @ particles[:, 1], theta])
     dev = particles - mean
-    dev[:, 2] = np.arctan2(np.sin(dev[:, 2]), np.cos(dev[:, 2]))
+    dev[:, 2] = wrap_angle(dev[:, 2])
     return mean, (dev * w[:, None]).T @ dev
 
 

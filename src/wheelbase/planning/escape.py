@@ -47,6 +47,7 @@ import numpy as np
 
 from wheelbase._validate import as_float_array, integer, nonnegative, positive
 from wheelbase.errors import ConfigError
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.limits import MAX_PRIMITIVE_SAMPLES
 from wheelbase.planning.collision import _clearance_one, _scratch
 from wheelbase.planning.footprint import Footprint
@@ -204,7 +205,7 @@ def escape(
             score = (
                 math.hypot(*(end[:2] - goal_xy))
                 + _MOVE_COST * (depth + 1)
-                + _HEADING_WEIGHT * radius * abs(math.remainder(end[2] - goal_th, 2 * math.pi))
+                + _HEADING_WEIGHT * radius * abs(wrap_angle_scalar(end[2] - goal_th))
             )
             heapq.heappush(open_list, (score, len(nodes) - 1))
     return found, expanded

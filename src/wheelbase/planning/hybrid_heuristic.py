@@ -14,6 +14,7 @@ import math
 import numba
 import numpy as np
 
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.planning.astar import _dijkstra_kernel
 from wheelbase.planning.dubins import _dubins_all
 from wheelbase.planning.reeds_shepp import _min_length, _normalise
@@ -89,14 +90,6 @@ def _holonomic_heuristic(
 
 
 @numba.njit(cache=True, inline="always")
-def _wrap(a):
-    """``a`` wrapped to (−π, π] [rad], by arithmetic (no trigonometric calls)."""
-    if -math.pi < a <= math.pi:
-        return a
-    return a - 2.0 * math.pi * math.ceil((a - math.pi) / (2.0 * math.pi))
-
-
-@numba.njit(cache=True, inline="always")
 def _cheap_heuristic(x, y, th, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost):
     """A lower bound on :func:`_heuristic` without the curve length (a table look-up): the
     holonomic cost-to-go or the straight-line distance, plus the least cost of turning to the
@@ -105,7 +98,9 @@ def _cheap_heuristic(x, y, th, gx, gy, gth, mode, hgrid, hres, x0, y0, turn_cost
     i = math.floor((y - y0) / hres)
     if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
         return np.inf
-    return max(math.hypot(gx - x, gy - y), hgrid[i, j]) + turn_cost * abs(_wrap(gth - th))
+    return max(math.hypot(gx - x, gy - y), hgrid[i, j]) + turn_cost * abs(
+        wrap_angle_scalar(gth - th)
+    )
 
 
 @numba.njit(cache=True)
@@ -117,7 +112,7 @@ def _heuristic(x, y, th, gx, gy, gth, mode, radius, families, hgrid, hres, x0, y
     if i < 0 or i >= hgrid.shape[0] or j < 0 or j >= hgrid.shape[1]:
         return np.inf
     h2 = hgrid[i, j]
-    turn = turn_cost * abs(_wrap(gth - th))
+    turn = turn_cost * abs(wrap_angle_scalar(gth - th))
     d = math.hypot(gx - x, gy - y)
     if mode == _MODE_POINT or (mode == _MODE_RS and h2 >= d + math.pi * radius):
         # turning in place: the Euclidean distance is the curve length. Reeds–Shepp: turning

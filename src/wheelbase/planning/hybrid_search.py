@@ -12,6 +12,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.planning._heap import _heap_pop, _heap_push
 from wheelbase.planning.collision import _circles_clearance, _collides_one, _scratch
 from wheelbase.planning.dubins import _WORDS as _DUBINS_WORDS
@@ -22,7 +23,6 @@ from wheelbase.planning.hybrid_heuristic import (
     _MODE_RS,
     _cheap_heuristic,
     _heuristic,
-    _wrap,
 )
 from wheelbase.planning.lattice import _ROTATE
 from wheelbase.planning.reeds_shepp import _best, _normalise
@@ -116,15 +116,15 @@ def _shot_word(x, y, th, gx, gy, gth, mode, radius, families, reverse_ok):
     d = math.hypot(dx, dy)
     heading = math.atan2(dy, dx) if d > 1e-12 else th
     sign = 1.0
-    a1 = _wrap(heading - th)
+    a1 = wrap_angle_scalar(heading - th)
     if reverse_ok:
-        a1b = _wrap(heading + math.pi - th)
-        a2b = _wrap(gth - heading - math.pi)
-        a2 = _wrap(gth - heading)
+        a1b = wrap_angle_scalar(heading + math.pi - th)
+        a2b = wrap_angle_scalar(gth - heading - math.pi)
+        a2 = wrap_angle_scalar(gth - heading)
         if abs(a1b) + abs(a2b) < abs(a1) + abs(a2):
             a1 = a1b
             sign = -1.0
-    a2 = _wrap(gth - (th + a1))
+    a2 = wrap_angle_scalar(gth - (th + a1))
     types[0] = _ROTATE
     lengths[0] = a1
     types[1] = 0
@@ -221,7 +221,7 @@ def _bin(x, y, th, x0, y0, xy_res, nx, ny, nh):
     iy = math.floor((y - y0) / xy_res)
     if ix < 0 or ix >= nx or iy < 0 or iy >= ny:
         return -1
-    ih = math.floor(_wrap(th) / (2.0 * math.pi / nh) + 0.5) % nh
+    ih = math.floor(wrap_angle_scalar(th) / (2.0 * math.pi / nh) + 0.5) % nh
     return (iy * nx + ix) * nh + ih
 
 
@@ -387,7 +387,7 @@ def _search(
             if (
                 xy_tol > 0.0
                 and math.hypot(x - gx, y - gy) <= xy_tol
-                and abs(_wrap(th - gth)) <= yaw_tol
+                and abs(wrap_angle_scalar(th - gth)) <= yaw_tol
             ):
                 status = 0
                 goal_node = node
@@ -445,7 +445,7 @@ def _search(
                     extra += change_penalty * pcost[p]  # the whole primitive's, cut or not
                 nxp = x + c * offsets[p, ns - 1, 0] - s * offsets[p, ns - 1, 1]
                 nyp = y + s * offsets[p, ns - 1, 0] + c * offsets[p, ns - 1, 1]
-                nth = _wrap(th + offsets[p, ns - 1, 2])
+                nth = wrap_angle_scalar(th + offsets[p, ns - 1, 2])
                 nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
                 full_open = nb >= 0 and g + (pc + extra) < best_g[nb]
                 near = psweep[p] >= free_sweep
@@ -462,7 +462,7 @@ def _search(
                     if use < ns:  # the move until contact: up to the last free sample
                         nxp = x + c * offsets[p, use - 1, 0] - s * offsets[p, use - 1, 1]
                         nyp = y + s * offsets[p, use - 1, 0] + c * offsets[p, use - 1, 1]
-                        nth = _wrap(th + offsets[p, use - 1, 2])
+                        nth = wrap_angle_scalar(th + offsets[p, use - 1, 2])
                         nb = _bin(nxp, nyp, nth, x0, y0, xy_res, nx, ny, nh)
                         if nb < 0 or best_g[nb] == -np.inf:
                             continue

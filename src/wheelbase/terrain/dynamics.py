@@ -60,6 +60,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array, integer, positive
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics, _accel
 from wheelbase.errors import ConfigError
+from wheelbase.geometry_numba import wrap_angle_scalar
 from wheelbase.terrain.contact import RM100_CONTACTS, WheelContacts
 from wheelbase.terrain.map import TerrainMap
 
@@ -400,7 +401,7 @@ def _advance(s6, aux, tl, tr, dt, p, layout, ainv, table, cells, slope, geo, sig
             y[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
         remaining -= h
         substeps += 1
-    y[2] = math.atan2(math.sin(y[2]), math.cos(y[2]))
+    y[2] = wrap_angle_scalar(y[2])
     for j in range(6):
         s6[j] = y[j]
     if slip:
