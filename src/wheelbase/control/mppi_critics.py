@@ -4,33 +4,6 @@ Every critic adds a non-negative cost to each sampled rollout; :class:`~wheelbas
 turns the costs into weights exp(−(S − S_min)/λ). With T the horizon steps, p_t the rollout pose
 after step t, u_t the sampled command and dt the step:
 
-critic (weight)     cost of one rollout                                              weight unit
-==================  ==============================================================  ============
-``path``            mean over checked steps of d, d = distance from p_t to the       1/m
-                    nearest point of the local path window (every ``path_stride``)
-``path_align``      mean over the same steps of wrap(θ_t − θ_path)², θ_path the      1/rad²
-                    travel heading of the robot at that nearest window point
-``follow``          path length left in the window past the window point nearest     1/m
-                    p_T (progress along the path, without cutting corners)
-``goal``            mean over t of |p_t − goal| once the section end is near         1/m
-``goal_heading``    |wrap(θ_T − θ_goal)| once the section end is near                1/rad
-``obstacle``        mean over t of (r_infl − c)² for 0 < c < r_infl, c the           1/m²
-                    footprint's clearance: the least over its disks of distance
-                    field − disk radius − √2·cell; off within ``near_goal_distance``
-                    of the goal
-(lethal)            ``collision_cost`` once if any c <= 0 or a disk leaves the map,   —
-                    or the costmap or a track is hit (below)
-``costmap``         mean over t of c_t/252, c_t the costmap cost under the robot      —
-                    (Nav2's CostCritic; off within ``near_goal_distance``)
-``dynamic_obstacle`` Σ over t (and the held final pose) of Σ_tracks g² / T, g the         1/m²
-                    scaled gap to the track predicted at step t
-``prefer_forward``  Σ_t max(0, −s·v_t)·dt, s = ±1 the direction of the path section   1/m
-``effort``          mean over t of Σ_j (u_tj/ū_j)², ū the command limits             —
-``rate``            mean over t of Σ_j ((u_tj − u_{t−1,j})/ū_j)², u_{−1} the last     —
-                    command sent
-``twirl``           mean over t of |ω_t|/ω̄ (velocity commands only)                  —
-==================  ==============================================================  ============
-=======
 ====================  ==============================================================  ===========
 critic (weight)       cost of one rollout                                             weight unit
 ====================  ==============================================================  ===========
