@@ -8,7 +8,8 @@ explore_lite ``min_frontier_size``, there 0.5 m).
 
 The choice (:func:`choose_frontier`) follows explore_lite's cost: for each frontier, the
 **approach cell** is the cell the robot can reach (finite distance in ``distance``, a
-cost-to-go field from the robot over the space its footprint fits in) nearest to the
+cost-to-go field from the robot over the space its footprint fits in), among ``targets`` when
+given, nearest to the
 frontier's middle cell (the frontier cell nearest to the cells' centroid), no farther than
 ``approach`` from it; the cost is ``distance_weight · d − gain_weight · size``, with ``d`` the
 path distance to the approach cell [m] and ``size`` the frontier's length (cells × resolution)
@@ -121,6 +122,7 @@ def choose_frontier(
     blacklist: np.ndarray | None = None,
     blacklist_radius: float = 0.5,
     origin: tuple[float, float] = (0.0, 0.0),
+    targets: np.ndarray | None = None,
 ) -> list[tuple[float, Frontier, np.ndarray]]:
     """The reachable frontiers ranked by cost, cheapest first (module docstring).
 
@@ -142,6 +144,9 @@ def choose_frontier(
         Frontiers whose middle lies within this of a blacklisted point are skipped [m].
     origin : tuple of float
         World (x, y) of cell (0, 0)'s lower-left corner [m] (the grid's origin).
+    targets : numpy.ndarray of bool, shape (rows, cols), optional
+        Cells that may be approach cells (e.g. where the robot fits in any heading); default
+        every reachable cell. Only reachable ones are used.
 
     Returns
     -------
@@ -158,6 +163,11 @@ def choose_frontier(
         raise ConfigError(f"distance must be a 2-D field (got shape {distance.shape})")
     ox, oy = (finite("origin", v) for v in origin)
     reachable = np.isfinite(distance)
+    if targets is not None:
+        targets = np.asarray(targets, bool)
+        if targets.shape != distance.shape:
+            raise ConfigError(f"targets has shape {targets.shape}, distance {distance.shape}")
+        reachable &= targets
     if not reachable.any():
         return []
     # nearest reachable cell to every cell, and how far it is [cells]
