@@ -21,7 +21,9 @@ The loop (:func:`explore`):
    obstacles**: the robot only ever plans through space it has seen free, which is why it
    cannot hit a wall it has not seen; the goal is the frontier's approach cell, facing the
    frontier (other headings tried in quarter turns when that one collides). A frontier Hybrid
-   A* cannot reach is blacklisted and the next one tried.
+   A* cannot reach is blacklisted and the next one tried; so is every frontier once driven to
+   (what is left of it after the visit cannot be seen from there: ragged edges where beams
+   graze a wall).
 4. **Drive** the plan with the one closed-loop engine (:class:`~wheelbase.sim.Engine`: the
    scenario's controller, plant, encoders and lidar; collisions against the true world). The
    plan is made in the map frame and handed to the controller in its odometry frame through
@@ -58,8 +60,8 @@ from wheelbase.scenario import Scenario, format_validation_error
 __all__ = [
     "ExplorationResult",
     "ExplorationSpec",
-    "explore",
     "exploration_metrics",
+    "explore",
     "load_exploration",
 ]
 
@@ -70,7 +72,7 @@ class ExplorationSpec(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     min_frontier_size: float = Field(
-        0.3, gt=0, le=100, description="Shortest frontier worth visiting [m] (explore_lite 0.5)."
+        0.5, gt=0, le=100, description="Shortest frontier worth visiting [m] (explore_lite 0.5)."
     )
     distance_weight: float = Field(
         3.0, ge=0, le=1e6, description="Weight of the path distance in the cost (potential_scale)."
@@ -388,8 +390,8 @@ def explore(
     from wheelbase import runner
     from wheelbase.mapping import LidarSlam, OccupancyMapper
     from wheelbase.mapping.frontiers import choose_frontier, find_frontiers
-    from wheelbase.sim import Arrival
     from wheelbase.sensors import scan_rays
+    from wheelbase.sim import Arrival
 
     scenario, spec = source if isinstance(source, tuple) else load_exploration(source)
     wall = time.perf_counter()
@@ -416,12 +418,12 @@ def explore(
     min_cells = max(1, math.ceil(spec.min_frontier_size / spec.resolution))
     status = "max_legs"
     grid = None
+    timing = {"slam_s": 0.0, "drive_s": 0.0, "plan_s": 0.0}
     for _leg in range(spec.max_legs + 1):
         log = _scan_log(times, ranges, odometry, truths, lidar)
-        if spec.slam:
-            estimated = slam.run(log).poses
-        else:
-            estimated = log.odometry
+        tick = time.perf_counter()
+        estimated = slam.run(log).poses if spec.slam else log.odometry
+        timing["slam_s"] += time.perf_counter() - tick
         grid = _render(slam, log, estimated, limit)
         belief = compose(estimated[-1], relative_pose(odometry[-1], odo_pose))
         frames.append((clock, grid, estimated.copy()))
@@ -430,6 +432,7 @@ def explore(
         if clock >= scenario.duration - scenario.dt:
             status = "timeout"
             break
+        tick = time.perf_counter()
         distance, targets = _distance_field(grid, parts, belief)
         planner = _planner(grid, parts, scenario)
         ranked = choose_frontier(
@@ -453,13 +456,14 @@ def explore(
             middle = np.asarray(grid.cell_to_world(frontier.middle[None].astype(float)))
             blacklist.append(middle.reshape(-1)[:2])
             plan = None
+        timing["plan_s"] += time.perf_counter() - tick
         if chosen is None:
             status = "explored"
             break
 
         # the plan in the leg's odometry frame (map→odom from the SLAM pose)
-        def to_odom(poses, _b=belief):
-            return compose(true_pose, relative_pose(_b, poses))
+        def to_odom(poses, _b=belief, _o=true_pose):
+            return compose(_o, relative_pose(_b, poses))
 
         path = replace(plan, poses=to_odom(plan.poses))
         timed = runner._timed_reference(path, parts.limits, scenario.dt,
@@ -472,7 +476,9 @@ def explore(
             duration=max(scenario.dt, min(end + spec.leg_slack, remaining)),
             arrival=Arrival(to_odom(goal), tolerance, end_time=end),
         )
+        tick = time.perf_counter()
         leg_log = engine.run(true_pose[None], seeds=[scenario.seed + len(legs)])
+        timing["drive_s"] += time.perf_counter() - tick
         n = int(leg_log.length[0])
         leg_status = leg_log.statuses[0]
         rows = sorted(row for (r, row) in leg_log.scans if r == 0 and row < n)
@@ -497,8 +503,11 @@ def explore(
         if leg_status == "collision":
             status = "collision"
             break
-        if leg_status != "arrived":
-            blacklist.append(chosen.centroid)
+        # a frontier once driven to is not chosen again: what stays of it after the visit
+        # cannot be seen from its approach (explore_lite blacklists failures only)
+        blacklist.append(chosen.centroid)
+        blacklist.append(np.asarray(grid.cell_to_world(chosen.middle[None].astype(float))
+                                    ).reshape(-1)[:2])  # fmt: skip
     result = ExplorationResult(
         scenario, spec, grid, truth, np.array(truths), np.asarray(estimated),
         np.array(goals).reshape(-1, 3), np.array(centroids).reshape(-1, 2), legs, status, frames,
@@ -506,6 +515,7 @@ def explore(
     metrics = exploration_metrics(result)
     metrics["wall_time_s"] = time.perf_counter() - wall
     metrics["simulated_time_s"] = clock
+    metrics.update({f"{key[:-2]}_time_s": value for key, value in timing.items()})
     return replace(result, metrics=metrics)
 
 

@@ -10,8 +10,9 @@ The choice (:func:`choose_frontier`) follows explore_lite's cost: for each front
 **approach cell** is the cell the robot can reach (finite distance in ``distance``, a
 cost-to-go field from the robot over the space its footprint fits in), among ``targets`` when
 given, nearest to the
-frontier's middle cell (the frontier cell nearest to the cells' centroid), no farther than
-``approach`` from it; the cost is ``distance_weight · d − gain_weight · size``, with ``d`` the
+frontier's cells (of those equally near, the one nearest to the frontier's middle cell, the
+cell nearest to the cells' centroid), no farther than ``approach`` from it: a long ragged
+frontier, where beams graze far walls, is approached where it meets the known free space; the cost is ``distance_weight · d − gain_weight · size``, with ``d`` the
 path distance to the approach cell [m] and ``size`` the frontier's length (cells × resolution)
 [m] (explore_lite's ``potential_scale`` 3 and ``gain_scale`` 1 are the defaults). Frontiers
 without an approach cell, or whose middle lies within ``blacklist_radius`` of a blacklisted
@@ -135,7 +136,7 @@ def choose_frontier(
     resolution : float
         Cell side [m], > 0.
     approach : float
-        Farthest an approach cell may lie from the frontier's middle [m], > 0.
+        Farthest an approach cell may lie from the frontier [m], > 0.
     distance_weight, gain_weight : float
         Weights of the path distance and of the frontier's length in the cost (>= 0).
     blacklist : numpy.ndarray, shape (M, 2), optional
@@ -175,7 +176,10 @@ def choose_frontier(
     points = np.zeros((0, 2)) if blacklist is None else np.asarray(blacklist, float).reshape(-1, 2)
     ranked = []
     for frontier in frontiers:
-        r, c = (int(v) for v in frontier.middle)
+        gaps = gap[frontier.cells[:, 0], frontier.cells[:, 1]]
+        # the frontier cell nearest to where the robot can stand; of equals, nearest the middle
+        order = np.lexsort((np.sum((frontier.cells - frontier.middle) ** 2, axis=1), gaps))
+        r, c = (int(v) for v in frontier.cells[order[0]])
         if gap[r, c] * resolution > approach:
             continue
         middle_xy = np.array([ox + (c + 0.5) * resolution, oy + (r + 0.5) * resolution])
