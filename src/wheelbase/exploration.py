@@ -60,6 +60,7 @@ from wheelbase.scenario import Scenario, format_validation_error
 __all__ = [
     "ExplorationResult",
     "ExplorationSpec",
+    "bundled_explorations",
     "exploration_metrics",
     "explore",
     "load_exploration",
@@ -154,13 +155,20 @@ _NOT_HERE = {
 }
 
 
+def bundled_explorations() -> dict[str, Path]:
+    """Names and paths of the exploration scenarios in ``wheelbase/data/explorations/``."""
+    folder = Path(__file__).parent / "data" / "explorations"
+    return {path.stem: path for path in sorted(folder.glob("*.yaml"))}
+
+
 def load_exploration(source: str | Path | dict[str, Any]) -> tuple[Scenario, ExplorationSpec]:
     """Read an exploration scenario (module docstring).
 
     Parameters
     ----------
     source : str, Path or dict
-        A YAML file or the parsed mapping.
+        A YAML file, a bundled name (:func:`bundled_explorations`: ``doorway``, ``maze``,
+        ``warehouse``) or the parsed mapping.
 
     Returns
     -------
@@ -177,8 +185,12 @@ def load_exploration(source: str | Path | dict[str, Any]) -> tuple[Scenario, Exp
         label, data, folder = "<dict>", dict(source), None
     elif isinstance(source, (str, Path)):
         path = Path(source)
+        bundled = bundled_explorations()
+        if not path.is_file() and str(source) in bundled:
+            path = bundled[str(source)]
         if not path.is_file():
-            raise ScenarioError(f"{path}: no such file")
+            names = ", ".join(bundled)
+            raise ScenarioError(f"{path}: no such file (bundled explorations: {names})")
         label, folder = path.name, path.parent
         try:
             data = yaml.safe_load(read_text(path, "scenario", ScenarioError, label))
