@@ -29,8 +29,9 @@ def test_exploration_ends_with_no_reachable_frontier(explored):
     parts = _parts(explored.scenario, explored.truth)
     field, targets = _distance_field(explored.grid, parts, explored.estimated_path[-1])
     visited = np.vstack([explored.frontiers, explored.frontiers])
-    ranked = choose_frontier(find_frontiers(explored.grid, 10), field, explored.grid.resolution,
-                             targets=targets, blacklist=visited, origin=explored.grid.origin)  # fmt: skip
+    grid = explored.grid
+    ranked = choose_frontier(find_frontiers(grid, 10), field, grid.resolution, targets=targets,
+                             blacklist=visited, origin=grid.origin)  # fmt: skip
     assert all(np.min(np.hypot(*(explored.frontiers - f.centroid).T)) < 1.5 for _, f, _ in ranked)
 
 

@@ -13,8 +13,9 @@ given, nearest to the
 frontier's cells (of those equally near, the one nearest to the frontier's middle cell, the
 cell nearest to the cells' centroid), no farther than ``approach`` from it: a long ragged
 frontier, where beams graze far walls, is approached where it meets the known free space;
-the cost is ``distance_weight · d − gain_weight · size``, with ``d`` the path distance to the approach cell [m] and ``size`` the frontier's length (cells × resolution)
-[m] (explore_lite's ``potential_scale`` 3 and ``gain_scale`` 1 are the defaults). Frontiers
+the cost is ``distance_weight · d − gain_weight · size``, with ``d`` the path distance to
+the approach cell [m] and ``size`` the frontier's length (cells × resolution) [m]
+(explore_lite's ``potential_scale`` 3 and ``gain_scale`` 1 are the defaults). Frontiers
 without an approach cell, or whose middle lies within ``blacklist_radius`` of a blacklisted
 point (a goal that Hybrid A* could not reach or the robot could not drive to), are skipped.
 """
