@@ -520,6 +520,11 @@ def explore(
         blacklist.append(chosen.centroid)
         blacklist.append(np.asarray(grid.cell_to_world(chosen.middle[None].astype(float))
                                     ).reshape(-1)[:2])  # fmt: skip
+    if len(estimated) != len(truths):  # a leg ended the loop (a collision): map its scans
+        log = _scan_log(times, ranges, odometry, truths, lidar)
+        estimated = slam.run(log).poses if spec.slam else log.odometry
+        grid = _render(slam, log, estimated, limit)
+        frames.append((clock, grid, estimated.copy()))
     result = ExplorationResult(
         scenario, spec, grid, truth, np.array(truths), np.asarray(estimated),
         np.array(goals).reshape(-1, 3), np.array(centroids).reshape(-1, 2), legs, status, frames,
