@@ -253,8 +253,8 @@ AMCL_ROUTES = {
 def exploration(quick: bool, seeds: int = 20) -> dict:
     import tempfile
 
-    import wheelbase
     from wheelbase.exploration import explore
+    from wheelbase.runner import run_seeds
     from wheelbase.planning.map_io import write_ros_yaml
 
     out = {}
@@ -276,7 +276,7 @@ def exploration(quick: bool, seeds: int = 20) -> dict:
                     "goal_tolerance": [0.1, 10.0], "trajectory": {"max_speed": 0.6},
                     "dt": 0.05, "duration": 200,
                 }  # fmt: skip
-                rows = wheelbase.run_seeds(scenario, range(3 if quick else seeds))
+                rows = run_seeds(scenario, range(3 if quick else seeds))
                 row["amcl_arrived"] = sum(r["status"] == "arrived" for r in rows)
                 row["amcl_seeds"] = len(rows)
         out[world] = row
