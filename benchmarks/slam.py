@@ -254,8 +254,8 @@ def exploration(quick: bool, seeds: int = 20) -> dict:
     import tempfile
 
     from wheelbase.exploration import explore
-    from wheelbase.runner import run_seeds
     from wheelbase.planning.map_io import write_ros_yaml
+    from wheelbase.runner import run_seeds
 
     out = {}
     for world in ("doorway",) if quick else ("doorway", "maze", "warehouse"):
