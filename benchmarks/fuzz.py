@@ -39,6 +39,7 @@ TARGETS = {
     "cli": (fuzzing.cli_cases, fuzzing.run_cli, "cli", 0.1),
     "world": (fuzzing.world_cases, fuzzing.run_world, "world", 0.1),
     "slam_file": (fuzzing.slam_file_cases, fuzzing.slam_file, "slam_file", 0.05),
+    "exploration": (fuzzing.exploration_cases, fuzzing.run_exploration, "exploration", 0.02),
 }  # fmt: skip
 
 

@@ -28,6 +28,11 @@ Sections (one JSON object; ``targets`` says which targets this run met):
     and smoothing, landmark positions unknown.
 ``occupancy_speed``
     CPU time of one 360-beam, 8 m scan into a 0.05 m grid.
+``exploration``
+    :func:`wheelbase.exploration.explore` on the bundled explorations (doorway; with the full
+    run also maze and warehouse): status, explored fraction of the reachable free area, map
+    agreement, collisions, distance, simulated and wall time; then AMCL on the saved map
+    (``wheelbase.run_seeds``) along a route across it, arrivals out of the seeds.
 
 Usage: ``python benchmarks/slam.py [--quick] [--sections posegraphs,carmen,...]``.
 """
@@ -238,6 +243,46 @@ def occupancy_speed(quick: bool) -> dict:
             "beams": 360, "max_range_m": 8.0, "resolution_m": 0.05}  # fmt: skip
 
 
+AMCL_ROUTES = {
+    "doorway": ([1.5, 3.0, 0.0], [10.0, 3.0, 0.0]),
+    "maze": ([2.0, 2.0, 0.0], [18.5, 6.0, 90.0]),
+    "warehouse": ([2.0, 2.0, 0.0], [13.6, 9.0, -90.0]),
+}
+
+
+def exploration(quick: bool, seeds: int = 20) -> dict:
+    import tempfile
+
+    from wheelbase.exploration import explore
+    from wheelbase.planning.map_io import write_ros_yaml
+    from wheelbase.runner import run_seeds
+
+    out = {}
+    for world in ("doorway",) if quick else ("doorway", "maze", "warehouse"):
+        result = explore(world)
+        row = dict(result.metrics)
+        if result.metrics["status"] == "explored":
+            with tempfile.TemporaryDirectory() as folder:
+                path = Path(folder) / "map.yaml"
+                write_ros_yaml(result.grid, path)
+                start, goal = AMCL_ROUTES[world]
+                scenario = {
+                    "name": f"amcl_on_explored_{world}", "map": str(path),
+                    "robot": {"model": "diffdrive", "preset": "rm100"},
+                    "controller": {"law": "kanayama"},
+                    "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
+                    "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
+                    "localization": {"method": "amcl"}, "start": start, "goal": goal,
+                    "goal_tolerance": [0.1, 10.0], "trajectory": {"max_speed": 0.6},
+                    "dt": 0.05, "duration": 200,
+                }  # fmt: skip
+                rows = run_seeds(scenario, range(3 if quick else seeds))
+                row["amcl_arrived"] = sum(r["status"] == "arrived" for r in rows)
+                row["amcl_seeds"] = len(rows)
+        out[world] = row
+    return out
+
+
 def targets(report: dict) -> dict:
     out: dict = {}
     for name, row in report.get("posegraphs", {}).items():
@@ -262,6 +307,11 @@ def targets(report: dict) -> dict:
     if lm:
         out["mrclam_robot_rmse_le_0.15m"] = lm["position_rmse_m"] <= 0.15
         out["mrclam_landmark_rmse_le_0.15m"] = lm["landmark_rmse_m"] <= 0.15
+    for world, row in report.get("exploration", {}).items():
+        out[f"explore_{world}_ge_95pct"] = row["explored_fraction"] >= 0.95
+        out[f"explore_{world}_no_collision"] = row["collisions"] == 0
+        if "amcl_seeds" in row:
+            out[f"explore_{world}_amcl_19_of_20"] = row["amcl_arrived"] >= 0.95 * row["amcl_seeds"]
     speed = report.get("occupancy_speed")
     if speed:
         out["occupancy_scan_le_0.2ms_cpu"] = speed["cpu_ms_per_scan"] <= 0.2
@@ -273,7 +323,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="small subsets: a smoke run")
     parser.add_argument("--repeat", type=int, default=3, help="timings per pose graph")
     parser.add_argument("--sections", default="posegraphs,carmen,simulation,landmarks,"
-                        "occupancy_speed", help="comma-separated sections")  # fmt: skip
+                        "occupancy_speed,exploration", help="comma-separated sections")  # fmt: skip
     args = parser.parse_args()
     chosen = args.sections.split(",")
     report: dict = {}
@@ -287,6 +337,8 @@ def main() -> None:
         report["carmen"] = carmen(args.quick)
     if "simulation" in chosen:
         report["simulation"] = simulation(args.quick)
+    if "exploration" in chosen:
+        report["exploration"] = exploration(args.quick)
     report["targets"] = targets(report)
     json.dump(report, sys.stdout, indent=2, default=float)
     print()

@@ -39,11 +39,13 @@ __all__ = [
     "call_constructor",
     "cli_cases",
     "constructor_cases",
+    "exploration_cases",
     "grid_from_array",
     "load_map_file",
     "map_file_cases",
     "outcome",
     "run_cli",
+    "run_exploration",
     "run_scenario",
     "run_scenario_file",
     "run_world",
@@ -57,6 +59,7 @@ __all__ = [
 
 BUDGET_S = {
     "slam_file": 30.0,
+    "exploration": 30.0,
     "scenario": 30.0,
     "scenario_file": 30.0,
     "map_file": 10.0,
@@ -1541,3 +1544,35 @@ def run_cli(args: list[str]) -> Any:
 
 class CliRefused(WheelbaseError):
     """The CLI refused the arguments cleanly (exit code 2: one line, or click's usage)."""
+
+
+_EXPLORATION_PATHS: list[tuple[str, ...]] = [
+    ("map",), ("world",), ("world", "map"), ("world", "agents"), ("exploration",),
+    ("exploration", "min_frontier_size"), ("exploration", "max_legs"),
+    ("exploration", "resolution"), ("exploration", "initial_scans"),
+    ("exploration", "approach"), ("exploration", "distance_weight"),
+    ("exploration", "leg_slack"), ("exploration", "slam"), ("start",), ("goal",),
+    ("sensors",), ("sensors", "lidar"), ("sensors", "lidar", "max_range"),
+    ("sensors", "lidar", "beams"), ("duration",), ("dt",), ("plant",), ("controller", "law"),
+    ("resources", "max_map_cells"), ("localization",),
+]  # fmt: skip
+
+
+@st.composite
+def exploration_cases(draw) -> dict[str, Any]:
+    """The bundled doorway exploration with one to three fields hostile, deleted or misspelt."""
+    from wheelbase.exploration import bundled_explorations
+
+    data = yaml.safe_load(bundled_explorations()["doorway"].read_text())
+    for mutation in draw(st.lists(_mutation(_EXPLORATION_PATHS), min_size=1, max_size=3)):
+        _apply(data, mutation)
+    return data
+
+
+def run_exploration(data: dict[str, Any]) -> Any:
+    """Validate an exploration case as ``wheelbase explore`` does, then drive its first leg
+    (``max_legs`` 1: a whole exploration is 10 s; the loop after the first leg repeats it)."""
+    from wheelbase.exploration import explore, load_exploration
+
+    scenario, spec = load_exploration(copy.deepcopy(data))
+    return explore((scenario, spec.model_copy(update={"max_legs": 1})))

@@ -39,6 +39,7 @@ LAYERS = (
     {"sim", "navigation"},
     {
         "runner",
+        "exploration",
         "batch",
         "scenario",
         "scenario_sensors",

@@ -84,6 +84,7 @@ def plot_map(
     loops: np.ndarray | None = None,
     reference: np.ndarray | None = None,
     title: str = "",
+    frontiers: np.ndarray | None = None,
 ) -> Path:
     """An occupancy map with the trajectory on it and its loop closures.
 
@@ -101,6 +102,8 @@ def plot_map(
         A reference or true trajectory, drawn dashed.
     title : str
         Figure title.
+    frontiers : numpy.ndarray or None, shape (G, 2)
+        Frontiers visited (x, y) [m], numbered in order (exploration).
 
     Returns
     -------
@@ -120,6 +123,13 @@ def plot_map(
         if loops is not None and len(loops):
             _edge_lines(ax, trajectory, np.asarray(loops), colors="tab:red", linewidths=0.6,
                         label=f"loop closures ({len(loops)})")  # fmt: skip
+    if frontiers is not None and len(frontiers):
+        points = np.asarray(frontiers, float).reshape(-1, 2)
+        ax.plot(
+            *points.T, "o", color="tab:orange", ms=5, label=f"frontiers visited ({len(points)})"
+        )
+        for k, (x, y) in enumerate(points):
+            ax.annotate(str(k + 1), (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(title)

@@ -1,0 +1,100 @@
+"""Frontier exploration on the bundled doorway world: it ends with no reachable frontier, the
+saved map loads, and AMCL on it navigates (a real run that arrives)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from wheelbase.errors import ScenarioError
+from wheelbase.exploration import explore, load_exploration
+
+
+@pytest.fixture(scope="module")
+def explored():
+    return explore("doorway")
+
+
+def test_exploration_ends_with_no_reachable_frontier(explored):
+    m = explored.metrics
+    assert m["status"] == "explored"
+    assert m["collisions"] == 0 and m["legs"] == m["legs_arrived"] >= 2
+    assert m["explored_fraction"] >= 0.95
+    assert m["map_agreement"] >= 0.97
+    assert m["position_rmse_m"] < 0.1
+    # the same choice again on the final map finds nothing reachable
+    from wheelbase.exploration import _distance_field, _parts
+    from wheelbase.mapping.frontiers import choose_frontier, find_frontiers
+
+    parts = _parts(explored.scenario, explored.truth)
+    field, targets = _distance_field(explored.grid, parts, explored.estimated_path[-1])
+    visited = np.vstack([explored.frontiers, explored.frontiers])
+    grid = explored.grid
+    ranked = choose_frontier(find_frontiers(grid, 10), field, grid.resolution, targets=targets,
+                             blacklist=visited, origin=grid.origin)  # fmt: skip
+    assert all(np.min(np.hypot(*(explored.frontiers - f.centroid).T)) < 1.5 for _, f, _ in ranked)
+
+
+def test_saved_map_loads_and_amcl_navigates_on_it(explored, tmp_path):
+    import wheelbase
+    from wheelbase.planning.map_io import read_ros_yaml, write_ros_yaml
+
+    write_ros_yaml(explored.grid, tmp_path / "map.yaml")
+    again = read_ros_yaml(tmp_path / "map.yaml")
+    assert np.array_equal(again.occupied, explored.grid.occupied)
+    assert np.array_equal(again.unknown, explored.grid.unknown)
+    run = wheelbase.run({
+        "name": "amcl_on_explored", "map": str(tmp_path / "map.yaml"),
+        "robot": {"model": "diffdrive", "preset": "rm100"}, "controller": {"law": "kanayama"},
+        "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
+        "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
+        "localization": {"method": "amcl"},
+        "start": [1.5, 3.0, 0.0], "goal": [10.0, 3.0, 0.0], "goal_tolerance": [0.1, 10.0],
+        "trajectory": {"max_speed": 0.6}, "dt": 0.05, "duration": 90,
+    })  # fmt: skip
+    assert run.metrics["status"] == "arrived"
+    assert run.metrics["collisions"] == 0 if "collisions" in run.metrics else True
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"map": "doorway"}, "map: an exploration starts without a map"),
+        ({"world": None}, "world.map"),
+        ({"world": {"map": "doorway", "agents": []}}, "world.agents"),
+        ({"goal": [1, 1, 0]}, "goal: the frontiers are the goals"),
+        ({"localization": {"method": "amcl"}}, "localization"),
+        ({"sensors": {}}, "sensors.lidar"),
+        ({"plant": "dynamic"}, "plant"),
+        ({"exploration": {"min_frontier_size": -1}}, "exploration: min_frontier_size"),
+        ({"exploration": {"bogus": 1}}, "exploration: bogus"),
+        ({"exploration": 3}, "exploration: a mapping"),
+        ({"controller": {"law": "mppi"}}, "controller.law"),
+        ({"start": [1.0, float("nan"), 0.0]}, "start"),
+    ],
+)
+def test_bad_input_errors(change, message):
+    data = load_exploration.__globals__["yaml"].safe_load(
+        (load_exploration.__globals__["bundled_explorations"]()["doorway"]).read_text()
+    )
+    data.update(change)
+    data = {k: v for k, v in data.items() if v is not None}
+    with pytest.raises(ScenarioError, match=message):
+        if change.get("controller"):
+            explore(data)
+        else:
+            load_exploration(data)
+
+
+def test_cli_writes_the_map_and_metrics(tmp_path):
+    from typer.testing import CliRunner
+
+    from wheelbase.cli import app
+
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["explore", "doorway", "--out", str(out), "--frames", "3"])
+    assert result.exit_code == 0, result.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "explored" and metrics["collisions"] == 0
+    for name in ("map.yaml", "map.pgm", "map.png", "map.gif"):
+        assert (out / name).stat().st_size > 0
