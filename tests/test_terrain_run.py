@@ -246,3 +246,51 @@ def test_a_raster_of_surfaces_lies_under_the_regions(tmp_path):
     (tmp_path / "s.yaml").write_text(__import__("yaml").safe_dump(data))
     with pytest.raises(ScenarioError, match="grey level 0 of the image has no surface"):
         run(tmp_path / "s.yaml")
+
+
+def test_estimated_friction_learns_ice_from_the_encoders_alone(monkeypatch):
+    # the 4 m straight at 1 m/s² on ice: the first spin teaches the robot the ice (its rim
+    # outruns the body its torques push), the estimate lands between ice's sliding (0.07) and
+    # its peak (0.1), and no wheel spins again until the estimate's memory (5 m) runs out and
+    # it probes the peak again
+    from wheelbase import scenario_ground
+
+    ice = _with(terrain={"surface": "ice"}, trajectory={"max_speed": 0.5, "max_acceleration": 1.0})
+    ice["controller"]["traction_control"] = {"friction": "estimate"}
+    prepared = prepare(ice)
+    log = prepared.engine.run(prepared.start, seeds=[0])
+    estimator = prepared.engine.controller.estimator
+    assert estimator.spins, "the first spin is detected"
+    first_end, _robot, _wheel, learnt = estimator.spins[0]
+    assert first_end < 0.5 and 0.06 <= learnt <= 0.1
+    probe = estimator.spins[2][0] - 0.5 if len(estimator.spins) > 2 else np.inf
+    after = (log.t > first_end + 0.1) & (log.t < probe)
+    assert log.t[after][-1] > 5.0
+    slip = np.abs(np.concatenate([log.extras["slip_left"][0, after],
+                                  log.extras["slip_right"][0, after]]))  # fmt: skip
+    assert slip.max() < 0.05  # ice peaks at 0.06
+    # it never reads the terrain: the same run with the map hidden from the controller
+    original = scenario_ground.wrap_controller
+
+    def hidden(scenario, controller, robot, timeline, terrain=None):
+        return original(scenario, controller, robot, timeline, None)
+
+    monkeypatch.setattr(scenario_ground, "wrap_controller", hidden)
+    again = prepare(ice)
+    blind = again.engine.run(again.start, seeds=[0])
+    assert np.array_equal(blind.true_pose, log.true_pose)
+    assert np.array_equal(blind.torques, log.torques)
+
+
+def test_estimated_friction_raises_no_alarm_on_concrete_with_an_unknown_payload():
+    # heavier than its model (+100 %), a robot's wheels turn slower than the model says:
+    # the opposite of a spin; the torques are those of the run without traction control
+    data = _with(terrain={"surface": "dry_concrete"},
+                 robot={"model": "diffdrive", "preset": "rm100",
+                        "payload": {"mass": 26.2, "position": [0.1, 0.0]}})  # fmt: skip
+    free = run(copy.deepcopy(data))
+    data["controller"]["traction_control"] = {"friction": "estimate"}
+    prepared = prepare(data)
+    log = prepared.engine.run(prepared.start, seeds=[0])
+    assert prepared.engine.controller.estimator.spins == []
+    assert np.array_equal(log.torques, free.log.torques)

@@ -307,6 +307,21 @@ class TorqueTracking:
             Time [s].
         state : numpy.ndarray, shape (6,)
             Estimated (x, y, θ, u, v, r).
+        reference : PoseTrajectory or numpy.ndarray, shape (9,)
+            The trajectory, or the row to track now.
+        """
+        if isinstance(reference, np.ndarray):  # a row (9,) already: traction's slowed clock
+            return self._pid(t, state, reference)
+        return self._pid(t, state, self.row(t, reference))
+
+    def row(self, t: float, reference: PoseTrajectory) -> np.ndarray:
+        """The reference row (x, y, ψ, u, v, r, u̇, v̇, ṙ) ``(9,)`` it tracks at time ``t``, its
+        accelerations within the bounds.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
         reference : PoseTrajectory
             The trajectory.
         """
@@ -317,8 +332,7 @@ class TorqueTracking:
             table[:, 6] = np.clip(table[:, 6], -self._accel_bounds[0], self._accel_bounds[0])
             table[:, 8] = np.clip(table[:, 8], -self._accel_bounds[1], self._accel_bounds[1])
             self._rows = (reference, TimedRows(reference.t, table))
-        row = self._rows[1].at(t)
-        return self._pid(t, state, row)
+        return self._rows[1].at(t)
 
 
 def _computed_torque(robot: Robot, gains: dict[str, float], limits: SpeedLimits, grid: Any = None):

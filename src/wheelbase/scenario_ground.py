@@ -382,7 +382,10 @@ def wrap_controller(
         try:
             controller = TractionControl(
                 controller, model, friction=spec.friction, margin=spec.margin,
-                drive_load_share=contacts.drive_load_share, terrain=terrain,
+                drive_load_share=contacts.drive_load_share,
+                wheel_inertia=contacts.wheel_inertia,
+                terrain=terrain if spec.friction == "map" else None,
+                initial_friction=spec.initial_friction, slow_down=spec.slow_down,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None

@@ -237,17 +237,27 @@ class TerrainSpec(_Strict):
 class TractionSpec(_Strict):
     """Wheel torques limited by the friction (:class:`wheelbase.control.TractionControl`)."""
 
-    friction: Literal["map"] | float = Field(
+    friction: Literal["map", "estimate"] | float = Field(
         "map", description="The friction coefficient to respect: 'map', the peak friction of "
-        "the terrain under each wheel (the robot knows its floor), or a number."
+        "the terrain under each wheel (the robot knows its floor); 'estimate', the robot's own "
+        "online estimate from its encoders, its torques and its model (it never reads the "
+        "terrain); or a number."
     )  # fmt: skip
     margin: float = Field(
         0.8, gt=0, le=1, description="Share of the friction limit the torques may use."
     )
+    initial_friction: float = Field(
+        1.0, gt=0, le=3, description="With friction 'estimate': the peak friction believed "
+        "before any wheel has spun."
+    )  # fmt: skip
+    slow_down: bool = Field(
+        False, description="Drive the reference slower where the friction is low: its speed "
+        "scaled so that turns and accelerations stay within margin times the friction."
+    )  # fmt: skip
 
     @field_validator("friction")
     @classmethod
     def _positive(cls, value):
-        if value != "map" and not (math.isfinite(value) and 0 < value <= 3):
-            raise ValueError(f"must be 'map' or a coefficient in (0, 3] (got {value})")
+        if value not in ("map", "estimate") and not (math.isfinite(value) and 0 < value <= 3):
+            raise ValueError(f"must be 'map', 'estimate' or a coefficient in (0, 3] (got {value})")
         return value
