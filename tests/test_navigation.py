@@ -201,3 +201,43 @@ def test_a_robot_without_the_right_of_way_waits_in_the_passing_bay_then_goes_on(
     pose, t, seen = drive(nav, Route(first, (goal,), priority=1), free, pose, t, 40.0)
     assert seen[-1] != "yielding" and nav.yields == 1
     assert math.hypot(*(pose[:2] - goal[:2])) < 0.3
+
+
+def test_a_refuge_the_planner_cannot_reach_is_not_the_end_of_yielding():
+    """The nearest refuge's way in is refused (a turn into a tight bay): the yielding robot
+    tries the other heading and the next refuges, and tries again after each recovery."""
+    square = Footprint.rectangle(0.7, 0.7)
+    refused: list[int] = []
+    free, grid = corridor_view()
+    other = corridor_view((5.4, 6.1, 0.45, 1.15))[0]  # a stopped robot in the corridor ahead
+    start, goal = np.array([8.6, 0.8, math.pi]), np.array([1.0, 0.8, math.pi])
+
+    def stubborn_planner(grid, start, goals):
+        # the first ``refused[0]`` requests for a refuge fail; plans to the goal are found
+        to_refuge = math.hypot(*(np.asarray(goals[0])[:2] - goal[:2])) > 1e-9
+        if to_refuge and refused and refused[0] > 0:
+            refused[0] -= 1
+            return None
+        path = HybridAStar(grid, footprint=(0.8, 0.8), turning_radius=0.0).plan(start, goals[0])
+        return path if path.success else None
+
+    first = stubborn_planner(OccupancyGrid(grid.occupied, grid.resolution), start, [goal])
+    route = Route(first, (goal,), priority=1)
+    nav = Navigator(Straight(), stubborn_planner, square, NavigatorOptions(rate_hz=0.0))
+    nav(0.0, start, route, perception=free)  # the route is known from the first call
+    refuges = nav._refuges(start, believed_grid(other, 0.1))
+    assert len(refuges) == 3
+    apart = [math.hypot(*(a - b)) for i, a in enumerate(refuges) for b in refuges[:i]]
+    assert min(apart) >= 2 * square.max_radius - 1e-12
+    assert all(nav._aside(np.array(refuges), 0.15))
+    # one refused request: the other heading of the same refuge is taken at once
+    refused[:] = [1]
+    drive(nav, route, other, start, 0.0, 0.5)
+    assert nav.yields == 1 and nav.recoveries == 0
+    assert nav.yielding.refuge[:2] == pytest.approx(refuges[0])
+    assert abs(math.remainder(nav.yielding.refuge[2] - start[2] - math.pi, 2 * math.pi)) < 1e-9
+    # every refuge refused at first (six requests): a recovery, then the yield after it
+    nav = Navigator(Straight(), stubborn_planner, square, NavigatorOptions(rate_hz=0.0))
+    refused[:] = [6]
+    drive(nav, route, other, start, 0.0, 6.0)
+    assert nav.recoveries == 1 and nav.yields == 1

@@ -451,16 +451,19 @@ class Navigator:
         """Go aside for a robot of higher priority: True when a refuge and a way there exist."""
         if self.priority <= 0 or self.options.yield_time <= 0:
             return False
-        refuge = self._refuge(pose, grid)
-        if refuge is None:
-            return False
-        path = self.plan_route(_cleared(grid, pose, self.footprint), pose, [refuge])
-        if path is None:
-            return False
-        self.yields += 1
-        self.yielding = _Yield(t, refuge, path, t)
-        self.plans.append((t, np.asarray(path.poses)))
-        return True
+        cleared = _cleared(grid, pose, self.footprint)
+        # the nearest refuges first, each facing as the robot does or the other way: a refuge
+        # whose only way in the planner cannot find (a turn into a tight bay) is not the end
+        for refuge in self._refuges(pose, grid):
+            for heading in (pose[2], wrap_angle(pose[2] + math.pi)):
+                target = np.array([refuge[0], refuge[1], heading])
+                path = self.plan_route(cleared, pose, [target])
+                if path is not None:
+                    self.yields += 1
+                    self.yielding = _Yield(t, target, path, t)
+                    self.plans.append((t, np.asarray(path.poses)))
+                    return True
+        return False
 
     def _yield(
         self, t: float, measured: np.ndarray, pose: np.ndarray, grid: Any, perception: Any
@@ -519,9 +522,10 @@ class Navigator:
         )
         return away >= self.footprint.max_radius + 0.5 * width + margin
 
-    def _refuge(self, pose: np.ndarray, grid: Any) -> np.ndarray | None:
-        """The nearest pose reachable from ``pose`` whose footprint stands aside of the plan by
-        at least a robot's width (module docstring), or None."""
+    def _refuges(self, pose: np.ndarray, grid: Any, count: int = 3) -> list[np.ndarray]:
+        """Up to ``count`` points (x, y) [m] reachable from ``pose`` whose footprint stands
+        aside of the plan by at least a robot's width (module docstring), nearest (by the
+        way there) first, each at least a robot's diameter from the ones before it."""
         from wheelbase.planning.astar import dijkstra
 
         footprint = self.footprint
@@ -536,13 +540,18 @@ class Navigator:
         reach = dijkstra(OccupancyGrid(occupied, grid.resolution, grid.origin), cell)
         rows, cols = np.nonzero(np.isfinite(reach))
         if not len(rows):
-            return None
+            return []
         centres = grid.cell_to_world(np.column_stack([rows, cols]))
         ok = self._aside(centres, 0.15)
-        if not ok.any():
-            return None
-        best = int(np.argmin(np.where(ok, reach[rows, cols], np.inf)))
-        return np.array([*centres[best], pose[2]])
+        centres, way = centres[ok], reach[rows[ok], cols[ok]]
+        chosen: list[np.ndarray] = []
+        for index in np.argsort(way, kind="stable"):
+            point = centres[index]
+            if all(math.hypot(*(point - other)) >= 2 * footprint.max_radius for other in chosen):
+                chosen.append(point)
+                if len(chosen) == count:
+                    break
+        return chosen
 
     def _start_recovery(self, t: float, pose: np.ndarray, grid: Any) -> np.ndarray:
         if self.retries >= self.options.max_retries:
@@ -589,6 +598,8 @@ class Navigator:
         self.recovery = None
         if self._replan(t, pose, grid) and not self._blocked(pose, grid):
             return None  # back to following; the retries count on until the goal (as Nav2)
+        if self._start_yield(t, pose, grid):
+            return None  # the caller drives aside (a refuge the last try could not reach)
         return self._start_recovery(t, pose, grid)
 
 
