@@ -48,9 +48,27 @@ from wheelbase._validate import nonnegative, positive
 from wheelbase.errors import ConfigError
 from wheelbase.geometry import wrap_angle
 
-__all__ = ["NAVIGATOR_STATUSES", "Navigator", "NavigatorOptions", "Route", "believed_grid"]
+__all__ = [
+    "ARRIVED_ASIDE",
+    "NAVIGATOR_STATUSES",
+    "REFUGE_ASIDE",
+    "Navigator",
+    "NavigatorOptions",
+    "Route",
+    "believed_grid",
+]
 
 NAVIGATOR_STATUSES: tuple[str, ...] = ("yielding", "recovering", "blocked")
+
+REFUGE_ASIDE = 0.25
+"""Margin [m] of a refuge beyond the sum of the yielding robot's circumscribed radius and half
+the passing robot's width, from the route. The robot with the right of way sees the yielding one
+as a tracked disc of about the circumscribed radius, painted one cell wider: with 0.05 m, a
+robot 0.7 m square that stopped turned 45° into the bay left 6 cm to the passer's footprint,
+which its belief filled (corridor_swap seed 2: both ended blocked)."""
+ARRIVED_ASIDE = 0.15
+"""Margin [m] (as :data:`REFUGE_ASIDE`) at which a yielding robot has arrived aside: the
+refuge's, less the 0.1 m within which a robot has reached the refuge itself."""
 """The navigator's own statuses, beside the local controller's (``ok``, ``all_collide``, …)."""
 
 LETHAL = 254
@@ -476,7 +494,9 @@ class Navigator:
             return self._start_recovery(t, pose, grid)
         # there, or anywhere far enough aside: stop and let the others by
         near = math.hypot(*(pose[:2] - waiting.refuge[:2])) <= 0.1
-        waiting.reached = waiting.reached or near or bool(self._aside(pose[None, :2], 0.05)[0])
+        waiting.reached = (
+            waiting.reached or near or bool(self._aside(pose[None, :2], ARRIVED_ASIDE)[0])
+        )
         if waiting.reached and t - waiting.last_try >= 1.0:
             waiting.last_try = t
             goals = self.goals[self.next_goal :]
@@ -512,7 +532,8 @@ class Navigator:
     def _aside(self, points: np.ndarray, margin: float) -> np.ndarray:
         """Which points are far enough from the way others take (the whole route, behind the
         robot too, and the plan now) for a robot as wide as this one to pass, ``margin`` [m]
-        apart (a refuge is chosen 0.15 m aside; a robot 0.05 m aside has arrived there)."""
+        apart (a refuge is chosen :data:`REFUGE_ASIDE` aside; a robot :data:`ARRIVED_ASIDE` aside
+        has arrived there)."""
         from wheelbase.polyline import distance_to_polyline
 
         width = float(np.ptp(self.footprint.polygon[:, 1]))
@@ -542,7 +563,7 @@ class Navigator:
         if not len(rows):
             return []
         centres = grid.cell_to_world(np.column_stack([rows, cols]))
-        ok = self._aside(centres, 0.15)
+        ok = self._aside(centres, REFUGE_ASIDE)
         centres, way = centres[ok], reach[rows[ok], cols[ok]]
         chosen: list[np.ndarray] = []
         for index in np.argsort(way, kind="stable"):
