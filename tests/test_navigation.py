@@ -241,3 +241,22 @@ def test_a_refuge_the_planner_cannot_reach_is_not_the_end_of_yielding():
     refused[:] = [6]
     drive(nav, route, other, start, 0.0, 6.0)
     assert nav.recoveries == 1 and nav.yields == 1
+
+
+def test_the_blocked_check_skips_only_poses_that_cannot_touch_an_obstacle():
+    """The footprint check samples only the poses near an occupied cell or the edge: the
+    same answer as sampling every pose, on random grids from nearly empty to cluttered."""
+    from wheelbase.navigation import _footprint_hits, _footprint_samples, _sampled_hits
+
+    rng = np.random.default_rng(7)
+    samples = _footprint_samples(Footprint.rectangle(0.4, 0.6), 0.05)
+    hits = 0
+    for density in (0.0, 0.0005, 0.003, 0.02, 0.2) * 30:
+        grid = OccupancyGrid(rng.random((80, 120)) < density, 0.05, tuple(rng.uniform(-1, 1, 2)))
+        start = rng.uniform([-1.5, -1.5], [7.5, 5.5])
+        steps = rng.normal(0.0, 0.05, (60, 2))
+        poses = np.column_stack([start + np.cumsum(steps, axis=0), rng.uniform(-3.2, 3.2, 60)])
+        expected = _sampled_hits(grid, samples, poses)
+        np.testing.assert_array_equal(_footprint_hits(grid, samples, poses), expected)
+        hits += int(expected.sum())
+    assert 0 < hits < 150 * 60  # both answers occur

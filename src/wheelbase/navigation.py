@@ -658,7 +658,36 @@ def _belief(grid: Any) -> bytes:
 def _footprint_hits(grid: Any, samples: np.ndarray, poses: np.ndarray) -> np.ndarray:
     """Which poses put the footprint (its ``samples`` (K, 2), body frame) on an occupied cell
     or off the grid. A believed grid changes with every scan: a lookup per sample, not a
-    distance transform per grid."""
+    distance transform per grid. Only the poses within reach of an occupied cell (or of the
+    grid's edge) are sampled: a pose's samples lie within their largest radius r of it, so a
+    cell whose centre is farther than r + one cell can hold none of them."""
+    poses = np.asarray(poses, dtype=np.float64)
+    hit = np.zeros(len(poses), dtype=bool)
+    if not len(poses):
+        return hit
+    res, (x0, y0) = grid.resolution, grid.origin
+    rows, cols = grid.shape
+    reach = float(np.max(np.hypot(samples[:, 0], samples[:, 1]))) + res
+    lo, hi = poses[:, :2].min(axis=0) - reach, poses[:, :2].max(axis=0) + reach
+    c0, r0 = math.floor((lo[0] - x0) / res), math.floor((lo[1] - y0) / res)
+    c1, r1 = math.floor((hi[0] - x0) / res) + 1, math.floor((hi[1] - y0) / res) + 1
+    if c0 < 0 or r0 < 0 or c1 > cols or r1 > rows:  # near the edge: every pose sampled
+        return _sampled_hits(grid, samples, poses)
+    occupied_rows, occupied_cols = np.nonzero(grid.occupied[r0:r1, c0:c1])
+    if not len(occupied_rows):
+        return hit
+    cx = x0 + (occupied_cols + c0 + 0.5) * res
+    cy = y0 + (occupied_rows + r0 + 0.5) * res
+    if len(cx) * len(poses) > 4_000_000:  # a box full of obstacles: sampling is cheaper
+        return _sampled_hits(grid, samples, poses)
+    near = np.min(np.hypot(poses[:, :1] - cx, poses[:, 1:2] - cy), axis=1) <= reach
+    if near.any():
+        hit[near] = _sampled_hits(grid, samples, poses[near])
+    return hit
+
+
+def _sampled_hits(grid: Any, samples: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """:func:`_footprint_hits` by looking up every sample of every pose."""
     c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
     x = poses[:, :1] + c * samples[:, 0] - s * samples[:, 1]
     y = poses[:, 1:2] + s * samples[:, 0] + c * samples[:, 1]
