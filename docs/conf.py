@@ -294,7 +294,8 @@ def _example_argv(gallery_conf, script_vars):
 
 
 class _WrittenFigures:
-    """A scraper that shows the PNG files an example wrote into its folder (in name order)."""
+    """A scraper that shows the PNG and GIF files an example wrote into its folder (in name
+    order; an animation keeps its ``.gif`` suffix)."""
 
     def __repr__(self) -> str:  # a stable repr keeps Sphinx's environment cache valid
         return "_WrittenFigures"
@@ -304,10 +305,10 @@ class _WrittenFigures:
 
         folder = _OUT / Path(block_vars["src_file"]).stem
         shown = []
-        for png, target in zip(
-            sorted(folder.glob("*.png")), block_vars["image_path_iterator"], strict=False
-        ):
-            shutil.copyfile(png, target)
+        written = sorted([*folder.glob("*.png"), *folder.glob("*.gif")])
+        for image, target in zip(written, block_vars["image_path_iterator"], strict=False):
+            target = str(Path(target).with_suffix(image.suffix))
+            shutil.copyfile(image, target)
             shown.append(target)
         return figure_rst(shown, gallery_conf["src_dir"])
 

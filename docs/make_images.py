@@ -5,7 +5,10 @@ data, default ``../shared/data``, with ``mrclam/`` and ``carmen/``). Each figure
 that command through ``python -m wheelbase`` in a scratch folder; the PNG it writes is shrunk to at
 most ``MAX_WIDTH`` pixels and 64 colours and saved as ``docs/images/page_NAME.png`` (tens of kB, so
 the repository stays small). Prints JSON: each file with its size and the command that drew it.
-No figure in the documentation is pasted by hand; the gymnasium page's learning curve is
+The navigate page's animations (``docs/images/navigate_NAME.gif``, ``--only navigate``) are the
+``animation.gif`` of ``wheelbase run NAME`` for each bundled obstacles scenario, shrunk the
+smaller (:func:`shrink_gif`). No figure in the documentation is
+pasted by hand; the gymnasium page's learning curve is
 ``examples/gym_ppo.py``'s (it trains for minutes), the terrain page's come from its own scripts.
 """
 
@@ -24,6 +27,10 @@ DOCS = Path(__file__).resolve().parent
 IMAGES = DOCS / "images"
 MAX_WIDTH = 760
 """Widest figure [pixels]: the width of the theme's text column."""
+GIF_WIDTH = 440
+"""Widest animation of the navigate page [pixels] (the run's own GIF width)."""
+ANIMATIONS = ("unexpected_boxes", "crowd_crossing", "doorway_blocked", "corridor_swap")
+"""The bundled scenarios animated on the navigate page."""
 
 SIMULATE = ["simulate", "--model", "diffdrive", "--left", "0.8", "--right", "0.6", "--t-end",
             "100", "--method", "euler", "--pose0", "0,0,90", "--no-gif"]  # fmt: skip
@@ -91,6 +98,44 @@ def shrink(source: Path, target: Path) -> int:
     return target.stat().st_size
 
 
+GIF_BYTES = 450_000
+"""Largest animation of the navigate page [bytes]: frames are dropped evenly until it fits."""
+
+
+def shrink_gif(source: Path, target: Path) -> int:
+    """Copy a GIF at most :data:`GIF_WIDTH` pixels wide in one palette of 32 colours (the middle
+    frame's), keeping every second frame, or every third … until it is under
+    :data:`GIF_BYTES`; return its size [bytes]."""
+    from PIL import Image, ImageSequence
+
+    with Image.open(source) as image:
+        duration = image.info.get("duration", 66)
+        frames = [frame.convert("RGB") for frame in ImageSequence.Iterator(image)]
+    if frames[0].width > GIF_WIDTH:
+        height = round(frames[0].height * GIF_WIDTH / frames[0].width)
+        frames = [frame.resize((GIF_WIDTH, height), Image.Resampling.LANCZOS) for frame in frames]
+    palette = frames[len(frames) // 2].quantize(colors=32, method=Image.Quantize.MEDIANCUT)
+    frames = [frame.quantize(palette=palette, dither=Image.Dither.NONE) for frame in frames]
+    for every in range(2, len(frames) + 1):
+        kept = frames[::every]
+        kept[0].save(target, save_all=True, append_images=kept[1:], duration=every * duration,
+                     loop=0)  # fmt: skip
+        if target.stat().st_size <= GIF_BYTES:
+            break
+    return target.stat().st_size
+
+
+def animate(name: str, scratch: Path) -> dict:
+    """Run a bundled scenario and save its animation as ``docs/images/navigate_NAME.gif``."""
+    out = scratch / name
+    command = [sys.executable, "-m", "wheelbase", "run", name, "--out", str(out)]
+    subprocess.run(command, check=True, capture_output=True, text=True)
+    target = IMAGES / f"navigate_{name}.gif"
+    return {"file": str(target.relative_to(DOCS.parent)),
+            "bytes": shrink_gif(out / "animation.gif", target),
+            "command": f"wheelbase run {name}"}  # fmt: skip
+
+
 def draw(name: str, data: Path, scratch: Path) -> dict:
     """Run the page's command and save its figure as ``docs/images/page_NAME.png``."""
     arguments, shown = PAGES[name]
@@ -109,12 +154,16 @@ def draw(name: str, data: Path, scratch: Path) -> dict:
 
 def main(argv: list[str] | None = None) -> list[dict]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", nargs="*", choices=sorted(PAGES), help="pages to redraw")
+    parser.add_argument("--only", nargs="*", choices=[*sorted(PAGES), "navigate"],
+                        help="pages to redraw")  # fmt: skip
     parser.add_argument("--data", type=Path, default=DOCS.parent.parent / "shared/data")
     args = parser.parse_args(argv)
     IMAGES.mkdir(exist_ok=True)
     with tempfile.TemporaryDirectory() as folder:
-        written = [draw(name, args.data, Path(folder)) for name in args.only or PAGES]
+        pages = args.only or [*PAGES, "navigate"]
+        written = [draw(name, args.data, Path(folder)) for name in pages if name in PAGES]
+        if "navigate" in pages:
+            written += [animate(name, Path(folder)) for name in ANIMATIONS]
     print(json.dumps(written, indent=2))
     return written
 
