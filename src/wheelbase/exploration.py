@@ -10,7 +10,9 @@ and ``localization`` is left out: SLAM localises the robot.
 The loop (:func:`explore`):
 
 1. **Map.** The scans so far, with the encoder odometry chained over the legs, go through
-   :class:`~wheelbase.mapping.LidarSlam` (scan-to-submap matching, keyframes, loop closures);
+   :class:`~wheelbase.mapping.LidarSlam` (scan-to-submap matching, keyframes, loop closures),
+   incrementally (:meth:`~wheelbase.mapping.LidarSlam.session`: each leg adds its own scans
+   to the pose graph of the legs before, with the result the batch run would give);
    the map is rendered from its poses (``exploration.slam: false``: from the odometry poses).
    The first ``initial_scans`` scans are taken at rest at the start.
 2. **Frontiers** (:mod:`wheelbase.mapping.frontiers`) of the map, at least
@@ -353,8 +355,12 @@ def _scan_log(times, ranges, odometry, truth_poses, lidar):
     return ScanLog(
         np.asarray(times, float), np.asarray(ranges, float), np.asarray(lidar.beam_angles, float),
         float(lidar.max_range), np.asarray(odometry, float), np.asarray(truth_poses, float),
-        tuple(lidar.mount) if hasattr(lidar, "mount") else (0.0, 0.0, 0.0), 0, "exploration",
+        _mount(lidar), 0, "exploration",
     )  # fmt: skip
+
+
+def _mount(lidar) -> tuple[float, float, float]:
+    return tuple(lidar.mount) if hasattr(lidar, "mount") else (0.0, 0.0, 0.0)
 
 
 def _goal_pose(planner: Any, grid: Any, cell: np.ndarray, frontier: Any, pose: np.ndarray):
@@ -431,10 +437,21 @@ def explore(
     status = "max_legs"
     grid = None
     timing = {"slam_s": 0.0, "drive_s": 0.0, "plan_s": 0.0}
-    for _leg in range(spec.max_legs + 1):
+    session = slam.session(lidar.beam_angles, float(lidar.max_range), mount=_mount(lidar))
+    fed = 0  # scans given to the session so far: each leg adds only its own
+
+    def estimate():
+        nonlocal fed
         log = _scan_log(times, ranges, odometry, truths, lidar)
+        if not spec.slam:
+            return log, log.odometry
+        session.add(log.ranges[fed:], log.odometry[fed:], log.t[fed:])
+        fed = log.n_scans
+        return log, session.result().poses
+
+    for _leg in range(spec.max_legs + 1):
         tick = time.perf_counter()
-        estimated = slam.run(log).poses if spec.slam else log.odometry
+        log, estimated = estimate()
         timing["slam_s"] += time.perf_counter() - tick
         grid = _render(slam, log, estimated, limit)
         belief = compose(estimated[-1], relative_pose(odometry[-1], odo_pose))
@@ -521,8 +538,7 @@ def explore(
         blacklist.append(np.asarray(grid.cell_to_world(chosen.middle[None].astype(float))
                                     ).reshape(-1)[:2])  # fmt: skip
     if len(estimated) != len(truths):  # a leg ended the loop (a collision): map its scans
-        log = _scan_log(times, ranges, odometry, truths, lidar)
-        estimated = slam.run(log).poses if spec.slam else log.odometry
+        log, estimated = estimate()
         grid = _render(slam, log, estimated, limit)
         frames.append((clock, grid, estimated.copy()))
     result = ExplorationResult(
