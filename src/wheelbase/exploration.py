@@ -32,10 +32,15 @@ The loop (:func:`explore`):
    map→odom = SLAM pose ⊖ odometry pose, as a ROS robot does; each leg's odometry frame starts
    where the engine starts it (the leg's true start pose: only the origin of that frame; the
    odometry chained for SLAM keeps only the encoders' relative motion). A leg that does not
-   arrive (``missed_goal``, ``timeout``) blacklists its frontier.
+   arrive (``missed_goal``, ``timeout``) blacklists its frontier. A plan longer than
+   ``replan_distance`` is driven only to the point that far along it (the robot stops there),
+   and the loop goes back to 1: the map→odom transform is held fixed through a leg, so the
+   robot follows the plan only as well as its encoders keep their drift, and cutting the leg
+   bounds that drift and brings the scans seen on the way into the next plan (measured on the
+   maze: whole legs of up to 30 m drove into a wall on the 68th leg).
 5. **Stop** when no reachable frontier is left (status ``explored``), at a collision
    (``collision``), when the simulated time reaches ``duration`` (``timeout``) or after
-   ``max_legs`` legs (``max_legs``).
+   ``max_legs`` frontier legs (``max_legs``; legs cut at ``replan_distance`` do not count).
 
 The map's array is sized once SLAM renders it (the beams' reach plus 1 m); the true world is
 read only by the simulation (lidar, collisions) and by the evaluation
@@ -90,6 +95,10 @@ class ExplorationSpec(BaseModel):
         0.5, ge=0, le=100, description="A given-up goal blacklists frontiers this near [m]."
     )
     max_legs: int = Field(100, ge=1, le=10_000, description="Most frontiers driven to.")
+    replan_distance: float = Field(
+        3.0, ge=0, le=1e4, description="A leg drives at most this far along its plan before "
+        "the robot re-maps and re-plans [m] (0: whole plans)."
+    )  # fmt: skip
     leg_slack: float = Field(
         20.0, gt=0, le=3600, description="Time a leg may take beyond its reference [s]."
     )
@@ -122,7 +131,8 @@ class ExplorationResult:
     frontiers : numpy.ndarray, shape (G, 2)
         Each goal's frontier centroid [m].
     legs : list of dict
-        Per leg: status, duration, planning time.
+        Per leg: status, duration, planning time, the length driven and whether the plan was
+        cut at ``replan_distance``.
     status : str
         explored, collision, timeout or max_legs.
     frames : list of tuple
@@ -363,6 +373,19 @@ def _mount(lidar) -> tuple[float, float, float]:
     return tuple(lidar.mount) if hasattr(lidar, "mount") else (0.0, 0.0, 0.0)
 
 
+def _cut(plan: Any, distance: float) -> Any:
+    """The plan up to ``distance`` along it [m] (the plan itself when 0, or when what would be
+    left after the cut is shorter than half of it: no stop just before the goal)."""
+    from wheelbase.planning.path import PlannedPath
+
+    arc = plan.arc_length
+    if distance <= 0 or arc[-1] <= 1.5 * distance:
+        return plan
+    k = max(1, int(np.searchsorted(arc, distance)))
+    return PlannedPath(plan.poses[: k + 1], plan.directions[: k + 1], plan.curvatures[: k + 1],
+                       arc[: k + 1], True, plan.stats)  # fmt: skip
+
+
 def _goal_pose(planner: Any, grid: Any, cell: np.ndarray, frontier: Any, pose: np.ndarray):
     """The approach cell's centre facing the frontier; other headings in quarter turns when the
     footprint collides there; None when none is free."""
@@ -449,14 +472,15 @@ def explore(
         fed = log.n_scans
         return log, session.result().poses
 
-    for _leg in range(spec.max_legs + 1):
+    visits = 0  # frontier legs: those not cut at replan_distance
+    while True:
         tick = time.perf_counter()
         log, estimated = estimate()
         timing["slam_s"] += time.perf_counter() - tick
         grid = _render(slam, log, estimated, limit)
         belief = compose(estimated[-1], relative_pose(odometry[-1], odo_pose))
         frames.append((clock, grid, estimated.copy()))
-        if len(legs) == spec.max_legs:
+        if visits == spec.max_legs:
             break
         if clock >= scenario.duration - scenario.dt:
             status = "timeout"
@@ -490,11 +514,14 @@ def explore(
             status = "explored"
             break
 
+        cut = _cut(plan, spec.replan_distance)
+        target = goal if cut is plan else cut.poses[-1]
+
         # the plan in the leg's odometry frame (map→odom from the SLAM pose)
         def to_odom(poses, _b=belief, _o=true_pose):
             return compose(_o, relative_pose(_b, poses))
 
-        path = replace(plan, poses=to_odom(plan.poses))
+        path = replace(cut, poses=to_odom(cut.poses))
         timed = runner._timed_reference(path, parts.limits, scenario.dt,
                                         scenario.resources.max_steps)  # fmt: skip
         end = float(timed.t[-1])
@@ -503,7 +530,7 @@ def explore(
             parts.engine,
             reference=path if parts.follows_path else timed,
             duration=max(scenario.dt, min(end + spec.leg_slack, remaining)),
-            arrival=Arrival(to_odom(goal), tolerance, end_time=end),
+            arrival=Arrival(to_odom(target), tolerance, end_time=end),
         )
         tick = time.perf_counter()
         leg_log = engine.run(true_pose[None], seeds=[scenario.seed + len(legs)])
@@ -522,16 +549,20 @@ def explore(
         odo_pose = compose(odo_pose, relative_pose(frame_start, leg_est[-1]))
         true_pose = leg_true[-1].copy()
         clock += float(leg_log.t[n - 1])
-        goals.append(goal)
-        centroids.append(chosen.centroid)
+        partial = cut is not plan
         legs.append({"status": leg_status, "duration_s": float(leg_log.t[n - 1]),
                      "planning_time_s": float(plan.stats.planning_time_s),
-                     "path_length_m": float(plan.length)})  # fmt: skip
+                     "path_length_m": float(cut.length), "cut": partial})  # fmt: skip
         if progress is not None:
             progress(len(legs), leg_status)
         if leg_status == "collision":
             status = "collision"
             break
+        if partial and leg_status == "arrived":
+            continue  # on the way: re-map, choose and plan again from here
+        visits += 1
+        goals.append(goal)
+        centroids.append(chosen.centroid)
         # a frontier once driven to is not chosen again: what stays of it after the visit
         # cannot be seen from its approach (explore_lite blacklists failures only)
         blacklist.append(chosen.centroid)
@@ -577,7 +608,8 @@ def exploration_metrics(result: ExplorationResult) -> dict[str, Any]:
     calls free (looked up at their centres); ``map_agreement`` (of the cells both call known,
     the fraction that agree, :func:`~wheelbase.mapping.map_agreement`); ``position_rmse_m``: the
     SLAM poses against the true ones at the scans (unaligned: both start at the start pose);
-    ``distance_m``: the true path length through the scans.
+    ``distance_m``: the true path length through the scans; ``legs_cut``: legs
+    cut at ``replan_distance``.
 
     Parameters
     ----------
@@ -605,6 +637,7 @@ def exploration_metrics(result: ExplorationResult) -> dict[str, Any]:
         "status": result.status,
         "legs": len(result.legs),
         "legs_arrived": statuses.count("arrived"),
+        "legs_cut": sum(bool(leg.get("cut")) for leg in result.legs),
         "collisions": statuses.count("collision"),
         "explored_fraction": float(free.mean()) if len(free) else math.nan,
         "reachable_free_area_m2": float(region.sum() * truth.resolution**2),
