@@ -121,3 +121,16 @@ def test_cli_writes_the_map_and_metrics(explored, tmp_path, monkeypatch):
     assert metrics["explored_fraction"] == explored.metrics["explored_fraction"]
     for name in ("map.yaml", "map.pgm", "map.png", "map.gif"):
         assert (out / name).stat().st_size > 0
+
+
+def test_the_turn_on_the_spot_at_the_end_of_a_plan_is_dropped():
+    from wheelbase.exploration import _without_final_turn
+    from wheelbase.planning.path import PlannedPath
+
+    x = np.array([0.0, 0.5, 1.0, 1.0, 1.0])
+    poses = np.stack([x, np.zeros(5), [0.0, 0.0, 0.0, 0.5, 1.0]], -1)
+    curvatures = np.array([0.0, 0.0, 0.0, np.inf, np.inf])
+    plan = PlannedPath(poses, np.ones(5), curvatures, x)
+    dropped = _without_final_turn(plan)
+    assert np.array_equal(dropped.poses, poses[:3])
+    assert _without_final_turn(dropped) is dropped

@@ -375,6 +375,23 @@ def _mount(lidar) -> tuple[float, float, float]:
     return tuple(lidar.mount) if hasattr(lidar, "mount") else (0.0, 0.0, 0.0)
 
 
+def _without_final_turn(plan: Any) -> Any:
+    """The plan without the turn on the spot it ends with (if any): with a 360° lidar the
+    heading at a frontier's goal sees nothing more, and a robot that stops off its plan
+    (tracking, the SLAM pose) sweeps its corners into the wall beside it while it turns there
+    (measured on the maze, seed 1: 0.40 m from a wall, the footprint's corner radius)."""
+    from wheelbase.planning.path import PlannedPath
+
+    spin = np.isinf(plan.curvatures)
+    k = len(spin)
+    while k > 2 and spin[k - 1]:
+        k -= 1
+    if k == len(spin):
+        return plan
+    return PlannedPath(plan.poses[:k], plan.directions[:k], plan.curvatures[:k],
+                       plan.arc_length[:k], True, plan.stats)  # fmt: skip
+
+
 def _cut(plan: Any, distance: float) -> Any:
     """The plan up to ``distance`` along it [m] (the plan itself when 0, or when what would be
     left after the cut is shorter than half of it: no stop just before the goal)."""
@@ -458,6 +475,8 @@ def explore(
     estimated = np.array([start])
     goals, centroids, legs, frames, blacklist = [], [], [], [], []
     tolerance = (scenario.goal_tolerance[0], math.radians(scenario.goal_tolerance[1]))
+    all_round = scenario.sensors.lidar.fov_deg >= 360.0
+    leg_tolerance = (tolerance[0], math.pi) if all_round else tolerance
     min_cells = max(1, math.ceil(spec.min_frontier_size / spec.resolution))
     status = "max_legs"
     grid = None
@@ -517,6 +536,9 @@ def explore(
             break
 
         cut = _cut(plan, spec.replan_distance)
+        partial = cut is not plan
+        if all_round:  # the heading at the goal does not matter: no turn on the spot there
+            cut = _without_final_turn(cut)
         target = goal if cut is plan else cut.poses[-1]
 
         # the plan in the leg's odometry frame (map→odom from the SLAM pose)
@@ -532,7 +554,7 @@ def explore(
             parts.engine,
             reference=path if parts.follows_path else timed,
             duration=max(scenario.dt, min(end + spec.leg_slack, remaining)),
-            arrival=Arrival(to_odom(target), tolerance, end_time=end),
+            arrival=Arrival(to_odom(target), leg_tolerance, end_time=end),
         )
         tick = time.perf_counter()
         leg_log = engine.run(true_pose[None], seeds=[scenario.seed + len(legs)])
@@ -551,7 +573,6 @@ def explore(
         odo_pose = compose(odo_pose, relative_pose(frame_start, leg_est[-1]))
         true_pose = leg_true[-1].copy()
         clock += float(leg_log.t[n - 1])
-        partial = cut is not plan
         legs.append({"status": leg_status, "duration_s": float(leg_log.t[n - 1]),
                      "planning_time_s": float(plan.stats.planning_time_s),
                      "path_length_m": float(cut.length), "cut": partial,
