@@ -56,6 +56,18 @@ def test_saved_map_loads_and_amcl_navigates_on_it(explored, tmp_path):
     assert run.metrics["collisions"] == 0 if "collisions" in run.metrics else True
 
 
+def test_a_long_plan_is_cut_at_the_replan_distance():
+    from wheelbase.exploration import _cut
+    from wheelbase.planning.path import PlannedPath
+
+    x = np.linspace(0.0, 10.0, 201)
+    poses = np.stack([x, np.zeros_like(x), np.zeros_like(x)], -1)
+    plan = PlannedPath(poses, np.ones(201), np.zeros(201), x)
+    cut = _cut(plan, 3.0)
+    assert 3.0 <= cut.length < 3.05 and np.array_equal(cut.poses, poses[: len(cut.poses)])
+    assert _cut(plan, 0.0) is plan and _cut(plan, 7.0) is plan  # no stop just before the goal
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -68,6 +80,7 @@ def test_saved_map_loads_and_amcl_navigates_on_it(explored, tmp_path):
         ({"plant": "dynamic"}, "plant"),
         ({"exploration": {"min_frontier_size": -1}}, "exploration: min_frontier_size"),
         ({"exploration": {"bogus": 1}}, "exploration: bogus"),
+        ({"exploration": {"replan_distance": -1}}, "exploration: replan_distance"),
         ({"exploration": 3}, "exploration: a mapping"),
         ({"controller": {"law": "mppi"}}, "controller.law"),
         ({"start": [1.0, float("nan"), 0.0]}, "start"),
@@ -86,15 +99,38 @@ def test_bad_input_errors(change, message):
             load_exploration(data)
 
 
-def test_cli_writes_the_map_and_metrics(tmp_path):
+def test_cli_writes_the_map_and_metrics(explored, tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
+    import wheelbase.exploration
     from wheelbase.cli import app
 
+    seen = []
+
+    def reuse(loaded, progress=None):  # the module's exploration of the same scenario
+        seen.append(loaded)
+        return explored
+
+    monkeypatch.setattr(wheelbase.exploration, "explore", reuse)
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["explore", "doorway", "--out", str(out), "--frames", "3"])
     assert result.exit_code == 0, result.output
+    assert seen[0][0] == explored.scenario and seen[0][1] == explored.spec
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["status"] == "explored" and metrics["collisions"] == 0
+    assert metrics["explored_fraction"] == explored.metrics["explored_fraction"]
     for name in ("map.yaml", "map.pgm", "map.png", "map.gif"):
         assert (out / name).stat().st_size > 0
+
+
+def test_the_turn_on_the_spot_at_the_end_of_a_plan_is_dropped():
+    from wheelbase.exploration import _without_final_turn
+    from wheelbase.planning.path import PlannedPath
+
+    x = np.array([0.0, 0.5, 1.0, 1.0, 1.0])
+    poses = np.stack([x, np.zeros(5), [0.0, 0.0, 0.0, 0.5, 1.0]], -1)
+    curvatures = np.array([0.0, 0.0, 0.0, np.inf, np.inf])
+    plan = PlannedPath(poses, np.ones(5), curvatures, x)
+    dropped = _without_final_turn(plan)
+    assert np.array_equal(dropped.poses, poses[:3])
+    assert _without_final_turn(dropped) is dropped

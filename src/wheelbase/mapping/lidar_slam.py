@@ -54,7 +54,7 @@ from wheelbase.mapping.scan_matching import (
     scan_points,
 )
 
-__all__ = ["LidarSlam", "SlamResult"]
+__all__ = ["LidarSlam", "SlamResult", "SlamSession"]
 
 
 @dataclass(frozen=True)
@@ -175,144 +175,43 @@ class LidarSlam:
         """
         if log.n_scans == 0:
             raise DataError(f"{log.source or 'the log'} holds no scan")
-        start_time = time.perf_counter()
-        mount = np.asarray(log.mount, dtype=np.float64)
-        points = [scan_points(r, log.angles, min(self.max_range, log.max_range), mount=mount)
-                  for r in log.ranges]  # fmt: skip
-        usable = np.array([p.shape[0] >= 10 for p in points])
-        if not usable.any():
-            raise DataError(
-                f"{log.source or 'the log'}: no scan has 10 returns within {self.max_range:g} m"
-            )
-        odometry = log.odometry if (self.use_odometry and log.odometry is not None) else None
-        n = log.n_scans
-        poses = np.zeros((n, 3))  # estimates, kept relative to the scan's keyframe at the end
-        frontend = np.zeros((n, 3))
-        anchor = np.full(n, -1, np.int64)  # the keyframe each scan hangs from
-        kf_scan: list[int] = []
-        kf_pose: list[np.ndarray] = []
-        edges: list[tuple[int, int]] = []
-        meas: list[np.ndarray] = []
-        info: list[np.ndarray] = []
-        loop_edge: list[bool] = []
-        stats = {"failed_matches": 0, "loop_searches": 0, "loop_candidates": 0,
-                 "loops_accepted": 0, "loops_rejected": 0, "skipped_scans": 0,
-                 "optimizations": 0}  # fmt: skip
-        snapshots: list[tuple[int, np.ndarray]] = []
-        first = int(np.flatnonzero(usable)[0])
-        pose = log.odometry[first].copy() if odometry is not None else np.zeros(3)
-        previous = pose.copy()
-        velocity = np.zeros(3)
-        table = reference = None
-        since_closure = 0
-        pending_optimizations = 0
+        session = self.session(log.angles, log.max_range, mount=log.mount, source=log.source,
+                               snapshot_every=snapshot_every)  # fmt: skip
+        session.add(log.ranges, log.odometry, log.t)
+        return session.result()
 
-        def rebuild_submap():
-            first_kf = max(0, len(kf_scan) - self.submap_keyframes)
-            keys = range(first_kf, len(kf_scan))
-            world = np.vstack([_transform(kf_pose[k], points[kf_scan[k]]) for k in keys])
-            return self._tables(world)
+    def session(
+        self,
+        angles: np.ndarray,
+        max_range: float,
+        *,
+        mount: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
+        source: str = "",
+        snapshot_every: int = 0,
+    ) -> SlamSession:
+        """An incremental run: scans are added as they come (:meth:`SlamSession.add`) and the
+        result asked for at any time; the result after adding a log's scans in any number of
+        batches equals :meth:`run` on the log (the same computation, continued).
 
-        def add_keyframe(scan: int, p: np.ndarray, cov: np.ndarray | None) -> None:
-            kf_scan.append(scan)
-            kf_pose.append(p.copy())
-            if cov is not None:
-                i = len(kf_scan) - 2
-                edges.append((i, i + 1))
-                meas.append(relative_pose(kf_pose[i], p))
-                info.append(self._edge_information(cov, p[2]))
-                loop_edge.append(False)
+        Parameters
+        ----------
+        angles : numpy.ndarray, shape (B,)
+            Beam angles in the sensor frame [rad].
+        max_range : float
+            The sensor's largest reading [m].
+        mount : array_like, shape (3,)
+            Sensor pose in the robot frame [m, m, rad].
+        source : str
+            Name of the data for messages.
+        snapshot_every : int
+            As in :meth:`run`.
 
-        for k in range(first, n):
-            if not usable[k]:
-                stats["skipped_scans"] += 1
-                poses[k] = frontend[k] = pose
-                anchor[k] = len(kf_scan) - 1
-                continue
-            if odometry is not None and k > first:
-                guess = compose(pose, relative_pose(odometry[k - 1], odometry[k]))
-            else:
-                guess = compose(pose, velocity)
-            if table is None:
-                pose = guess
-                add_keyframe(k, pose, None)
-                table, reference = rebuild_submap()
-                cov = None
-            else:
-                # the same window with odometry: a narrower one (±0.3 m, ±10°, prior 5 cm)
-                # was measured worse on the maze (ATE 0.095 m against 0.016 m)
-                result = self.matcher.match(table, reference, points[k], guess,
-                                            prior_std=self.prior_std)  # fmt: skip
-                if result is not None and odometry is not None:
-                    jump = relative_pose(guess, result.pose)
-                    if (np.hypot(jump[0], jump[1]) > self.odometry_gate[0]
-                            or abs(jump[2]) > self.odometry_gate[1]):  # fmt: skip
-                        result = None  # farther from the odometry than it drifts in a scan
-                if result is None or result.score < self.min_score:
-                    stats["failed_matches"] += 1
-                    pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
-                else:
-                    pose, cov = result.pose, result.covariance
-            velocity = relative_pose(previous, pose) if odometry is None else np.zeros(3)
-            previous = pose.copy()
-            last = kf_pose[-1]
-            moved = relative_pose(last, pose)
-            if k != kf_scan[-1] and (np.hypot(moved[0], moved[1]) >= self.keyframe_distance
-                                     or abs(moved[2]) >= self.keyframe_angle):  # fmt: skip
-                add_keyframe(k, pose, cov)
-                since_closure += 1
-                closed = False
-                if len(kf_scan) % self.loop_every == 0:
-                    closed = self._close_loops(points, kf_scan, kf_pose, edges, meas, info,
-                                               loop_edge, stats)  # fmt: skip
-                if closed:
-                    pending_optimizations += 1
-                if pending_optimizations >= self.optimize_every:
-                    self._optimize(kf_pose, edges, meas, info, loop_edge)
-                    stats["optimizations"] += 1
-                    pending_optimizations = 0
-                    pose = kf_pose[-1].copy()
-                    previous = pose.copy()
-                table, reference = rebuild_submap()
-            anchor[k] = len(kf_scan) - 1
-            frontend[k] = pose
-            # the scan's pose relative to its keyframe: follows it when the graph moves
-            poses[k] = relative_pose(kf_pose[anchor[k]], pose)
-            if snapshot_every and (k - first) % snapshot_every == 0:
-                snapshots.append((k, np.array(kf_pose)))
-        if (pending_optimizations or not stats["optimizations"]) and any(loop_edge):
-            self._optimize(kf_pose, edges, meas, info, loop_edge)
-            stats["optimizations"] += 1
-        kf = np.array(kf_pose)
-        estimate = np.empty((n, 3))
-        for k in range(n):
-            a = anchor[k]
-            if a < 0:  # scans before the first usable one
-                estimate[k] = kf[0]
-            elif k >= first and usable[k]:
-                estimate[k] = compose(kf[a], poses[k])
-            else:
-                estimate[k] = kf[a] if a >= 0 else kf[0]
-        graph = PoseGraph(
-            np.arange(len(kf_scan)), kf, np.array(edges, np.int64).reshape(-1, 2),
-            np.array(meas).reshape(-1, 3), np.array(info).reshape(-1, 3, 3),
-        )  # fmt: skip
-        processing = time.perf_counter() - start_time
-        loops = graph.edges[np.array(loop_edge, bool)] if loop_edge else np.zeros((0, 2), int)
-        return SlamResult(
-            poses=estimate,
-            frontend_poses=frontend,
-            keyframes=np.array(kf_scan, np.int64),
-            graph=graph,
-            loop_edges=np.array(loop_edge, bool),
-            loops=np.array(kf_scan, np.int64)[loops] if len(loops) else np.zeros((0, 2), int),
-            processing_time_s=processing,
-            duration_s=log.duration,
-            stats=stats,
-            snapshots=snapshots,
-            anchors=anchor,
-            offsets=poses,
-        )
+        Returns
+        -------
+        SlamSession
+        """
+        return SlamSession(self, np.asarray(angles, np.float64), float(max_range),
+                           np.asarray(mount, np.float64), source, int(snapshot_every))  # fmt: skip
 
     def render(self, log: ScanLog, poses: np.ndarray, **kwargs) -> LogOddsMap:
         """The occupancy map of ``log`` from robot ``poses`` (e.g. the SLAM estimate).
@@ -403,6 +302,242 @@ class LidarSlam:
                                      max_iterations=20, tolerance=1e-6)  # fmt: skip
         for k, p in enumerate(result.poses):
             kf_pose[k] = p
+
+
+class SlamSession:
+    """The state of an incremental :class:`LidarSlam` run (made by :meth:`LidarSlam.session`):
+    the keyframes, the pose graph and the submap carry over from one :meth:`add` to the next,
+    so that the work per scan does not grow with the scans before it (except at a loop
+    closure, which re-optimises the graph)."""
+
+    def __init__(self, slam, angles, max_range, mount, source, snapshot_every) -> None:
+        self.slam = slam
+        self.angles, self.max_range, self.mount = angles, max_range, mount
+        self.source, self.snapshot_every = source, snapshot_every
+        self.points: list[np.ndarray] = []
+        self.usable: list[bool] = []
+        self.odometry: list[np.ndarray] | None = None
+        self.times: list[float] = []
+        self.offsets: list[np.ndarray] = []  # each scan's pose relative to its keyframe
+        self.frontend: list[np.ndarray] = []
+        self.anchor: list[int] = []  # the keyframe each scan hangs from
+        self.kf_scan: list[int] = []
+        self.kf_pose: list[np.ndarray] = []
+        self.edges: list[tuple[int, int]] = []
+        self.meas: list[np.ndarray] = []
+        self.info: list[np.ndarray] = []
+        self.loop_edge: list[bool] = []
+        self.stats = {"failed_matches": 0, "loop_searches": 0, "loop_candidates": 0,
+                      "loops_accepted": 0, "loops_rejected": 0, "skipped_scans": 0,
+                      "optimizations": 0}  # fmt: skip
+        self.snapshots: list[tuple[int, np.ndarray]] = []
+        self.first: int | None = None
+        self.pose = self.previous = self.velocity = np.zeros(3)
+        self.table = self.reference = None
+        self.since_closure = 0
+        self.pending_optimizations = 0
+        self.processing_time_s = 0.0
+
+    @property
+    def n_scans(self) -> int:
+        """Scans added so far."""
+        return len(self.points)
+
+    def add(self, ranges: np.ndarray, odometry: np.ndarray | None = None,
+            times: np.ndarray | None = None) -> None:  # fmt: skip
+        """Process more scans, in time order after those added before.
+
+        Parameters
+        ----------
+        ranges : numpy.ndarray, shape (M, B)
+            Readings [m] (NaN or out of range: no return).
+        odometry : numpy.ndarray, shape (M, 3), optional
+            Odometry pose at each scan [m, m, rad], in one frame with the earlier ones; used
+            when the SLAM's ``use_odometry`` is set. Give it with every batch or with none.
+        times : numpy.ndarray, shape (M,), optional
+            Scan times [s] (for ``duration_s``).
+
+        Raises
+        ------
+        DataError
+            Odometry given with some batches and not others, or shapes that do not match.
+        """
+        tick = time.perf_counter()
+        slam = self.slam
+        ranges = np.asarray(ranges, np.float64).reshape(-1, self.angles.size)
+        m = ranges.shape[0]
+        use = slam.use_odometry and odometry is not None
+        if self.points and use != (self.odometry is not None):
+            raise DataError(f"{self.source or 'the log'}: odometry with every batch or none")
+        if use:
+            odometry = np.asarray(odometry, np.float64)
+            if odometry.shape != (m, 3):
+                raise DataError(f"{self.source or 'the log'}: odometry shape {odometry.shape} "
+                                f"for {m} scans")  # fmt: skip
+            if self.odometry is None:
+                self.odometry = []
+            self.odometry.extend(odometry)
+        if times is not None:
+            self.times.extend(np.asarray(times, np.float64).reshape(-1)[:m].tolist())
+        reach = min(slam.max_range, self.max_range)
+        for row in ranges:
+            self.points.append(scan_points(row, self.angles, reach, mount=self.mount))
+            self.usable.append(self.points[-1].shape[0] >= 10)
+            self._step(len(self.points) - 1)
+        self.processing_time_s += time.perf_counter() - tick
+
+    def _rebuild_submap(self):
+        slam, kf_scan, kf_pose = self.slam, self.kf_scan, self.kf_pose
+        first_kf = max(0, len(kf_scan) - slam.submap_keyframes)
+        keys = range(first_kf, len(kf_scan))
+        world = np.vstack([_transform(kf_pose[k], self.points[kf_scan[k]]) for k in keys])
+        return slam._tables(world)
+
+    def _add_keyframe(self, scan: int, p: np.ndarray, cov: np.ndarray | None) -> None:
+        kf_scan, kf_pose = self.kf_scan, self.kf_pose
+        kf_scan.append(scan)
+        kf_pose.append(p.copy())
+        if cov is not None:
+            i = len(kf_scan) - 2
+            self.edges.append((i, i + 1))
+            self.meas.append(relative_pose(kf_pose[i], p))
+            self.info.append(self.slam._edge_information(cov, p[2]))
+            self.loop_edge.append(False)
+
+    def _step(self, k: int) -> None:
+        """Scan ``k`` through steps 1–4 of the module docstring."""
+        slam, stats, odometry = self.slam, self.stats, self.odometry
+        if self.first is None:
+            if not self.usable[k]:  # before the first usable scan: follows the first keyframe
+                self.anchor.append(-1)
+                self.offsets.append(np.zeros(3))
+                self.frontend.append(np.zeros(3))
+                return
+            self.first = k
+            self.pose = odometry[k].copy() if odometry is not None else np.zeros(3)
+            self.previous = self.pose.copy()
+            self.velocity = np.zeros(3)
+        first, pose = self.first, self.pose
+        if not self.usable[k]:
+            stats["skipped_scans"] += 1
+            self.anchor.append(len(self.kf_scan) - 1)
+            self.offsets.append(pose.copy())
+            self.frontend.append(pose.copy())
+            return
+        if odometry is not None and k > first:
+            guess = compose(pose, relative_pose(odometry[k - 1], odometry[k]))
+        else:
+            guess = compose(pose, self.velocity)
+        if self.table is None:
+            pose = guess
+            self._add_keyframe(k, pose, None)
+            self.table, self.reference = self._rebuild_submap()
+            cov = None
+        else:
+            # the same window with odometry: a narrower one (±0.3 m, ±10°, prior 5 cm)
+            # was measured worse on the maze (ATE 0.095 m against 0.016 m)
+            result = slam.matcher.match(self.table, self.reference, self.points[k], guess,
+                                        prior_std=slam.prior_std)  # fmt: skip
+            if result is not None and odometry is not None:
+                jump = relative_pose(guess, result.pose)
+                if (np.hypot(jump[0], jump[1]) > slam.odometry_gate[0]
+                        or abs(jump[2]) > slam.odometry_gate[1]):  # fmt: skip
+                    result = None  # farther from the odometry than it drifts in a scan
+            if result is None or result.score < slam.min_score:
+                stats["failed_matches"] += 1
+                pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
+            else:
+                pose, cov = result.pose, result.covariance
+        self.velocity = relative_pose(self.previous, pose) if odometry is None else np.zeros(3)
+        self.previous = pose.copy()
+        last = self.kf_pose[-1]
+        moved = relative_pose(last, pose)
+        if k != self.kf_scan[-1] and (np.hypot(moved[0], moved[1]) >= slam.keyframe_distance
+                                      or abs(moved[2]) >= slam.keyframe_angle):  # fmt: skip
+            self._add_keyframe(k, pose, cov)
+            self.since_closure += 1
+            closed = False
+            if len(self.kf_scan) % slam.loop_every == 0:
+                closed = slam._close_loops(self.points, self.kf_scan, self.kf_pose, self.edges,
+                                           self.meas, self.info, self.loop_edge,
+                                           stats)  # fmt: skip
+            if closed:
+                self.pending_optimizations += 1
+            if self.pending_optimizations >= slam.optimize_every:
+                slam._optimize(self.kf_pose, self.edges, self.meas, self.info, self.loop_edge)
+                stats["optimizations"] += 1
+                self.pending_optimizations = 0
+                pose = self.kf_pose[-1].copy()
+                self.previous = pose.copy()
+            self.table, self.reference = self._rebuild_submap()
+        self.anchor.append(len(self.kf_scan) - 1)
+        self.frontend.append(pose.copy())
+        # the scan's pose relative to its keyframe: follows it when the graph moves
+        self.offsets.append(relative_pose(self.kf_pose[self.anchor[k]], pose))
+        self.pose = pose
+        if self.snapshot_every and (k - first) % self.snapshot_every == 0:
+            self.snapshots.append((k, np.array(self.kf_pose)))
+
+    def result(self) -> SlamResult:
+        """The estimate after the scans added so far; the session can go on after it (the
+        final optimisation :meth:`LidarSlam.run` makes is applied to a copy of the graph).
+
+        Returns
+        -------
+        SlamResult
+
+        Raises
+        ------
+        DataError
+            No scan yet, or no scan with a usable return.
+        """
+        tick = time.perf_counter()
+        slam, stats = self.slam, dict(self.stats)
+        if not self.points:
+            raise DataError(f"{self.source or 'the log'} holds no scan")
+        if self.first is None:
+            raise DataError(
+                f"{self.source or 'the log'}: no scan has 10 returns within {slam.max_range:g} m"
+            )
+        kf_pose = [p.copy() for p in self.kf_pose]
+        if (self.pending_optimizations or not stats["optimizations"]) and any(self.loop_edge):
+            slam._optimize(kf_pose, self.edges, self.meas, self.info, self.loop_edge)
+            stats["optimizations"] += 1
+        n, first = len(self.points), self.first
+        kf = np.array(kf_pose)
+        offsets = np.array(self.offsets).reshape(n, 3)
+        estimate = np.empty((n, 3))
+        for k in range(n):
+            a = self.anchor[k]
+            if a < 0:  # scans before the first usable one
+                estimate[k] = kf[0]
+            elif k >= first and self.usable[k]:
+                estimate[k] = compose(kf[a], offsets[k])
+            else:
+                estimate[k] = kf[a]
+        graph = PoseGraph(
+            np.arange(len(self.kf_scan)), kf, np.array(self.edges, np.int64).reshape(-1, 2),
+            np.array(self.meas).reshape(-1, 3), np.array(self.info).reshape(-1, 3, 3),
+        )  # fmt: skip
+        loop_edge = np.array(self.loop_edge, bool)
+        loops = graph.edges[loop_edge] if loop_edge.any() else np.zeros((0, 2), int)
+        kf_scan = np.array(self.kf_scan, np.int64)
+        duration = float(self.times[-1] - self.times[0]) if len(self.times) == n else 0.0
+        processing = self.processing_time_s + time.perf_counter() - tick
+        return SlamResult(
+            poses=estimate,
+            frontend_poses=np.array(self.frontend).reshape(n, 3),
+            keyframes=kf_scan,
+            graph=graph,
+            loop_edges=loop_edge,
+            loops=kf_scan[loops] if len(loops) else np.zeros((0, 2), int),
+            processing_time_s=processing,
+            duration_s=duration,
+            stats=stats,
+            snapshots=list(self.snapshots),
+            anchors=np.array(self.anchor, np.int64),
+            offsets=offsets,
+        )
 
 
 @dataclass(frozen=True)
