@@ -34,7 +34,8 @@ Sections (one JSON object; ``targets`` says which targets this run met):
     agreement, collisions, distance, simulated and wall time; then AMCL on the saved map
     (``wheelbase.run_seeds``) along a route across it, arrivals out of the seeds.
 
-Usage: ``python benchmarks/slam.py [--quick] [--sections posegraphs,carmen,...]``.
+Usage: ``python benchmarks/slam.py [--quick] [--sections posegraphs,carmen,...]
+[--logs intel,aces]``.
 """
 
 from __future__ import annotations
@@ -105,13 +106,13 @@ def posegraphs(repeat: int) -> dict:
     return out
 
 
-def carmen(quick: bool) -> dict:
+def carmen(quick: bool, logs: tuple[str, ...] = ("intel", "aces")) -> dict:
     from wheelbase.datasets import read_carmen
     from wheelbase.mapping import LidarSlam
     from wheelbase.mapping.evaluation import lidar_metrics
 
     out = {}
-    for name in ("intel", "aces"):
+    for name in logs:
         path = DATA / "carmen" / f"{name}-corrected.log.gz"
         if not path.is_file():
             continue
@@ -119,7 +120,7 @@ def carmen(quick: bool) -> dict:
         if quick:
             log = log.subset(slice(12, 80))
         cpu = time.process_time()
-        result = LidarSlam().run(log)
+        result = LidarSlam.without_odometry().run(log)
         metrics = lidar_metrics(log, result)
         metrics["cpu_time_s"] = time.process_time() - cpu
         metrics["cpu_real_time_factor"] = log.duration / metrics["cpu_time_s"]
@@ -324,6 +325,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="timings per pose graph")
     parser.add_argument("--sections", default="posegraphs,carmen,simulation,landmarks,"
                         "occupancy_speed,exploration", help="comma-separated sections")  # fmt: skip
+    parser.add_argument("--logs", default="intel,aces",
+                        help="comma-separated CARMEN logs of the carmen section")  # fmt: skip
     args = parser.parse_args()
     chosen = args.sections.split(",")
     report: dict = {}
@@ -334,7 +337,7 @@ def main() -> None:
     if "landmarks" in chosen and not args.quick:
         report["landmarks"] = landmarks()
     if "carmen" in chosen:
-        report["carmen"] = carmen(args.quick)
+        report["carmen"] = carmen(args.quick, tuple(args.logs.split(",")))
     if "simulation" in chosen:
         report["simulation"] = simulation(args.quick)
     if "exploration" in chosen:

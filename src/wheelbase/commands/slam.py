@@ -115,7 +115,8 @@ def _lidar_slam(data: Path, paths: dict[str, Path], frames: int, mcap: bool,
     log = read_scans(data)
     if max_scans is not None:
         log = log.subset(slice(0, max_scans))
-    slam = LidarSlam(use_odometry=use_odometry)
+    with_odometry = use_odometry and log.odometry is not None
+    slam = LidarSlam(use_odometry=True) if with_odometry else LidarSlam.without_odometry()
     every = max(1, log.n_scans // max(frames, 1))
     result = slam.run(log, snapshot_every=every)
     grid = slam.render(log, result.poses).to_grid()
