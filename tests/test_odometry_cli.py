@@ -109,3 +109,17 @@ def test_calibrate_writes_metrics(tmp_path):
     assert metrics["scale_right"] / metrics["scale_left"] == pytest.approx(1.005, abs=1e-4)
     bad = runner.invoke(app, ["calibrate", "--ed", "-1", "--out", str(tmp_path / "bad")])
     assert isinstance(bad.exception, ConfigError) and "diameter_ratio" in str(bad.exception)
+
+
+def test_a_goal_the_robot_starts_on_is_reported_not_a_traceback(tmp_path):
+    # found by benchmarks/fuzz.py: KeyError 'final_position_error_estimated_m'
+    out = tmp_path / "run"
+    result = runner.invoke(
+        app, ["goto", "--goal", "0.5", "0.5", "--goal", "1e-300", "1e-300", "--out", str(out),
+              "--no-gif"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "odometry error n/a (no motion)" in result.output
+    goals = json.loads((out / "metrics.json").read_text())["goals"]
+    assert goals[0]["odometry_final_error_m"] < 0.015
+    assert goals[1]["odometry_final_error_m"] is None

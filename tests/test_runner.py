@@ -226,3 +226,16 @@ def test_reversals_ignore_the_flicker_of_a_turn_in_place():
     parking = np.array([0.5] * 20 + [0.01, -0.01] * 3 + [-0.3] * 20 + [0.4] * 5)
     assert _reversals(parking) == 2  # backwards and forwards again
     assert _reversals(np.zeros(5)) == 0 and _reversals(np.array([])) == 0
+
+
+def test_torque_tracking_acceleration_gains_must_be_numbers():
+    # found by benchmarks/fuzz.py: a raw ValueError from float('empty')
+    scenario = {"name": "gain", "map": "empty", "robot": {"model": "diffdrive", "preset": "rm100"},
+                "plant": "dynamic", "controller": {"law": "adaptive_computed_torque",
+                                                   "gains": {"max_acceleration": "empty"}},
+                "start": [0.0, 0.0, 0.0], "goal": [1.5, 0.0, 0.0], "dt": 0.02}  # fmt: skip
+    with pytest.raises(ScenarioError, match="max_acceleration must be a real number"):
+        run(scenario)
+    scenario["controller"]["gains"]["max_acceleration"] = -1.0
+    with pytest.raises(ScenarioError, match="max_acceleration must be > 0"):
+        run(scenario)

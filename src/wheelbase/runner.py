@@ -218,6 +218,13 @@ def _follower(name: str) -> Callable[..., Any]:
     return make
 
 
+def _bound(name: str, value: Any, unit: str) -> float:
+    """A positive limit, or ``math.inf`` for none (anything else is a ConfigError naming it)."""
+    if isinstance(value, (int, float)) and value == math.inf:
+        return math.inf
+    return positive(name, value, unit)
+
+
 class TorqueTracking:
     """Computed-torque PID (document 000 §5.3) on a time-parametrised trajectory.
 
@@ -278,7 +285,10 @@ class TorqueTracking:
             derivative_filter=derivative_filter,
         )
         self._rows: tuple[Any, Any] | None = None
-        self._accel_bounds = (float(max_acceleration), float(max_yaw_acceleration))
+        self._accel_bounds = (
+            _bound("max_acceleration", max_acceleration, "m/s²"),
+            _bound("max_yaw_acceleration", max_yaw_acceleration, "rad/s²"),
+        )
 
     def reset(self) -> None:
         """Forget the integrals of the PID."""

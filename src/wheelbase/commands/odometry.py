@@ -182,9 +182,10 @@ def register(app: typer.Typer) -> None:
                 {
                     "goal": [float(log.goal[i, 0]), float(log.goal[i, 1])],
                     "status": row["status"],
-                    "true_final_error_m": row["final_position_error_true_m"],
-                    "odometry_final_error_m": row["final_position_error_estimated_m"],
-                    "odometry_drift_m": row["odometry_drift_m"],
+                    # a goal the robot starts on leaves no motion to measure: None
+                    "true_final_error_m": row.get("final_position_error_true_m"),
+                    "odometry_final_error_m": row.get("final_position_error_estimated_m"),
+                    "odometry_drift_m": row.get("odometry_drift_m"),
                     "time_s": row["duration_s"],
                 }
                 for i, row in enumerate(log.metrics())
@@ -201,9 +202,12 @@ def register(app: typer.Typer) -> None:
         paths["metrics.json"].write_text(json.dumps(metrics, indent=2) + "\n")
         for entry in metrics["goals"]:
             x, y = entry["goal"]
+            true_error, odometry_error = (
+                "n/a (no motion)" if value is None else f"{value:.4f} m"
+                for value in (entry["true_final_error_m"], entry["odometry_final_error_m"])
+            )
             typer.echo(
-                f"goal ({x:g}, {y:g}) m: true error {entry['true_final_error_m']:.4f} m, "
-                f"odometry error {entry['odometry_final_error_m']:.4f} m"
+                f"goal ({x:g}, {y:g}) m: true error {true_error}, odometry error {odometry_error}"
             )
         typer.echo(f"wrote {', '.join(str(p) for p in paths.values())}")
 
