@@ -900,6 +900,8 @@ def _g2o(draw) -> tuple[str, bytes]:
     for _ in range(draw(st.integers(0, 3))):
         k = draw(st.integers(0, len(lines) - 1))
         tokens = lines[k].split()
+        if not tokens:  # an earlier mutation left the line blank (a whitespace token)
+            continue
         j = draw(st.integers(0, len(tokens) - 1))
         tokens[j] = draw(st.sampled_from(HOSTILE_TEXT))
         lines[k] = " ".join(tokens) if draw(st.booleans()) else " ".join(tokens[: j + 1])
