@@ -38,11 +38,13 @@ from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import transform_points
 
 __all__ = [
+    "agg_pyplot",
     "animate",
     "footprint_outline",
     "plot_path",
     "plot_result",
     "plot_states",
+    "save_and_close",
     "save_figure",
 ]
 
@@ -110,6 +112,47 @@ def save_figure(
     """
     path = _writable(path, overwrite)
     fig.savefig(path, dpi=positive("dpi", dpi, "dots/inch"))
+    return path
+
+
+def agg_pyplot() -> Any:
+    """:mod:`matplotlib.pyplot` on the Agg backend (figures for files, never a window).
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_and_close(fig: Any, path: str | Path, dpi: float = 110.0) -> Path:
+    """Lay out a pyplot figure, write it to ``path`` and close it (a file already there is
+    replaced: the command that chose ``path`` decides about overwriting).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure made through :func:`agg_pyplot`.
+    path : str or pathlib.Path
+        Destination (format from the suffix).
+    dpi : float
+        Resolution [dots per inch].
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=dpi)
+    agg_pyplot().close(fig)
     return path
 
 

@@ -7,24 +7,9 @@ from typing import Any
 
 import numpy as np
 
+from wheelbase.plot import agg_pyplot, save_and_close
+
 __all__ = ["plot_error", "plot_paths"]
-
-
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(plt: Any, fig: Any, path: str | Path) -> Path:
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def plot_paths(result: Any, path: str | Path, title: str = "") -> Path:
@@ -43,7 +28,7 @@ def plot_paths(result: Any, path: str | Path, title: str = "") -> Path:
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 7.5))
     ax.plot(*result.truth[:, :2].T, color="k", lw=1.2, label="ground truth (Vicon)")
     ax.plot(*result.estimate[:, :2].T, color="tab:blue", lw=0.9, label=result.filter.upper())
@@ -57,7 +42,7 @@ def plot_paths(result: Any, path: str | Path, title: str = "") -> Path:
     ax.set_ylabel("y [m]")
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)
 
 
 def plot_error(result: Any, path: str | Path, title: str = "") -> Path:
@@ -76,7 +61,7 @@ def plot_error(result: Any, path: str | Path, title: str = "") -> Path:
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     error = np.hypot(*(result.estimate[:, :2] - result.truth[:, :2]).T)
     bound = 3.0 * np.sqrt(np.maximum(result.cov[:, 0, 0] + result.cov[:, 1, 1], 0.0))
     fig, ax = plt.subplots(figsize=(10, 4))
@@ -88,4 +73,4 @@ def plot_error(result: Any, path: str | Path, title: str = "") -> Path:
     ax.grid(True, alpha=0.3)
     ax.set_title(title)
     ax.legend(loc="upper right", fontsize=8)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)

@@ -8,24 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from wheelbase.plot import agg_pyplot, save_and_close
+
 __all__ = ["animate_map", "plot_error", "plot_landmarks", "plot_map", "plot_pose_graph"]
-
-
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(plt: Any, fig: Any, path: str | Path) -> Path:
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
 
 
 def _edge_lines(ax: Any, poses: np.ndarray, edges: np.ndarray, **style: Any) -> None:
@@ -61,7 +46,7 @@ def plot_pose_graph(
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 6))
     loops = edges[np.abs(edges[:, 1] - edges[:, 0]) != 1]
     for ax, poses, name in ((axes[0], initial, "initial guess"), (axes[1], optimised,
@@ -74,7 +59,7 @@ def plot_pose_graph(
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_title(f"{title}: {name}" if title else name)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)
 
 
 def plot_map(
@@ -109,7 +94,7 @@ def plot_map(
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     image = np.where(grid.occupied, 0.0, 1.0)
     if grid.unknown is not None:
         image = np.where(grid.unknown, 0.75, image)
@@ -135,7 +120,7 @@ def plot_map(
     ax.set_title(title)
     if trajectory is not None or reference is not None:
         ax.legend(loc="best", fontsize=8)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)
 
 
 def plot_error(
@@ -161,7 +146,7 @@ def plot_error(
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     fig, ax = plt.subplots(figsize=(9, 4))
     for label, values in errors.items():
         ax.plot(t, values, lw=0.9, label=label)
@@ -170,7 +155,7 @@ def plot_error(
     ax.grid(True, alpha=0.3)
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)
 
 
 def _image(grid: Any) -> np.ndarray:
@@ -201,7 +186,7 @@ def animate_map(frames: list[tuple[Any, np.ndarray]], path: str | Path, title: s
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     last = frames[-1][0]
@@ -247,7 +232,7 @@ def plot_landmarks(result: Any, path: str | Path, title: str = "") -> Path:
     -------
     Path
     """
-    plt = _pyplot()
+    plt = agg_pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 7.5))
     ax.plot(*result.truth[:, :2].T, color="k", lw=1.0, label="ground truth (Vicon)")
     ax.plot(*result.estimate[:, :2].T, color="tab:blue", lw=0.8, label=result.method)
@@ -266,4 +251,4 @@ def plot_landmarks(result: Any, path: str | Path, title: str = "") -> Path:
     ax.set_ylabel("y [m]")
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
-    return _save(plt, fig, path)
+    return save_and_close(fig, path)
