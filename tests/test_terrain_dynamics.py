@@ -177,3 +177,30 @@ def test_terrain_dynamics_refuses_what_it_cannot_model():
                         TerrainMap.uniform(FREE_CONCRETE))  # fmt: skip
     with pytest.raises(ConfigError, match="step_factor"):
         TerrainDynamics(RM100, TerrainMap.uniform(FREE_CONCRETE), step_factor=3.0)
+
+
+@pytest.mark.parametrize("name", ["dry_sand", "sandy_loam"])
+def test_each_drive_wheel_pulls_with_janosi_thrust_at_wongs_slip(name):
+    # the plant's soil traction at Wong's slip i = 1 − v/(a·ω), against Bekker's sinkage and
+    # Janosi–Hanamoto's thrust written out here from Wong (eqs. 2.36, 2.56, 2.62), and the
+    # body's drag against the compaction resistance b·k·z₀^(n+1)/(n+1)
+    soil = SURFACES[name].soil
+    model = TerrainDynamics(RM100, TerrainMap.uniform(SURFACES[name]), slip_speed=1e-4)
+    a, b = RM100.wheel_radius, model.contacts.wheel_width
+    speed = 0.5
+    n, k_c, k_phi = soil.n, soil.k_c, soil.k_phi
+    for i in (0.05, 0.2, 0.5, 0.8):
+        omega = speed / (a * (1.0 - i))
+        aux = model.start(1)
+        aux[0, :2] = omega
+        aux[0, 12] = 1.0  # the wheel rates are set: no start from the twist
+        state = np.array([[0.0, 0.0, 0.0, speed, 0.0, 0.0]])
+        _s, _aux, signals = model.step(state, aux, np.zeros((1, 2)), 1e-9)
+        load = signals[0, 4]
+        z0 = (3 * load / ((3 - n) * (k_c + b * k_phi) * math.sqrt(2 * a))) ** (2 / (2 * n + 1))
+        length = a * math.acos(1 - z0 / a)
+        strength = b * length * soil.cohesion + load * math.tan(soil.friction_angle)
+        x = i * length / soil.shear_modulus
+        janosi = strength * (1 - (1 - math.exp(-x)) / x)
+        assert signals[0, 6] == pytest.approx(z0, rel=1e-9)
+        assert signals[0, 2] == pytest.approx(janosi, rel=1e-6)

@@ -252,3 +252,26 @@ def test_payload_refuses_negative_values_and_positions_off_the_robot():
     with pytest.raises(ConfigError, match="outside the robot's footprint"):
         Payload(5.0, (0.5, 0.0)).check_footprint(0.66, 0.455)
     Payload(5.0, (0.3, 0.2)).check_footprint(0.66, 0.455)
+
+
+@pytest.mark.parametrize("name", ["dry_sand", "sandy_loam"])
+def test_drawbar_pull_against_slip_is_wongs_closed_form(name):
+    # DP/W against slip for the benchmark's 1 m, 0.3 m wide wheel under 5 kN, written out from
+    # Wong ch. 2 with Table 2.3's values in the table's units (kN/m^(n+1), kN/m^(n+2), kPa)
+    table = {"dry_sand": (1.1, 0.99, 1528.43, 1.04, 28.0), "sandy_loam": (0.7, 5.27, 1515.04,
+                                                                          1.72, 29.0)}  # fmt: skip
+    n, k_c, k_phi, c, phi = table[name]
+    k_c, k_phi, c = 1e3 * k_c, 1e3 * k_phi, 1e3 * c
+    big_k = SOILS[name].shear_modulus
+    w, a, b = 5000.0, 0.5, 0.3
+    z0 = (3 * w / ((3 - n) * (k_c + b * k_phi) * math.sqrt(2 * a))) ** (2 / (2 * n + 1))
+    r_c = b * (k_c / b + k_phi) * z0 ** (n + 1) / (n + 1)
+    length = a * math.acos(1 - z0 / a)
+    strength = b * length * c + w * math.tan(math.radians(phi))
+    slips = np.array([0.05, 0.1, 0.2, 0.3, 0.5, 0.8])
+    expected = (strength * (1 - big_k / (slips * length) * (1 - np.exp(-slips * length / big_k)))
+                - r_c) / w  # fmt: skip
+    ours = drawbar_pull(w, slips, a, b, SOILS[name]) / w
+    assert np.allclose(ours, expected, rtol=1e-12, atol=0)
+    assert np.all(np.diff(ours) > 0)  # pull grows with slip towards (A·c + W·tan φ − R_c)/W
+    assert ours[-1] < (strength - r_c) / w

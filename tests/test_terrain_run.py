@@ -294,3 +294,20 @@ def test_estimated_friction_raises_no_alarm_on_concrete_with_an_unknown_payload(
     log = prepared.engine.run(prepared.start, seeds=[0])
     assert prepared.engine.controller.estimator.spins == []
     assert np.array_equal(log.torques, free.log.torques)
+
+
+def test_traction_control_holding_the_integrators_stops_the_demo_on_ice_without_collision():
+    # the clipped torques wound the PID's integrators up: the robot overshot its reference,
+    # skidded in the turn and hit a wall; with the law's saturation at the friction limit its
+    # anti-windup holds, the wheels stay below ice's peak slip and the run ends without a
+    # collision (it creeps to within 0.25 m of the goal and ends stuck, not arrived)
+    data = load_scenario("demo").model_dump(mode="json")
+    data["terrain"] = {"surface": "ice"}
+    data["controller"]["traction_control"] = {"friction": "map"}
+    before = run(copy.deepcopy(data)).metrics
+    data["controller"]["traction_control"]["hold_integrators"] = True
+    after = run(data).metrics
+    assert before["status"] == "collision"
+    assert after["status"] != "collision"
+    assert after["max_slip"] < 0.1
+    assert after["final_position_error_true_m"] < 0.3

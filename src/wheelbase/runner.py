@@ -708,6 +708,8 @@ def prepare(
 
     sensors = _field("sensors", lambda: build_sensors(scenario, grid))
     estimator = _field("localization", lambda: build_estimator(scenario, robot, grid, sensors))
+    if dynamic:
+        estimator = ground.compensate_slip(scenario, estimator, robot, terrain)
     surroundings = _field(
         "world", lambda: _surroundings(scenario, grid, robot, footprint, robots, plans, seed)
     )

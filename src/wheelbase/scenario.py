@@ -200,6 +200,12 @@ class ControllerSpec(_Strict):
     traction_control: TractionSpec | None = Field(
         None, description="Limit the wheel torques by the estimated friction (a dynamic plant)."
     )
+    slope_feedforward: bool = Field(
+        False,
+        description="Add the wheel torques that hold the controller's model against the slope "
+        "of the terrain under its estimated pose (the robot knows its floor's grades; a dynamic "
+        "plant with terrain).",
+    )
 
 
 class OdometrySpec(_Strict):
@@ -220,6 +226,12 @@ class OdometrySpec(_Strict):
         description="True (left, right) wheel radius / nominal: systematic odometry error.",
     )
     track_scale: float = Field(1.0, gt=0, description="True track / nominal track.")
+    slip_compensation: bool = Field(
+        False,
+        description="Take out of the wheel distances the slip the commanded torques cause on "
+        "the terrain's friction curves (wheelbase.sim.SlipCompensatedOdometry: the robot knows "
+        "its floor; a dynamic plant, localization: odometry).",
+    )
 
 
 class LidarSpec(_Strict):
@@ -572,6 +584,8 @@ class Scenario(_Strict):
             ("robot.payload", self.robot.payload is not None),
             ("goal_payloads", self.goal_payloads is not None),
             ("controller.traction_control", self.controller.traction_control is not None),
+            ("controller.slope_feedforward", self.controller.slope_feedforward),
+            ("odometry.slip_compensation", self.odometry.slip_compensation),
         ):
             if given and not dynamic:
                 raise ValueError(f"{name} acts on the dynamics: set plant: dynamic")

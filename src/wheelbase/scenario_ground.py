@@ -6,7 +6,9 @@
   (:class:`~wheelbase.terrain.TerrainMap`);
 - :func:`build_plant`: the true robot on its ground, payload changes included
   (:class:`~wheelbase.sim.TerrainPlant`);
-- :func:`wrap_controller`: the controller's model schedule and traction control;
+- :func:`wrap_controller`: the controller's model schedule, slope feed-forward and traction
+  control;
+- :func:`compensate_slip`: the encoder odometry that takes out its torques' slip;
 - :func:`build_stuck`: the ``stuck`` rule of a scenario with terrain.
 
 Decisions where the scenario is silent: a payload changes when the reference trajectory comes to
@@ -37,6 +39,7 @@ __all__ = [
     "build_plant",
     "build_stuck",
     "build_terrain",
+    "compensate_slip",
     "controller_model",
     "ground_active",
     "payload_timeline",
@@ -350,7 +353,8 @@ def wrap_controller(
     timeline: list[tuple[float, Payload | None]],
     terrain: Any = None,
 ) -> Any:
-    """The controller with the payload changes it knows of and traction control.
+    """The controller with the payload changes it knows of, the slope feed-forward and
+    traction control.
 
     Parameters
     ----------
@@ -363,7 +367,8 @@ def wrap_controller(
     timeline : list of (float, Payload or None)
         :func:`payload_timeline`.
     terrain : TerrainMap, optional
-        The floor the robot knows (traction control's ``friction: map``).
+        The floor the robot knows (the slope feed-forward, traction control's
+        ``friction: map``).
     """
     from wheelbase.control.schedule import ModelSchedule
     from wheelbase.control.traction import TractionControl
@@ -375,6 +380,13 @@ def wrap_controller(
     ):
         changes = [(time, _dynamics_with(robot, payload)) for time, payload in timeline[1:]]
         controller = ModelSchedule(controller, changes)
+    if scenario.controller.slope_feedforward:
+        from wheelbase.control.slope import SlopeFeedForward
+
+        if terrain is None:
+            raise ScenarioError("controller.slope_feedforward needs a terrain section")
+        model = getattr(controller, "model", None) or controller_model(scenario, robot)
+        controller = SlopeFeedForward(controller, model, terrain)
     spec = scenario.controller.traction_control
     if spec is not None:
         contacts = build_contacts(scenario)
@@ -386,10 +398,43 @@ def wrap_controller(
                 wheel_inertia=contacts.wheel_inertia,
                 terrain=terrain if spec.friction == "map" else None,
                 initial_friction=spec.initial_friction, slow_down=spec.slow_down,
+                hold_integrators=spec.hold_integrators,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None
     return controller
+
+
+def compensate_slip(scenario: Scenario, estimator: Any, robot: Any, terrain: Any) -> Any:
+    """The estimator with ``odometry.slip_compensation`` applied (unchanged without it).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+    estimator : object
+        The estimator :func:`wheelbase.scenario_sensors.build_estimator` made.
+    robot : Robot
+        The resolved robot (``robot.dynamics`` without payload).
+    terrain : TerrainMap
+        The floor the robot knows.
+    """
+    if not scenario.odometry.slip_compensation:
+        return estimator
+    from wheelbase.sim.sensing import EncoderOdometry
+    from wheelbase.sim.slip_odometry import SlipCompensatedOdometry
+
+    if type(estimator) is not EncoderOdometry:
+        raise ScenarioError(
+            "odometry.slip_compensation needs odometry.mode: encoders and localization: odometry"
+        )
+    try:
+        return SlipCompensatedOdometry(
+            estimator.encoder, estimator.odometry, controller_model(scenario, robot),
+            build_contacts(scenario), terrain,
+        )  # fmt: skip
+    except ConfigError as error:
+        raise ScenarioError(f"odometry.slip_compensation: {error}") from None
 
 
 def build_stuck(scenario: Scenario) -> Any:

@@ -255,6 +255,11 @@ class TractionSpec(_Strict):
         "scaled so that turns and accelerations stay within margin times the friction."
     )  # fmt: skip
 
+    hold_integrators: bool = Field(
+        False, description="Lower the wrapped law's torque saturation to the friction limit, "
+        "so that its anti-windup holds its integrators while traction clips the torques."
+    )  # fmt: skip
+
     @field_validator("friction")
     @classmethod
     def _positive(cls, value):

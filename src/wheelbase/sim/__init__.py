@@ -3,6 +3,7 @@
 - :mod:`wheelbase.sim.plants`: what moves (kinematic, dynamic, or dynamic on terrain with
   slip and payloads), and its encoder axle;
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
+- :mod:`wheelbase.sim.slip_odometry`: encoder odometry that takes out the slip of its torques;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
 - :mod:`wheelbase.sim.streams`: counter-based random streams (a step is a function of its
@@ -35,6 +36,7 @@ if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first us
     )
     from wheelbase.sim.sensing import EncoderOdometry, PerfectState
     from wheelbase.sim.sensors import Readings, SensorSuite
+    from wheelbase.sim.slip_odometry import SlipCompensatedOdometry
     from wheelbase.sim.stuck import Stuck
     from wheelbase.sim.surroundings import Surroundings
     from wheelbase.sim.tracking import track_trajectory, tune_computed_torque
@@ -62,6 +64,7 @@ _EXPORTS = {
     "PerfectState": "wheelbase.sim.sensing",
     "Readings": "wheelbase.sim.sensors",
     "SensorSuite": "wheelbase.sim.sensors",
+    "SlipCompensatedOdometry": "wheelbase.sim.slip_odometry",
     "Stuck": "wheelbase.sim.stuck",
     "Surroundings": "wheelbase.sim.surroundings",
     "track_trajectory": "wheelbase.sim.tracking",
@@ -86,6 +89,7 @@ __all__ = [
     "PerfectState",
     "Readings",
     "SensorSuite",
+    "SlipCompensatedOdometry",
     "Stuck",
     "Surroundings",
     "TerrainPlant",

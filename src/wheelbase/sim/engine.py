@@ -622,6 +622,8 @@ class Engine:
                 extra["readings"] = readings
                 if readings.scan is not None and self.record_sensors:
                     scan, scan_index = readings.scan, moving
+            if getattr(self.estimator, "reads_command", False):  # its own torques (slip)
+                extra["command"] = command[moving]
             est, est_twist, estimator_state = self.estimator.update(
                 state.estimate[moving], delta, self.dt, new_pose, new_twist,
                 state=state.estimator, index=moving, **extra,
