@@ -74,15 +74,25 @@ def _ring(rng, n=30, noise=0.0):
     return truth, PoseGraph(np.arange(n), truth.copy(), edges, z, info)
 
 
+def _assembled(graph, poses, weights, fixed):
+    """The Numba kernel's normal equations, as a dense H and g in vertex order (free ones)."""
+    from wheelbase.mapping._posegraph_kernels import assemble_kernel
+
+    s = pg._GraphSystem(graph, fixed)
+    n = s.free.size
+    diag, off, g = np.empty((n, 3, 3)), np.empty((s.chol.n_off, 3, 3)), np.empty((n, 3))
+    assemble_kernel(np.ascontiguousarray(poses), s.edges, s.measurements, s.information,
+                    weights, s.free_index, s.slot, s.upper, diag, off, g)  # fmt: skip
+    return s, s.chol.to_dense(diag, off), g
+
+
 def test_gradient_and_gauss_newton_matrix_match_finite_differences():
     rng = np.random.default_rng(3)
     _, graph = _ring(rng, 8, noise=0.1)
     poses = graph.poses + rng.normal(size=graph.poses.shape) * 0.2
     fixed = np.zeros(graph.n_vertices, bool)
     fixed[0] = True
-    s = pg._Structure(graph, fixed)
-    _, _, gi, gj = pg._linearise(graph, poses, np.ones(graph.n_edges))
-    g = s.gradient(gi, gj).reshape(-1, 3)[s.column_of_free]  # in vertex order
+    s, _, g = _assembled(graph, poses, np.ones(graph.n_edges), fixed)
     numeric = np.zeros_like(g)
     for row, v in enumerate(s.free):
         for k in range(3):
@@ -93,6 +103,38 @@ def test_gradient_and_gauss_newton_matrix_match_finite_differences():
             down[v] = compose(poses[v], se2_exp_map(-d))
             numeric[row, k] = (graph_chi2(graph, up) - graph_chi2(graph, down)) / 2e-6 / 2
     np.testing.assert_allclose(g, numeric, rtol=1e-5, atol=1e-5)
+
+
+def test_numba_assembly_equals_the_numpy_linearisation():
+    # random weights, two fixed vertices, a repeated edge in both directions and a self-edge
+    rng = np.random.default_rng(9)
+    _, ring = _ring(rng, 12, noise=0.1)
+    edges = np.vstack([ring.edges, [[4, 3], [3, 4], [6, 6], [0, 11]]])
+    z = np.vstack([ring.measurements, rng.normal(size=(4, 3)) * 0.5])
+    info = np.concatenate([ring.information, ring.information[:4]])
+    graph = PoseGraph(ring.ids, ring.poses, edges, z, info)
+    poses = graph.poses + rng.normal(size=graph.poses.shape) * 0.3
+    poses[:, 2] = np.where(np.arange(len(poses)) % 3 == 0, poses[:, 2] + 3.0, poses[:, 2])
+    weights = rng.uniform(0.1, 2.0, graph.n_edges)
+    fixed = np.zeros(graph.n_vertices, bool)
+    fixed[[0, 7]] = True
+    s, h, g = _assembled(graph, poses, weights, fixed)
+    _, blocks, gi, gj = pg._linearise(graph, poses, weights)
+    n = graph.n_vertices
+    dense_h, dense_g = np.zeros((3 * n, 3 * n)), np.zeros((n, 3))
+    for e, (i, j) in enumerate(graph.edges):
+        for (a, b), block in zip([(i, i), (i, j), (j, i), (j, j)], blocks[e], strict=True):
+            dense_h[3 * a : 3 * a + 3, 3 * b : 3 * b + 3] += block
+        dense_g[i] += gi[e]
+        dense_g[j] += gj[e]
+    keep = (3 * s.free[:, None] + np.arange(3)).ravel()
+    np.testing.assert_allclose(h, dense_h[np.ix_(keep, keep)], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(g, dense_g[s.free], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(
+        pg.edge_chi2(graph, poses),
+        np.einsum("ei,eij,ej->e", r := pg.edge_residuals(graph, poses), graph.information, r),
+        rtol=1e-12,
+    )
 
 
 def test_exact_measurements_are_recovered_from_a_perturbed_start():
