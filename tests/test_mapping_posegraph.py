@@ -81,8 +81,10 @@ def _assembled(graph, poses, weights, fixed):
     s = pg._GraphSystem(graph, fixed)
     n = s.free.size
     diag, off, g = np.empty((n, 3, 3)), np.empty((s.chol.n_off, 3, 3)), np.empty((n, 3))
-    assemble_kernel(np.ascontiguousarray(poses), s.edges, s.measurements, s.information,
-                    weights, s.free_index, s.slot, s.upper, diag, off, g)  # fmt: skip
+    poses = np.ascontiguousarray(poses)
+    z, zcs, info = s.measurements, s.measured_cos_sin, s.information
+    assemble_kernel(poses, s.edges, z, zcs, info, weights, s.free_index, s.slot, s.upper,
+                    diag, off, g)  # fmt: skip
     return s, s.chol.to_dense(diag, off), g
 
 
@@ -130,6 +132,14 @@ def test_numba_assembly_equals_the_numpy_linearisation():
     keep = (3 * s.free[:, None] + np.arange(3)).ravel()
     np.testing.assert_allclose(h, dense_h[np.ix_(keep, keep)], rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(g, dense_g[s.free], rtol=1e-12, atol=1e-9)
+    # the retraction X·Exp(δ) of the free vertices, angles across ±π included
+    from wheelbase.mapping._posegraph_kernels import retract_kernel
+
+    step = rng.normal(size=(s.free.size, 3))
+    step[:3, 2] = [0.0, 1e-9, 3.1]
+    moved = retract_kernel(poses, s.free, step)
+    np.testing.assert_allclose(moved[s.free], pg._retract(poses[s.free], step), atol=1e-12)
+    np.testing.assert_array_equal(moved[fixed], poses[fixed])
     np.testing.assert_allclose(
         pg.edge_chi2(graph, poses),
         np.einsum("ei,eij,ej->e", r := pg.edge_residuals(graph, poses), graph.information, r),

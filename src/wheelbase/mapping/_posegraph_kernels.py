@@ -18,40 +18,53 @@ __all__: list[str] = []
 _SMALL = 1e-5  # as se2._SMALL: |φ| below which the series of J_r's third column are used
 
 
+_TWO_PI = 2.0 * math.pi
+
+
 @numba.njit(cache=True, inline="always")
 def _wrap(angle):  # pragma: no cover - compiled
-    w = math.atan2(math.sin(angle), math.cos(angle))
+    """angle to (−π, π], as geometry.wrap_angle (to rounding), without three trig calls."""
+    w = angle - _TWO_PI * math.floor((angle + math.pi) / _TWO_PI)
     return math.pi if w <= -math.pi else w
 
 
 @numba.njit(cache=True, inline="always")
-def _a_b(phi):  # pragma: no cover - compiled
-    """sin φ / φ and (1 − cos φ)/φ, smooth through 0 (as se2._a_b)."""
-    if phi == 0.0:
-        return 1.0, 0.0
-    half = 0.5 * phi
-    sh = math.sin(half) / half
-    return math.sin(phi) / phi, half * sh * sh
+def _half_angle(phi):  # pragma: no cover - compiled
+    """sin φ and 1 − cos φ from one sine and one cosine of φ/2 (no cancellation near 0)."""
+    sh, ch = math.sin(0.5 * phi), math.cos(0.5 * phi)
+    return 2.0 * sh * ch, 2.0 * sh * sh
+
+
+@numba.njit(cache=True)
+def cos_sin(poses):  # pragma: no cover - compiled
+    """cos θ and sin θ of every pose, (V, 2): each vertex's once, not each edge's."""
+    out = np.empty((poses.shape[0], 2))
+    for v in range(poses.shape[0]):
+        out[v, 0], out[v, 1] = math.cos(poses[v, 2]), math.sin(poses[v, 2])
+    return out
 
 
 @numba.njit(cache=True, inline="always")
-def _residual(poses, i, j, z):  # pragma: no cover - compiled
-    """r = Log(Z⁻¹ X_i⁻¹ X_j) and the pose X_j⁻¹ X_i."""
-    xi, yi, ti = poses[i, 0], poses[i, 1], poses[i, 2]
-    xj, yj, tj = poses[j, 0], poses[j, 1], poses[j, 2]
-    ci, si = math.cos(ti), math.sin(ti)
-    dx, dy = xj - xi, yj - yi
-    tx, ty, tt = ci * dx + si * dy, -si * dx + ci * dy, _wrap(tj - ti)
-    cz, sz = math.cos(z[2]), math.sin(z[2])
+def _residual(poses, cs, i, j, z, zcs):  # pragma: no cover - compiled
+    """r = Log(Z⁻¹ X_i⁻¹ X_j) = (ρ₁, ρ₂, φ), sin φ, 1 − cos φ and the pose X_j⁻¹ X_i as
+    (x, y, cos θ, sin θ); cs holds cos, sin of the poses' angles, zcs those of Z's."""
+    ci, si, cj, sj = cs[i, 0], cs[i, 1], cs[j, 0], cs[j, 1]
+    dx, dy = poses[j, 0] - poses[i, 0], poses[j, 1] - poses[i, 1]
+    tx, ty = ci * dx + si * dy, -si * dx + ci * dy
+    cz, sz = zcs[0], zcs[1]
     ex, ey = tx - z[0], ty - z[1]
-    mx, my, mt = cz * ex + sz * ey, -sz * ex + cz * ey, _wrap(tt - z[2])
-    phi = _wrap(mt)
-    a, b = _a_b(phi)
+    mx, my = cz * ex + sz * ey, -sz * ex + cz * ey
+    phi = _wrap(poses[j, 2] - poses[i, 2] - z[2])
+    sin_phi, one_minus_cos = _half_angle(phi)
+    if phi == 0.0:
+        a, b = 1.0, 0.0
+    else:  # a = sin φ / φ, b = (1 − cos φ)/φ: V(φ) of se2
+        a, b = sin_phi / phi, one_minus_cos / phi
     det = a * a + b * b
     r0, r1 = (a * mx + b * my) / det, (-b * mx + a * my) / det
-    cj, sj = math.cos(tj), math.sin(tj)
-    dxi, dyi = xi - xj, yi - yj
-    return r0, r1, phi, a, b, cj * dxi + sj * dyi, -sj * dxi + cj * dyi, _wrap(ti - tj)
+    # X_j⁻¹ X_i: translation R_jᵀ (t_i − t_j), angle θ_i − θ_j by its cosine and sine
+    ax, ay = cj * -dx + sj * -dy, -sj * -dx + cj * -dy
+    return r0, r1, phi, a, b, sin_phi, one_minus_cos, ax, ay, ci * cj + si * sj, si * cj - ci * sj
 
 
 @numba.njit(cache=True, inline="always")
@@ -63,11 +76,14 @@ def _add_at_b(out, a, b):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def edge_chi2_kernel(poses, edges, measurements, information):  # pragma: no cover - compiled
-    """rᵀΩr of every edge."""
+def edge_chi2_kernel(poses, edges, measurements, zcs, information):  # pragma: no cover - compiled
+    """rᵀΩr of every edge (zcs: cos, sin of the measured angles, (E, 2))."""
     out = np.empty(edges.shape[0])
+    cs = cos_sin(poses)
     for e in range(edges.shape[0]):
-        r0, r1, r2, _, _, _, _, _ = _residual(poses, edges[e, 0], edges[e, 1], measurements[e])
+        r0, r1, r2, _, _, _, _, _, _, _, _ = _residual(
+            poses, cs, edges[e, 0], edges[e, 1], measurements[e], zcs[e]
+        )
         om = information[e]
         out[e] = (
             om[0, 0] * r0 * r0 + om[1, 1] * r1 * r1 + om[2, 2] * r2 * r2
@@ -77,8 +93,8 @@ def edge_chi2_kernel(poses, edges, measurements, information):  # pragma: no cov
 
 
 @numba.njit(cache=True)
-def assemble_kernel(poses, edges, measurements, information, weights, free_index, slot, upper,
-                    diag, off, grad):  # pragma: no cover - compiled  # fmt: skip
+def assemble_kernel(poses, edges, measurements, zcs, information, weights, free_index, slot,
+                    upper, diag, off, grad):  # pragma: no cover - compiled  # fmt: skip
     """Add each edge's JᵀWΩJ blocks and JᵀWΩr into diag (n_free, 3, 3), off (n_off, 3, 3)
     and grad (n_free, 3), zeroed first; vertices with ``free_index`` −1 are held."""
     diag[:] = 0.0
@@ -91,17 +107,20 @@ def assemble_kernel(poses, edges, measurements, information, weights, free_index
     oj = np.empty((3, 3))
     r = np.empty(3)
     wr = np.empty(3)
+    cs = cos_sin(poses)
     for e in range(edges.shape[0]):
         i, j = edges[e, 0], edges[e, 1]
         fi, fj = free_index[i], free_index[j]
         if fi < 0 and fj < 0:
             continue
-        r[0], r[1], phi, a, b, dx, dy, dt = _residual(poses, i, j, measurements[e])
+        r[0], r[1], phi, a, b, sin_phi, one_minus_cos, dx, dy, c, s = _residual(
+            poses, cs, i, j, measurements[e], zcs[e]
+        )
         # J_r(r)⁻¹ (se2.se2_right_jacobian_inv)
         if abs(phi) < _SMALL:
             p, q = phi / 6.0, 0.5 - phi * phi / 24.0
         else:
-            p, q = (phi - math.sin(phi)) / (phi * phi), (1.0 - math.cos(phi)) / (phi * phi)
+            p, q = (phi - sin_phi) / (phi * phi), one_minus_cos / (phi * phi)
         u, v = r[0] * p - r[1] * q, r[0] * q + r[1] * p
         det = a * a + b * b
         ia, ib = a / det, b / det
@@ -110,7 +129,6 @@ def assemble_kernel(poses, edges, measurements, information, weights, free_index
         jj[2, 0], jj[2, 1], jj[2, 2] = 0.0, 0.0, 1.0
         r[2] = phi
         # J_i = −J_r⁻¹ Ad(X_j⁻¹ X_i), Ad = [[c, −s, y], [s, c, −x], [0, 0, 1]]
-        c, s = math.cos(dt), math.sin(dt)
         for m in range(3):
             ji[m, 0] = -(jj[m, 0] * c + jj[m, 1] * s)
             ji[m, 1] = -(-jj[m, 0] * s + jj[m, 1] * c)
@@ -193,3 +211,23 @@ def accumulate_linear(ji, jj, target, edges, held, free_index, slot, upper, diag
                         off[slot[e], u, w] += sij
                     else:
                         off[slot[e], w, u] += sij
+
+
+@numba.njit(cache=True)
+def retract_kernel(poses, free, step):  # pragma: no cover - compiled
+    """A copy of poses with X_v·Exp(δ) for each free vertex v (step in free's order)."""
+    out = poses.copy()
+    for k in range(free.size):
+        v = free[k]
+        r0, r1, phi = step[k, 0], step[k, 1], step[k, 2]
+        sin_phi, one_minus_cos = _half_angle(phi)
+        if phi == 0.0:
+            a, b = 1.0, 0.0
+        else:
+            a, b = sin_phi / phi, one_minus_cos / phi
+        ex, ey = a * r0 - b * r1, b * r0 + a * r1
+        c, s = math.cos(poses[v, 2]), math.sin(poses[v, 2])
+        out[v, 0] = poses[v, 0] + c * ex - s * ey
+        out[v, 1] = poses[v, 1] + s * ex + c * ey
+        out[v, 2] = _wrap(poses[v, 2] + _wrap(phi))
+    return out

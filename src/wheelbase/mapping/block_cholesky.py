@@ -43,8 +43,9 @@ def _minimum_degree_order(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         shape=(n, n),
     ).tocsc()
     laplacian = laplacian + sparse.diags(1.0 - np.asarray(laplacian.sum(0)).ravel())
-    lu = splu(laplacian.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options={"SymmetricMode": True})  # fmt: skip
+    # relax=1, panel_size=1: no supernodes for a factor that only the ordering is wanted of
+    lu = splu(laplacian.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, relax=1,
+              panel_size=1, options={"SymmetricMode": True})  # fmt: skip
     return np.asarray(lu.perm_c, dtype=np.int64)
 
 
@@ -104,113 +105,124 @@ def _symbolic(n, a_ptr, a_rows):  # pragma: no cover - compiled
     return parent, row_ptr, row_cols, row_slot, col_ptr, col_rows
 
 
-@numba.njit(cache=True)
-def _dense_cholesky(d, out, ref):  # pragma: no cover - compiled
-    """out = the lower Cholesky factor of the b×b block d; False if d is not positive definite
-    (a pivot at most 1e-13 of ``ref``, the diagonal of the block before elimination)."""
-    b = d.shape[0]
-    for j in range(b):
-        s = d[j, j]
-        for m in range(j):
-            s -= out[j, m] * out[j, m]
-        if not s > _PIVOT_RTOL * ref[j] or not s > 0.0:
-            return False
-        out[j, j] = np.sqrt(s)
-        for i in range(j + 1, b):
-            t = d[i, j]
-            for m in range(j):
-                t -= out[i, m] * out[j, m]
-            out[i, j] = t / out[j, j]
-        for i in range(j):
-            out[i, j] = 0.0
-    return True
+_KERNELS: dict[int, tuple] = {}
 
 
-@numba.njit(cache=True)
-def _factor(a_ptr, a_rows, a_diag, a_off, damping, row_ptr, row_cols, row_slot, col_ptr,
-            col_rows, l_diag, l_off, x, d):  # pragma: no cover - compiled  # fmt: skip
-    """Up-looking block Cholesky of A + diag(damping) into (l_diag, l_off); False on a
-    non-positive pivot. x (n, b, b) is a zeroed workspace and left zeroed; d is (b, b)."""
-    n, b = a_diag.shape[0], a_diag.shape[1]
-    y = np.empty((b, b))
-    ref = np.empty(b)
-    for k in range(n):
-        for p in range(a_ptr[k], a_ptr[k + 1]):  # scatter column k of A (rows < k)
-            x[a_rows[p]] += a_off[p]
-        d[:, :] = a_diag[k]
-        for u in range(b):
-            d[u, u] += damping[k, u]
-            ref[u] = abs(d[u, u])
-        for t in range(row_ptr[k], row_ptr[k + 1]):
-            i = row_cols[t]
-            li = l_diag[i]
-            xi = x[i]
-            # y = L_ii⁻¹ x_i (forward substitution, column by column); y = L[k, i]ᵀ
-            for c in range(b):
-                for r in range(b):
-                    s = xi[r, c]
-                    for m in range(r):
-                        s -= li[r, m] * y[m, c]
-                    y[r, c] = s / li[r, r]
-            xi[:, :] = 0.0
-            for p in range(col_ptr[i], row_slot[t]):  # rows r of column i with i < r < k
-                xr = x[col_rows[p]]
-                lp = l_off[p]
-                for r in range(b):
-                    for c in range(b):
-                        s = 0.0
-                        for m in range(b):
-                            s += lp[r, m] * y[m, c]
-                        xr[r, c] -= s
-            lk = l_off[row_slot[t]]
-            for r in range(b):
-                for c in range(b):
-                    lk[r, c] = y[c, r]
-                    s = 0.0
-                    for m in range(b):
-                        s += y[m, r] * y[m, c]
-                    d[r, c] -= s
-        if not _dense_cholesky(d, l_diag[k], ref):
-            for p in range(a_ptr[k], a_ptr[k + 1]):  # leave the workspace zeroed
-                x[a_rows[p]] = 0.0
+def _kernels(b: int) -> tuple:
+    """The numeric kernels (factor, substitute) for b×b blocks, b a compile-time constant
+    (Numba unrolls the block loops); compiled once per b and cached on disk."""
+    if b not in _KERNELS:
+        _KERNELS[b] = _make_kernels(b)
+    return _KERNELS[b]
+
+
+def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kernels
+    @numba.njit(cache=True)
+    def factor(a_ptr, a_rows, a_diag, a_off, damping, row_ptr, row_cols, row_slot, col_ptr,
+               col_rows, l_diag, l_off, x):  # pragma: no cover - compiled  # fmt: skip
+        """Up-looking block Cholesky of A + diag(damping) into (l_diag, l_off); False on a
+        non-positive pivot (at most 1e-13 of the diagonal before elimination). x (n, B, B)
+        is a zeroed workspace and is left zeroed."""
+        n = a_diag.shape[0]
+        y = np.empty((B, B))
+        d = np.empty((B, B))
+        ref = np.empty(B)
+        for k in range(n):
+            for p in range(a_ptr[k], a_ptr[k + 1]):  # scatter column k of A (rows < k)
+                q = a_rows[p]
+                for r in range(B):
+                    for c in range(B):
+                        x[q, r, c] += a_off[p, r, c]
+            for r in range(B):
+                for c in range(B):
+                    d[r, c] = a_diag[k, r, c]
+                d[r, r] += damping[k, r]
+                ref[r] = abs(d[r, r])
             for t in range(row_ptr[k], row_ptr[k + 1]):
-                x[row_cols[t]] = 0.0
-            return False
-    return True
+                i = row_cols[t]
+                # y = L_ii⁻¹ x_i (forward substitution, column by column); y = L[k, i]ᵀ
+                for c in range(B):
+                    for r in range(B):
+                        s = x[i, r, c]
+                        for m in range(r):
+                            s -= l_diag[i, r, m] * y[m, c]
+                        y[r, c] = s / l_diag[i, r, r]
+                for r in range(B):
+                    for c in range(B):
+                        x[i, r, c] = 0.0
+                for p in range(col_ptr[i], row_slot[t]):  # rows q of column i, i < q < k
+                    q = col_rows[p]
+                    for r in range(B):
+                        for c in range(B):
+                            s = 0.0
+                            for m in range(B):
+                                s += l_off[p, r, m] * y[m, c]
+                            x[q, r, c] -= s
+                slot = row_slot[t]
+                for r in range(B):
+                    for c in range(B):
+                        l_off[slot, r, c] = y[c, r]
+                        s = 0.0
+                        for m in range(B):
+                            s += y[m, r] * y[m, c]
+                        d[r, c] -= s
+            # the pivot block: dense Cholesky d = L_kk L_kkᵀ
+            ok = True
+            for j in range(B):
+                s = d[j, j]
+                for m in range(j):
+                    s -= l_diag[k, j, m] * l_diag[k, j, m]
+                if not (s > _PIVOT_RTOL * ref[j] and s > 0.0):
+                    ok = False
+                    break
+                l_diag[k, j, j] = np.sqrt(s)
+                for r in range(j + 1, B):
+                    s = d[r, j]
+                    for m in range(j):
+                        s -= l_diag[k, r, m] * l_diag[k, j, m]
+                    l_diag[k, r, j] = s / l_diag[k, j, j]
+                for r in range(j):
+                    l_diag[k, r, j] = 0.0
+            if not ok:
+                for p in range(a_ptr[k], a_ptr[k + 1]):  # leave the workspace zeroed
+                    x[a_rows[p]] = 0.0
+                for t in range(row_ptr[k], row_ptr[k + 1]):
+                    x[row_cols[t]] = 0.0
+                return False
+        return True
 
+    @numba.njit(cache=True)
+    def substitute(l_diag, l_off, col_ptr, col_rows, rhs):  # pragma: no cover - compiled
+        """Solve L Lᵀ z = rhs in place (rhs of shape (n, B))."""
+        n = l_diag.shape[0]
+        for i in range(n):  # L y = rhs, column-oriented
+            for r in range(B):
+                s = rhs[i, r]
+                for m in range(r):
+                    s -= l_diag[i, r, m] * rhs[i, m]
+                rhs[i, r] = s / l_diag[i, r, r]
+            for p in range(col_ptr[i], col_ptr[i + 1]):
+                q = col_rows[p]
+                for r in range(B):
+                    s = 0.0
+                    for m in range(B):
+                        s += l_off[p, r, m] * rhs[i, m]
+                    rhs[q, r] -= s
+        for i in range(n - 1, -1, -1):  # Lᵀ z = y
+            for p in range(col_ptr[i], col_ptr[i + 1]):
+                q = col_rows[p]
+                for r in range(B):
+                    s = 0.0
+                    for m in range(B):
+                        s += l_off[p, m, r] * rhs[q, m]
+                    rhs[i, r] -= s
+            for r in range(B - 1, -1, -1):
+                s = rhs[i, r]
+                for m in range(r + 1, B):
+                    s -= l_diag[i, m, r] * rhs[i, m]
+                rhs[i, r] = s / l_diag[i, r, r]
 
-@numba.njit(cache=True)
-def _substitute(l_diag, l_off, col_ptr, col_rows, rhs):  # pragma: no cover - compiled
-    """Solve L Lᵀ z = rhs in place (rhs of shape (n, b))."""
-    n, b = l_diag.shape[0], l_diag.shape[1]
-    for i in range(n):  # L y = rhs, column-oriented
-        li = l_diag[i]
-        for r in range(b):
-            s = rhs[i, r]
-            for m in range(r):
-                s -= li[r, m] * rhs[i, m]
-            rhs[i, r] = s / li[r, r]
-        for p in range(col_ptr[i], col_ptr[i + 1]):
-            row = col_rows[p]
-            for r in range(b):
-                s = 0.0
-                for m in range(b):
-                    s += l_off[p, r, m] * rhs[i, m]
-                rhs[row, r] -= s
-    for i in range(n - 1, -1, -1):  # Lᵀ z = y
-        for p in range(col_ptr[i], col_ptr[i + 1]):
-            row = col_rows[p]
-            for r in range(b):
-                s = 0.0
-                for m in range(b):
-                    s += l_off[p, m, r] * rhs[row, m]
-                rhs[i, r] -= s
-        li = l_diag[i]
-        for r in range(b - 1, -1, -1):
-            s = rhs[i, r]
-            for m in range(r + 1, b):
-                s -= li[m, r] * rhs[i, m]
-            rhs[i, r] = s / li[r, r]
+    return factor, substitute
 
 
 class BlockCholesky:
@@ -284,7 +296,6 @@ class BlockCholesky:
             self._l_diag = np.zeros((self.n_nodes, b, b))
             self._l_off = np.zeros((self.fill_blocks, b, b))
             self._x = np.zeros((self.n_nodes, b, b))
-            self._d = np.zeros((b, b))
 
     def factor(self, diag: np.ndarray, off: np.ndarray, damping: np.ndarray | None = None) -> bool:
         """Factor A + diag(damping) numerically; False if it is not positive definite.
@@ -313,11 +324,10 @@ class BlockCholesky:
         self._workspace(b)
         order = self._order
         damping = np.zeros((self.n_nodes, b)) if damping is None else damping
-        self._factored = _factor(
+        self._factored = _kernels(b)[0](
             self._a_ptr, self._a_rows, diag[order], np.ascontiguousarray(off, np.float64),
             np.ascontiguousarray(damping, np.float64)[order], self._row_ptr, self._row_cols,
-            self._row_slot, self._col_ptr, self._col_rows, self._l_diag, self._l_off,
-            self._x, self._d,
+            self._row_slot, self._col_ptr, self._col_rows, self._l_diag, self._l_off, self._x,
         )  # fmt: skip
         return bool(self._factored)
 
@@ -336,7 +346,7 @@ class BlockCholesky:
         if not self._factored:
             raise ConfigError("solve needs a successful factor() first")
         z = np.array(rhs, dtype=np.float64)[self._order]
-        _substitute(self._l_diag, self._l_off, self._col_ptr, self._col_rows, z)
+        _kernels(self._block)[1](self._l_diag, self._l_off, self._col_ptr, self._col_rows, z)
         return z[self.position]
 
     def to_dense(self, diag: np.ndarray, off: np.ndarray) -> np.ndarray:

@@ -54,6 +54,7 @@ from wheelbase.mapping._posegraph_kernels import (
     accumulate_linear,
     assemble_kernel,
     edge_chi2_kernel,
+    retract_kernel,
 )
 from wheelbase.mapping.block_cholesky import BlockCholesky
 from wheelbase.mapping.se2 import se2_adjoint, se2_exp_map, se2_log, se2_right_jacobian_inv
@@ -146,10 +147,12 @@ def edge_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> np.ndarray:
         Vertex poses (default: the graph's).
     """
     poses = graph.poses if poses is None else poses
+    z = np.ascontiguousarray(graph.measurements, dtype=np.float64)
     return edge_chi2_kernel(
         np.ascontiguousarray(poses, dtype=np.float64),
         np.ascontiguousarray(graph.edges, dtype=np.int64),
-        np.ascontiguousarray(graph.measurements, dtype=np.float64),
+        z,
+        np.column_stack([np.cos(z[:, 2]), np.sin(z[:, 2])]),
         np.ascontiguousarray(graph.information, dtype=np.float64),
     )
 
@@ -210,6 +213,8 @@ class _GraphSystem:
         self.free_index[self.free] = np.arange(self.free.size)
         self.edges = np.ascontiguousarray(graph.edges, dtype=np.int64)
         self.measurements = np.ascontiguousarray(graph.measurements, dtype=np.float64)
+        angle = self.measurements[:, 2]
+        self.measured_cos_sin = np.column_stack([np.cos(angle), np.sin(angle)])
         self.information = np.ascontiguousarray(graph.information, dtype=np.float64)
         fi, fj = self.free_index[self.edges[:, 0]], self.free_index[self.edges[:, 1]]
         both = (fi >= 0) & (fj >= 0)
@@ -298,9 +303,10 @@ def optimize_pose_graph(
         poses = _chordal(graph, system if same else _GraphSystem(graph, anchored))
     free = system.free
     edges, z, info = system.edges, system.measurements, system.information
+    zcs = system.measured_cos_sin
 
     def cost_of(p: np.ndarray) -> tuple[float, np.ndarray]:
-        s = edge_chi2_kernel(p, edges, z, info)
+        s = edge_chi2_kernel(p, edges, z, zcs, info)
         if robust != "none":
             s = np.where(mask, _robust_cost(s, robust, k), s)
         return float(s.sum()), s
@@ -308,7 +314,7 @@ def optimize_pose_graph(
     def weights_of(p: np.ndarray) -> np.ndarray:
         if robust == "none":
             return np.ones(graph.n_edges)
-        return np.where(mask, _weights(edge_chi2_kernel(p, edges, z, info), robust, k), 1.0)
+        return np.where(mask, _weights(edge_chi2_kernel(p, edges, z, zcs, info), robust, k), 1.0)
 
     poses = np.ascontiguousarray(poses, dtype=np.float64)
     cost, _ = cost_of(poses)
@@ -321,7 +327,7 @@ def optimize_pose_graph(
     diag, off = np.empty((n_free, 3, 3)), np.empty((system.chol.n_off, 3, 3))
     g = np.empty((n_free, 3))
     while iterations < max_iterations and not converged:
-        assemble_kernel(poses, edges, z, info, weights, system.free_index, system.slot,
+        assemble_kernel(poses, edges, z, zcs, info, weights, system.free_index, system.slot,
                         system.upper, diag, off, g)  # fmt: skip
         scale = np.maximum(np.diagonal(diag, axis1=1, axis2=2), 1e-12)
         while iterations < max_iterations:
@@ -335,9 +341,11 @@ def optimize_pose_graph(
                 )
             else:
                 step = np.full(g.shape, np.nan)
-            trial = poses.copy()
-            trial[free] = _retract(poses[free], step)
-            new_cost = cost_of(trial)[0] if np.all(np.isfinite(step)) else math.inf
+            if np.all(np.isfinite(step)):
+                trial = retract_kernel(poses, free, step)
+                new_cost = cost_of(trial)[0]
+            else:
+                trial, new_cost = poses, math.inf
             # the decrease the quadratic model predicts, L(0) − L(δ) = −(gᵀδ + ½δᵀHδ), times
             # 2; with (H + λD)δ = −g, δᵀHδ = −gᵀδ − λδᵀDδ
             predicted = float(-np.vdot(g, step) + lam * np.vdot(scale * step, step))
