@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from shared_data import DATA, absent
 from wheelbase.datasets import PoseGraph, read_g2o
-from wheelbase.errors import ConfigError
+from wheelbase.errors import ConfigError, EstimationError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.mapping import chordal_initialization, graph_chi2, optimize_pose_graph
 from wheelbase.mapping import posegraph as pg
@@ -181,6 +181,18 @@ def test_options_are_checked():
         optimize_pose_graph(graph, robust="tukey")
     with pytest.raises(ConfigError, match="robust_edges"):
         optimize_pose_graph(graph, robust="huber", robust_edges=np.ones(3, bool))
+
+
+def test_an_unconstrained_vertex_is_a_clear_error():
+    # vertex 3 has no edge: H is singular there (the Cholesky pivot vanishes), and the
+    # chordal problems have a second component
+    info = np.broadcast_to(np.eye(3) * 10.0, (2, 3, 3)).copy()
+    graph = PoseGraph(np.arange(4), np.zeros((4, 3)), np.array([[0, 1], [1, 2]]),
+                      np.array([[1.0, 0.0, 0.1], [1.0, 0.0, 0.1]]), info)  # fmt: skip
+    with pytest.raises(EstimationError, match="not fully constrained"):
+        optimize_pose_graph(graph)
+    with pytest.raises(EstimationError, match="not connected"):
+        optimize_pose_graph(graph, initial="chordal")
 
 
 @needs_graphs
