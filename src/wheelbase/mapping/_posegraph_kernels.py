@@ -164,16 +164,19 @@ def assemble_kernel(poses, edges, measurements, zcs, information, weights, free_
 
 
 @numba.njit(cache=True)
-def accumulate_linear(ji, jj, target, edges, held, free_index, slot, upper, diag, off,
+def accumulate_linear(ji, jj, weight, target, edges, held, free_index, slot, upper, diag, off,
                       rhs):  # pragma: no cover - compiled  # fmt: skip
-    """Normal equations of the linear residuals r_e = J_i x_i + J_j x_j − c_e (ji, jj of shape
-    (E, m, b), target c of shape (E, m)): diag, off, rhs zeroed then filled; a held vertex
-    (``free_index`` −1) enters with its value ``held[v]`` on the right-hand side."""
+    """Normal equations of the linear residuals r_e = J_i x_i + J_j x_j − c_e weighted by W_e
+    (ji, jj of shape (E, m, b), weight (E, m, m), target c (E, m)): diag, off, rhs zeroed then
+    filled with Σ JᵀWJ and Σ JᵀW c; a held vertex (``free_index`` −1) enters with its value
+    ``held[v]`` on the right-hand side."""
     diag[:] = 0.0
     off[:] = 0.0
     rhs[:] = 0.0
     n_rows, b = ji.shape[1], ji.shape[2]
     t = np.empty(n_rows)
+    wi = np.empty((n_rows, b))  # W J_i
+    wj = np.empty((n_rows, b))  # W J_j
     for e in range(edges.shape[0]):
         i, j = edges[e, 0], edges[e, 1]
         fi, fj = free_index[i], free_index[j]
@@ -187,18 +190,25 @@ def accumulate_linear(ji, jj, target, edges, held, free_index, slot, upper, diag
             if fj < 0:
                 for n in range(b):
                     t[m] -= jj[e, m, n] * held[j, n]
+        for m in range(n_rows):
+            for u in range(b):
+                si, sj = 0.0, 0.0
+                for n in range(n_rows):
+                    si += weight[e, m, n] * ji[e, n, u]
+                    sj += weight[e, m, n] * jj[e, n, u]
+                wi[m, u], wj[m, u] = si, sj
         for u in range(b):
             for m in range(n_rows):
                 if fi >= 0:
-                    rhs[fi, u] += ji[e, m, u] * t[m]
+                    rhs[fi, u] += wi[m, u] * t[m]
                 if fj >= 0:
-                    rhs[fj, u] += jj[e, m, u] * t[m]
+                    rhs[fj, u] += wj[m, u] * t[m]
             for w in range(b):
                 sii, sij, sjj = 0.0, 0.0, 0.0
                 for m in range(n_rows):
-                    sii += ji[e, m, u] * ji[e, m, w]
-                    sij += ji[e, m, u] * jj[e, m, w]
-                    sjj += jj[e, m, u] * jj[e, m, w]
+                    sii += ji[e, m, u] * wi[m, w]
+                    sij += ji[e, m, u] * wj[m, w]
+                    sjj += jj[e, m, u] * wj[m, w]
                 if fi >= 0:
                     diag[fi, u, w] += sii
                 if fj >= 0:

@@ -347,8 +347,9 @@ def optimize_pose_graph(
             else:
                 trial, new_cost = poses, math.inf
             # the decrease the quadratic model predicts, L(0) − L(δ) = −(gᵀδ + ½δᵀHδ), times
-            # 2; with (H + λD)δ = −g, δᵀHδ = −gᵀδ − λδᵀDδ
-            predicted = float(-np.vdot(g, step) + lam * np.vdot(scale * step, step))
+            # 2; with (H + λD)δ = −g, δᵀHδ = −gᵀδ − λδᵀDδ. Sums, not np.vdot: OpenBLAS's dot
+            # of 10⁴ numbers wakes its threads, which wait for a busy core on a loaded machine
+            predicted = float(((lam * scale * step - g) * step).sum())
             if new_cost <= cost:
                 decrease = (cost - new_cost) / max(cost, 1e-300)
                 gain = (cost - new_cost) / predicted if predicted > 0 else 1.0
@@ -419,8 +420,8 @@ def _chordal(graph: PoseGraph, system: _GraphSystem) -> np.ndarray:
     diag, off, rhs = np.empty((n_free, 2, 2)), np.empty((n_off, 2, 2)), np.empty((n_free, 2))
     held = np.zeros((n, 2))
 
-    def solve(ji, jj, target):
-        accumulate_linear(ji, jj, target, edges, held, system.free_index, system.slot,
+    def solve(ji, jj, weight, target):
+        accumulate_linear(ji, jj, weight, target, edges, held, system.free_index, system.slot,
                           system.upper, diag, off, rhs)  # fmt: skip
         if not system.chol.factor(diag, off):
             raise EstimationError(
@@ -430,30 +431,31 @@ def _chordal(graph: PoseGraph, system: _GraphSystem) -> np.ndarray:
         x[system.free] = system.chol.solve(rhs)
         return x
 
-    # rotations: residual w (q_j − R(z) q_i), unknowns q = (cos θ, sin θ) relaxed, q_0 = (1, 0)
+    # rotations: q_j = R(z) q_i, weight Ω_θθ; unknowns q = (cos θ, sin θ) relaxed, q_0 = (1, 0)
     c, s = np.cos(graph.measurements[:, 2]), np.sin(graph.measurements[:, 2])
-    w = np.sqrt(np.maximum(graph.information[:, 2, 2], 1e-12))
     rot_z = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-    eye = np.broadcast_to(np.eye(2), (e, 2, 2))
+    eye = np.ascontiguousarray(np.broadcast_to(np.eye(2), (e, 2, 2)))
+    weight = np.maximum(graph.information[:, 2, 2], 1e-12)[:, None, None] * eye
     held[0] = [math.cos(0.0), math.sin(0.0)]
-    q = solve(-w[:, None, None] * rot_z, w[:, None, None] * eye, np.zeros((e, 2)))
+    q = solve(-rot_z, eye, weight, np.zeros((e, 2)))
     norm = np.hypot(q[:, 0], q[:, 1])
     theta = np.arctan2(q[:, 1], q[:, 0])
     if np.any(norm < 1e-9):
         theta = np.where(norm < 1e-9, 0.0, theta)
-    # translations: t_j − t_i = R_i z_t, whitened by the Cholesky factor of R_i Ω_tt R_iᵀ
+    # translations: t_j − t_i = R_i z_t, weight R_i Ω_tt R_iᵀ (Ω_tt positive definite where Ω
+    # is; an identity weight where a graph built by hand has one that is not)
     ci, si = np.cos(theta[i]), np.sin(theta[i])
     zt = graph.measurements[:, :2]
     rhs_t = np.stack([ci * zt[:, 0] - si * zt[:, 1], si * zt[:, 0] + ci * zt[:, 1]], -1)
     rot = np.stack([np.stack([ci, -si], -1), np.stack([si, ci], -1)], -2)
-    cov_inv = rot @ graph.information[:, :2, :2] @ np.swapaxes(rot, 1, 2)
-    try:
-        chol = np.swapaxes(np.linalg.cholesky(cov_inv), 1, 2)  # Lᵀ: ‖Lᵀ r‖² = rᵀ Ω r
-    except np.linalg.LinAlgError:
-        chol = np.broadcast_to(np.eye(2), (e, 2, 2))
-    chol = np.ascontiguousarray(chol)
+    omega_t = graph.information[:, :2, :2]
+    det = omega_t[:, 0, 0] * omega_t[:, 1, 1] - omega_t[:, 0, 1] * omega_t[:, 1, 0]
+    if np.all((det > 0.0) & (omega_t[:, 0, 0] > 0.0)):
+        weight = np.ascontiguousarray(rot @ omega_t @ np.swapaxes(rot, 1, 2))
+    else:
+        weight = eye
     held[0] = 0.0
-    t = solve(-chol, chol, np.einsum("eij,ej->ei", chol, rhs_t))
+    t = solve(-eye, eye, weight, np.ascontiguousarray(rhs_t))
     poses = np.column_stack([t, wrap_angle(theta)])
     # place the first vertex where the graph has it
     anchor = graph.poses[0] if np.all(np.isfinite(graph.poses[0])) else np.zeros(3)
