@@ -24,7 +24,10 @@ _TWO_PI = 2.0 * math.pi
 @numba.njit(cache=True, inline="always")
 def _wrap(angle):  # pragma: no cover - compiled
     """angle to (−π, π], as geometry.wrap_angle (to rounding), without three trig calls."""
-    w = angle - _TWO_PI * math.floor((angle + math.pi) / _TWO_PI)
+    if abs(angle) < 64.0:  # a few turns (what the kernels see): within 1e-14 of atan2
+        w = angle - _TWO_PI * math.floor((angle + math.pi) / _TWO_PI)
+    else:  # far out, where the turn count times 2π would round: libm's reduction
+        w = math.atan2(math.sin(angle), math.cos(angle))
     return math.pi if w <= -math.pi else w
 
 
