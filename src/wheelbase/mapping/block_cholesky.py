@@ -305,8 +305,8 @@ class BlockCholesky:
         diag : numpy.ndarray, shape (n_nodes, b, b)
             Diagonal blocks, vertex order.
         off : numpy.ndarray, shape (n_off, b, b)
-            Off-diagonal blocks at :attr:`pair_slot`, each the block above the diagonal in the
-            factor's order (see :attr:`pair_upper`).
+            Off-diagonal blocks at ``pair_slot``, each the block above the diagonal in the
+            factor's order (see ``pair_upper``).
         damping : numpy.ndarray or None, shape (n_nodes, b)
             Added to the diagonals of the diagonal blocks (Levenberg–Marquardt), default none.
 
