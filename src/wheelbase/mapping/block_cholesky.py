@@ -75,21 +75,29 @@ def _symbolic(n, a_ptr, a_rows):  # pragma: no cover - compiled
                 count += 1
                 i = parent[i]
         row_ptr[k + 1] = row_ptr[k] + count
+    # each row's pattern in a topological order (Davis's cs_ereach: every path up the tree is
+    # pushed whole in front of the paths found before it, so that a column comes before the
+    # columns it updates); no sort, whose generic Numba code took seconds to compile
     row_cols = np.empty(row_ptr[n], np.int64)
+    path = np.empty(n, np.int64)
     col_count = np.zeros(n, np.int64)
     mark[:] = -1
     for k in range(n):
         mark[k] = k
-        top = row_ptr[k]
+        top = row_ptr[k + 1]
         for p in range(a_ptr[k], a_ptr[k + 1]):
             i = a_rows[p]
+            length = 0
             while mark[i] != k:
                 mark[i] = k
-                row_cols[top] = i
-                top += 1
+                path[length] = i
+                length += 1
                 col_count[i] += 1
                 i = parent[i]
-        row_cols[row_ptr[k] : row_ptr[k + 1]] = np.sort(row_cols[row_ptr[k] : row_ptr[k + 1]])
+            while length > 0:
+                length -= 1
+                top -= 1
+                row_cols[top] = path[length]
     col_ptr = np.zeros(n + 1, np.int64)
     for i in range(n):
         col_ptr[i + 1] = col_ptr[i] + col_count[i]
