@@ -127,10 +127,10 @@ def _kernels(b: int) -> tuple:
 def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kernels
     @numba.njit(cache=True)
     def factor(a_ptr, a_rows, a_diag, a_off, damping, row_ptr, row_cols, row_slot, col_ptr,
-               col_rows, l_diag, l_off, x):  # pragma: no cover - compiled  # fmt: skip
+               col_rows, l_diag, l_off, inv, x):  # pragma: no cover - compiled  # fmt: skip
         """Up-looking block Cholesky of A + diag(damping) into (l_diag, l_off); False on a
-        non-positive pivot (at most 1e-13 of the diagonal before elimination). x (n, B, B)
-        is a zeroed workspace and is left zeroed."""
+        non-positive pivot (at most 1e-13 of the diagonal before elimination); inv (n, B)
+        receives the pivots' reciprocals. x (n, B, B) is a zeroed workspace, left zeroed."""
         n = a_diag.shape[0]
         y = np.empty((B, B))
         d = np.empty((B, B))
@@ -154,7 +154,7 @@ def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kern
                         s = x[i, r, c]
                         for m in range(r):
                             s -= l_diag[i, r, m] * y[m, c]
-                        y[r, c] = s / l_diag[i, r, r]
+                        y[r, c] = s * inv[i, r]
                 for r in range(B):
                     for c in range(B):
                         x[i, r, c] = 0.0
@@ -184,11 +184,12 @@ def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kern
                     ok = False
                     break
                 l_diag[k, j, j] = np.sqrt(s)
+                inv[k, j] = 1.0 / l_diag[k, j, j]
                 for r in range(j + 1, B):
                     s = d[r, j]
                     for m in range(j):
                         s -= l_diag[k, r, m] * l_diag[k, j, m]
-                    l_diag[k, r, j] = s / l_diag[k, j, j]
+                    l_diag[k, r, j] = s * inv[k, j]
                 for r in range(j):
                     l_diag[k, r, j] = 0.0
             if not ok:
@@ -200,7 +201,7 @@ def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kern
         return True
 
     @numba.njit(cache=True)
-    def substitute(l_diag, l_off, col_ptr, col_rows, rhs):  # pragma: no cover - compiled
+    def substitute(l_diag, l_off, inv, col_ptr, col_rows, rhs):  # pragma: no cover - compiled
         """Solve L Lᵀ z = rhs in place (rhs of shape (n, B))."""
         n = l_diag.shape[0]
         for i in range(n):  # L y = rhs, column-oriented
@@ -208,7 +209,7 @@ def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kern
                 s = rhs[i, r]
                 for m in range(r):
                     s -= l_diag[i, r, m] * rhs[i, m]
-                rhs[i, r] = s / l_diag[i, r, r]
+                rhs[i, r] = s * inv[i, r]
             for p in range(col_ptr[i], col_ptr[i + 1]):
                 q = col_rows[p]
                 for r in range(B):
@@ -228,7 +229,7 @@ def _make_kernels(B: int) -> tuple:  # B: the block size, a constant of the kern
                 s = rhs[i, r]
                 for m in range(r + 1, B):
                     s -= l_diag[i, m, r] * rhs[i, m]
-                rhs[i, r] = s / l_diag[i, r, r]
+                rhs[i, r] = s * inv[i, r]
 
     return factor, substitute
 
@@ -303,6 +304,7 @@ class BlockCholesky:
             self._block = b
             self._l_diag = np.zeros((self.n_nodes, b, b))
             self._l_off = np.zeros((self.fill_blocks, b, b))
+            self._inv = np.zeros((self.n_nodes, b))  # reciprocals of L's diagonal
             self._x = np.zeros((self.n_nodes, b, b))
 
     def factor(self, diag: np.ndarray, off: np.ndarray, damping: np.ndarray | None = None) -> bool:
@@ -335,7 +337,8 @@ class BlockCholesky:
         self._factored = _kernels(b)[0](
             self._a_ptr, self._a_rows, diag[order], np.ascontiguousarray(off, np.float64),
             np.ascontiguousarray(damping, np.float64)[order], self._row_ptr, self._row_cols,
-            self._row_slot, self._col_ptr, self._col_rows, self._l_diag, self._l_off, self._x,
+            self._row_slot, self._col_ptr, self._col_rows, self._l_diag, self._l_off, self._inv,
+            self._x,
         )  # fmt: skip
         return bool(self._factored)
 
@@ -354,7 +357,9 @@ class BlockCholesky:
         if not self._factored:
             raise ConfigError("solve needs a successful factor() first")
         z = np.array(rhs, dtype=np.float64)[self._order]
-        _kernels(self._block)[1](self._l_diag, self._l_off, self._col_ptr, self._col_rows, z)
+        _kernels(self._block)[1](
+            self._l_diag, self._l_off, self._inv, self._col_ptr, self._col_rows, z
+        )
         return z[self.position]
 
     def to_dense(self, diag: np.ndarray, off: np.ndarray) -> np.ndarray:
