@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from shared_data import DATA, absent
 from wheelbase.datasets import PoseGraph, read_g2o
-from wheelbase.errors import ConfigError, EstimationError
+from wheelbase.errors import ConfigError, DataError, EstimationError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.mapping import chordal_initialization, graph_chi2, optimize_pose_graph
 from wheelbase.mapping import posegraph as pg
@@ -181,6 +181,19 @@ def test_options_are_checked():
         optimize_pose_graph(graph, robust="tukey")
     with pytest.raises(ConfigError, match="robust_edges"):
         optimize_pose_graph(graph, robust="huber", robust_edges=np.ones(3, bool))
+
+
+def test_a_graph_the_kernels_cannot_index_is_refused():
+    _, graph = _ring(np.random.default_rng(10), 6)
+    bad = PoseGraph(graph.ids, graph.poses, np.vstack([graph.edges, [[2, 6]]]),
+                    np.vstack([graph.measurements, [[1.0, 0.0, 0.0]]]),
+                    np.concatenate([graph.information, graph.information[:1]]))  # fmt: skip
+    with pytest.raises(DataError, match="edges must index the 6 vertices"):
+        optimize_pose_graph(bad)
+    with pytest.raises(DataError, match="edges must index"):
+        graph_chi2(bad)
+    with pytest.raises(DataError, match="poses must have shape"):
+        graph_chi2(graph, graph.poses[:, :2])
 
 
 def test_the_kernels_wrap_angles_as_wrap_angle():

@@ -48,7 +48,7 @@ import numpy as np
 
 from wheelbase._validate import check_choice, integer, positive
 from wheelbase.datasets.g2o import PoseGraph
-from wheelbase.errors import ConfigError, EstimationError
+from wheelbase.errors import ConfigError, DataError, EstimationError
 from wheelbase.geometry import compose, inverse_pose, wrap_angle
 from wheelbase.mapping._posegraph_kernels import (
     accumulate_linear,
@@ -146,15 +146,30 @@ def edge_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> np.ndarray:
     poses : numpy.ndarray or None
         Vertex poses (default: the graph's).
     """
-    poses = graph.poses if poses is None else poses
+    poses, edges, z, info = _kernel_arrays(graph, graph.poses if poses is None else poses)
+    return edge_chi2_kernel(poses, edges, z, np.column_stack([np.cos(z[:, 2]), np.sin(z[:, 2])]),
+                            info)  # fmt: skip
+
+
+def _kernel_arrays(graph: PoseGraph, poses: np.ndarray):
+    """Contiguous float64 / int64 poses, edges, measurements and information of a graph,
+    their shapes and the edges' vertex indices checked: the Numba kernels do not check
+    bounds."""
+    poses = np.ascontiguousarray(poses, dtype=np.float64)
+    edges = np.ascontiguousarray(graph.edges, dtype=np.int64)
     z = np.ascontiguousarray(graph.measurements, dtype=np.float64)
-    return edge_chi2_kernel(
-        np.ascontiguousarray(poses, dtype=np.float64),
-        np.ascontiguousarray(graph.edges, dtype=np.int64),
-        z,
-        np.column_stack([np.cos(z[:, 2]), np.sin(z[:, 2])]),
-        np.ascontiguousarray(graph.information, dtype=np.float64),
-    )
+    info = np.ascontiguousarray(graph.information, dtype=np.float64)
+    v, e = graph.n_vertices, edges.shape[0] if edges.ndim == 2 else -1
+    if poses.shape != (v, 3):
+        raise DataError(f"poses must have shape ({v}, 3) (got {poses.shape})")
+    if edges.shape != (e, 2) or z.shape != (e, 3) or info.shape != (e, 3, 3):
+        raise DataError(
+            f"a graph needs edges (E, 2), measurements (E, 3) and information (E, 3, 3) "
+            f"(got {edges.shape}, {z.shape}, {info.shape})"
+        )
+    if e and (edges.min() < 0 or edges.max() >= v):
+        raise DataError(f"edges must index the {v} vertices (got {edges.min()}..{edges.max()})")
+    return poses, edges, z, info
 
 
 def graph_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> float:
@@ -211,11 +226,9 @@ class _GraphSystem:
         self.free = np.flatnonzero(~held)
         self.free_index = np.full(graph.n_vertices, -1, np.int64)
         self.free_index[self.free] = np.arange(self.free.size)
-        self.edges = np.ascontiguousarray(graph.edges, dtype=np.int64)
-        self.measurements = np.ascontiguousarray(graph.measurements, dtype=np.float64)
+        _, self.edges, self.measurements, self.information = _kernel_arrays(graph, graph.poses)
         angle = self.measurements[:, 2]
         self.measured_cos_sin = np.column_stack([np.cos(angle), np.sin(angle)])
-        self.information = np.ascontiguousarray(graph.information, dtype=np.float64)
         fi, fj = self.free_index[self.edges[:, 0]], self.free_index[self.edges[:, 1]]
         both = (fi >= 0) & (fj >= 0)
         self.chol = BlockCholesky(self.free.size, np.column_stack([fi[both], fj[both]]))
@@ -226,7 +239,8 @@ class _GraphSystem:
 
 
 def _linearise(graph: PoseGraph, poses: np.ndarray, weights: np.ndarray):
-    """Residuals, and the blocks JᵀWΩJ and gradients JᵀWΩr of every edge."""
+    """Residuals, and the blocks JᵀWΩJ and gradients JᵀWΩr of every edge: the NumPy
+    reference of the Numba assembly (a test holds them equal), used by landmark SLAM."""
     xi, xj = poses[graph.edges[:, 0]], poses[graph.edges[:, 1]]
     r = se2_log(_between(_between(xi, xj), graph.measurements, inverse_first=True))
     jinv = se2_right_jacobian_inv(r)
