@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from shared_data import DATA, absent
 from wheelbase.datasets import PoseGraph, read_g2o
-from wheelbase.errors import ConfigError
+from wheelbase.errors import ConfigError, DataError, EstimationError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.mapping import chordal_initialization, graph_chi2, optimize_pose_graph
 from wheelbase.mapping import posegraph as pg
@@ -74,15 +74,27 @@ def _ring(rng, n=30, noise=0.0):
     return truth, PoseGraph(np.arange(n), truth.copy(), edges, z, info)
 
 
+def _assembled(graph, poses, weights, fixed):
+    """The Numba kernel's normal equations, as a dense H and g in vertex order (free ones)."""
+    from wheelbase.mapping._posegraph_kernels import assemble_kernel
+
+    s = pg._GraphSystem(graph, fixed)
+    n = s.free.size
+    diag, off, g = np.empty((n, 3, 3)), np.empty((s.chol.n_off, 3, 3)), np.empty((n, 3))
+    poses = np.ascontiguousarray(poses)
+    z, zcs, info = s.measurements, s.measured_cos_sin, s.information
+    assemble_kernel(poses, s.edges, z, zcs, info, weights, s.free_index, s.slot, s.upper,
+                    diag, off, g)  # fmt: skip
+    return s, s.chol.to_dense(diag, off), g
+
+
 def test_gradient_and_gauss_newton_matrix_match_finite_differences():
     rng = np.random.default_rng(3)
     _, graph = _ring(rng, 8, noise=0.1)
     poses = graph.poses + rng.normal(size=graph.poses.shape) * 0.2
     fixed = np.zeros(graph.n_vertices, bool)
     fixed[0] = True
-    s = pg._Structure(graph, fixed)
-    _, _, gi, gj = pg._linearise(graph, poses, np.ones(graph.n_edges))
-    g = s.gradient(gi, gj).reshape(-1, 3)[s.column_of_free]  # in vertex order
+    s, _, g = _assembled(graph, poses, np.ones(graph.n_edges), fixed)
     numeric = np.zeros_like(g)
     for row, v in enumerate(s.free):
         for k in range(3):
@@ -93,6 +105,46 @@ def test_gradient_and_gauss_newton_matrix_match_finite_differences():
             down[v] = compose(poses[v], se2_exp_map(-d))
             numeric[row, k] = (graph_chi2(graph, up) - graph_chi2(graph, down)) / 2e-6 / 2
     np.testing.assert_allclose(g, numeric, rtol=1e-5, atol=1e-5)
+
+
+def test_numba_assembly_equals_the_numpy_linearisation():
+    # random weights, two fixed vertices, a repeated edge in both directions and a self-edge
+    rng = np.random.default_rng(9)
+    _, ring = _ring(rng, 12, noise=0.1)
+    edges = np.vstack([ring.edges, [[4, 3], [3, 4], [6, 6], [0, 11]]])
+    z = np.vstack([ring.measurements, rng.normal(size=(4, 3)) * 0.5])
+    info = np.concatenate([ring.information, ring.information[:4]])
+    graph = PoseGraph(ring.ids, ring.poses, edges, z, info)
+    poses = graph.poses + rng.normal(size=graph.poses.shape) * 0.3
+    poses[:, 2] = np.where(np.arange(len(poses)) % 3 == 0, poses[:, 2] + 3.0, poses[:, 2])
+    weights = rng.uniform(0.1, 2.0, graph.n_edges)
+    fixed = np.zeros(graph.n_vertices, bool)
+    fixed[[0, 7]] = True
+    s, h, g = _assembled(graph, poses, weights, fixed)
+    _, blocks, gi, gj = pg._linearise(graph, poses, weights)
+    n = graph.n_vertices
+    dense_h, dense_g = np.zeros((3 * n, 3 * n)), np.zeros((n, 3))
+    for e, (i, j) in enumerate(graph.edges):
+        for (a, b), block in zip([(i, i), (i, j), (j, i), (j, j)], blocks[e], strict=True):
+            dense_h[3 * a : 3 * a + 3, 3 * b : 3 * b + 3] += block
+        dense_g[i] += gi[e]
+        dense_g[j] += gj[e]
+    keep = (3 * s.free[:, None] + np.arange(3)).ravel()
+    np.testing.assert_allclose(h, dense_h[np.ix_(keep, keep)], rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(g, dense_g[s.free], rtol=1e-12, atol=1e-9)
+    # the retraction X·Exp(δ) of the free vertices, angles across ±π included
+    from wheelbase.mapping._posegraph_kernels import retract_kernel
+
+    step = rng.normal(size=(s.free.size, 3))
+    step[:3, 2] = [0.0, 1e-9, 3.1]
+    moved = retract_kernel(poses, s.free, step)
+    np.testing.assert_allclose(moved[s.free], pg._retract(poses[s.free], step), atol=1e-12)
+    np.testing.assert_array_equal(moved[fixed], poses[fixed])
+    np.testing.assert_allclose(
+        pg.edge_chi2(graph, poses),
+        np.einsum("ei,eij,ej->e", r := pg.edge_residuals(graph, poses), graph.information, r),
+        rtol=1e-12,
+    )
 
 
 def test_exact_measurements_are_recovered_from_a_perturbed_start():
@@ -129,6 +181,43 @@ def test_options_are_checked():
         optimize_pose_graph(graph, robust="tukey")
     with pytest.raises(ConfigError, match="robust_edges"):
         optimize_pose_graph(graph, robust="huber", robust_edges=np.ones(3, bool))
+
+
+def test_a_graph_the_kernels_cannot_index_is_refused():
+    _, graph = _ring(np.random.default_rng(10), 6)
+    bad = PoseGraph(graph.ids, graph.poses, np.vstack([graph.edges, [[2, 6]]]),
+                    np.vstack([graph.measurements, [[1.0, 0.0, 0.0]]]),
+                    np.concatenate([graph.information, graph.information[:1]]))  # fmt: skip
+    with pytest.raises(DataError, match="edges must index the 6 vertices"):
+        optimize_pose_graph(bad)
+    with pytest.raises(DataError, match="edges must index"):
+        graph_chi2(bad)
+    with pytest.raises(DataError, match="poses must have shape"):
+        graph_chi2(graph, graph.poses[:, :2])
+
+
+def test_the_kernels_wrap_angles_as_wrap_angle():
+    from wheelbase.geometry import wrap_angle
+    from wheelbase.mapping._posegraph_kernels import _wrap
+
+    angles = np.concatenate([np.linspace(-63.9, 63.9, 20001), np.pi * np.arange(-9, 10),
+                             [63.99, 64.0, -64.0, 7e8, -1e17, 1e300]])  # fmt: skip
+    ours = np.array([_wrap(a) for a in angles])
+    assert np.all((ours > -np.pi) & (ours <= np.pi))
+    gap = np.abs(ours - wrap_angle(angles))
+    assert np.minimum(gap, 2 * np.pi - gap).max() < 1e-14
+
+
+def test_an_unconstrained_vertex_is_a_clear_error():
+    # vertex 3 has no edge: H is singular there (the Cholesky pivot vanishes), and the
+    # chordal problems have a second component
+    info = np.broadcast_to(np.eye(3) * 10.0, (2, 3, 3)).copy()
+    graph = PoseGraph(np.arange(4), np.zeros((4, 3)), np.array([[0, 1], [1, 2]]),
+                      np.array([[1.0, 0.0, 0.1], [1.0, 0.0, 0.1]]), info)  # fmt: skip
+    with pytest.raises(EstimationError, match="not fully constrained"):
+        optimize_pose_graph(graph)
+    with pytest.raises(EstimationError, match="not connected"):
+        optimize_pose_graph(graph, initial="chordal")
 
 
 @needs_graphs

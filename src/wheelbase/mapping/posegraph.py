@@ -14,8 +14,10 @@ perturbed on the right, X ← X·Exp(δ), so that
     ∂r/∂δ_j = J_r⁻¹(r),      ∂r/∂δ_i = −J_r⁻¹(r)·Ad(X_j⁻¹ X_i).
 
 Each iteration assembles the normal equations H δ = −g (H = Σ JᵀWΩJ, one 3×3 block per vertex
-pair, a sparse matrix), holds the fixed vertices (the first one when the graph fixes none:
-the gauge) and solves with SciPy's SuperLU under a minimum-degree ordering of HᵀH. Steps are
+pair), holding the fixed vertices (the first one when the graph fixes none: the gauge), in one
+Numba loop over the edges, straight into the storage of a sparse block Cholesky factorisation
+(:mod:`wheelbase.mapping.block_cholesky`) whose ordering and symbolic part are computed once
+per graph; only the numeric factorisation and the two substitutions are repeated. Steps are
 Gauss–Newton while they lower the cost; where one does not, Levenberg–Marquardt damping
 H + λ·diag(H) grows tenfold until a step does, and shrinks tenfold after each success. It stops
 when the relative decrease of the cost falls below ``tolerance`` (1e-10; GTSAM's default is
@@ -31,7 +33,9 @@ a local minimum. :func:`chordal_initialization` first solves for the rotations a
 unit-free 2-vectors (a linear least-squares problem, Carlone, Tron, Daniilidis and Dellaert,
 "Initialization techniques for 3D SLAM: a survey on rotation estimation and its use in pose
 graph optimization", ICRA 2015, §IV-B, "chordal relaxation"), normalises them, then the
-translations given the rotations (linear too), and Gauss–Newton starts from there.
+translations given the rotations (linear too), and Gauss–Newton starts from there. Both
+linear problems live on the vertex graph too (2×2 blocks) and reuse the optimiser's symbolic
+factorisation when it holds vertex 0 only.
 """
 
 from __future__ import annotations
@@ -41,13 +45,18 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse.linalg import splu
 
 from wheelbase._validate import check_choice, integer, positive
 from wheelbase.datasets.g2o import PoseGraph
-from wheelbase.errors import ConfigError, EstimationError
+from wheelbase.errors import ConfigError, DataError, EstimationError
 from wheelbase.geometry import compose, inverse_pose, wrap_angle
+from wheelbase.mapping._posegraph_kernels import (
+    accumulate_linear,
+    assemble_kernel,
+    edge_chi2_kernel,
+    retract_kernel,
+)
+from wheelbase.mapping.block_cholesky import BlockCholesky
 from wheelbase.mapping.se2 import se2_adjoint, se2_exp_map, se2_log, se2_right_jacobian_inv
 
 __all__ = [
@@ -137,8 +146,30 @@ def edge_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> np.ndarray:
     poses : numpy.ndarray or None
         Vertex poses (default: the graph's).
     """
-    r = edge_residuals(graph, poses)
-    return np.einsum("ei,eij,ej->e", r, graph.information, r)
+    poses, edges, z, info = _kernel_arrays(graph, graph.poses if poses is None else poses)
+    return edge_chi2_kernel(poses, edges, z, np.column_stack([np.cos(z[:, 2]), np.sin(z[:, 2])]),
+                            info)  # fmt: skip
+
+
+def _kernel_arrays(graph: PoseGraph, poses: np.ndarray):
+    """Contiguous float64 / int64 poses, edges, measurements and information of a graph,
+    their shapes and the edges' vertex indices checked: the Numba kernels do not check
+    bounds."""
+    poses = np.ascontiguousarray(poses, dtype=np.float64)
+    edges = np.ascontiguousarray(graph.edges, dtype=np.int64)
+    z = np.ascontiguousarray(graph.measurements, dtype=np.float64)
+    info = np.ascontiguousarray(graph.information, dtype=np.float64)
+    v, e = graph.n_vertices, edges.shape[0] if edges.ndim == 2 else -1
+    if poses.shape != (v, 3):
+        raise DataError(f"poses must have shape ({v}, 3) (got {poses.shape})")
+    if edges.shape != (e, 2) or z.shape != (e, 3) or info.shape != (e, 3, 3):
+        raise DataError(
+            f"a graph needs edges (E, 2), measurements (E, 3) and information (E, 3, 3) "
+            f"(got {edges.shape}, {z.shape}, {info.shape})"
+        )
+    if e and (edges.min() < 0 or edges.max() >= v):
+        raise DataError(f"edges must index the {v} vertices (got {edges.min()}..{edges.max()})")
+    return poses, edges, z, info
 
 
 def graph_chi2(graph: PoseGraph, poses: np.ndarray | None = None) -> float:
@@ -186,79 +217,30 @@ def _robust_cost(s: np.ndarray, kernel: str, k: float) -> np.ndarray:
     return s
 
 
-class _Structure:
-    """Sparsity pattern of H for a graph, with fixed vertices left out (built once)."""
+class _GraphSystem:
+    """The block pattern of a graph's normal equations with some vertices held, its symbolic
+    Cholesky factorisation (:class:`~wheelbase.mapping.block_cholesky.BlockCholesky`, built
+    once) and the kernels' contiguous copies of the edges."""
 
-    def __init__(self, graph: PoseGraph, fixed: np.ndarray) -> None:
-        n = graph.n_vertices
-        free = np.flatnonzero(~fixed)
-        self.n_free = free.size
-        self.free = free
-        # a fill-reducing order of the free vertices, computed once: SuperLU's minimum degree
-        # on the vertex graph (a Laplacian plus identity: positive definite), 9× smaller than H
-        index = np.full(n, -1, np.int64)
-        index[free] = np.arange(free.size)
-        a, b = index[graph.edges[:, 0]], index[graph.edges[:, 1]]
-        both = (a >= 0) & (b >= 0)
-        a, b = a[both], b[both]
-        laplacian = sparse.coo_matrix(
-            (np.full(2 * a.size, -1.0), (np.concatenate([a, b]), np.concatenate([b, a]))),
-            shape=(free.size, free.size),
-        ).tocsc()
-        laplacian = laplacian + sparse.diags(1.0 - np.asarray(laplacian.sum(0)).ravel())
-        order = splu(laplacian.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                     options={"SymmetricMode": True}).perm_c  # fmt: skip
-        column = np.full(n, -1, np.int64)
-        column[free] = order
-        self.free = free
-        self.column_of_free = order
-        i, j = graph.edges[:, 0], graph.edges[:, 1]
-        ci, cj = column[i], column[j]
-        # the 4 blocks (ii, ij, ji, jj) of each edge: 36 entries, row-major 3×3 each
-        pairs = np.stack([np.stack([ci, ci], -1), np.stack([ci, cj], -1),
-                          np.stack([cj, ci], -1), np.stack([cj, cj], -1)], 1)  # fmt: skip
-        a = np.arange(3)
-        rows = 3 * pairs[:, :, 0, None, None] + a[None, None, :, None]
-        cols = 3 * pairs[:, :, 1, None, None] + a[None, None, None, :]
-        rows, cols = np.broadcast_arrays(rows, cols)
-        keep = (pairs[:, :, 0] >= 0) & (pairs[:, :, 1] >= 0)
-        self.keep = np.broadcast_to(keep[:, :, None, None], rows.shape).ravel()
-        self.rows = rows.ravel()[self.keep]
-        self.cols = cols.ravel()[self.keep]
-        self.ci, self.cj = ci, cj
-        size = 3 * self.n_free
-        # the map from the 36·E entries to the CSC matrix's data (duplicates summed)
-        probe = sparse.coo_matrix(
-            (np.arange(1, self.rows.size + 1, dtype=np.float64), (self.rows, self.cols)),
-            shape=(size, size),
-        ).tocsc()
-        probe.sum_duplicates()
-        self.indptr, self.indices = probe.indptr, probe.indices
-        # position of each kept entry in the CSC data: via a linear key lookup
-        key_csc = np.repeat(np.arange(size), np.diff(probe.indptr)) * size + probe.indices
-        key = self.cols * size + self.rows
-        self.slot = np.searchsorted(key_csc, key)
-        self.size = size
-        diag_key = np.arange(size) * size + np.arange(size)
-        self.diag_slot = np.searchsorted(key_csc, diag_key)
-
-    def matrix(self, blocks: np.ndarray) -> sparse.csc_matrix:
-        data = np.bincount(self.slot, blocks.ravel()[self.keep], minlength=self.indices.size)
-        return sparse.csc_matrix((data, self.indices, self.indptr), shape=(self.size, self.size))
-
-    def gradient(self, gi: np.ndarray, gj: np.ndarray) -> np.ndarray:
-        g = np.zeros((self.n_free + 1, 3))  # row n_free collects the fixed vertices' parts
-        np.add.at(g, np.where(self.ci >= 0, self.ci, self.n_free), gi)
-        np.add.at(g, np.where(self.cj >= 0, self.cj, self.n_free), gj)
-        return g[:-1].ravel()
-
-    def steps(self, step: np.ndarray) -> np.ndarray:
-        """The step of each free vertex (in ``free``'s order) from the ordered solution."""
-        return step.reshape(-1, 3)[self.column_of_free]
+    def __init__(self, graph: PoseGraph, held: np.ndarray) -> None:
+        self.free = np.flatnonzero(~held)
+        self.free_index = np.full(graph.n_vertices, -1, np.int64)
+        self.free_index[self.free] = np.arange(self.free.size)
+        _, self.edges, self.measurements, self.information = _kernel_arrays(graph, graph.poses)
+        angle = self.measurements[:, 2]
+        self.measured_cos_sin = np.column_stack([np.cos(angle), np.sin(angle)])
+        fi, fj = self.free_index[self.edges[:, 0]], self.free_index[self.edges[:, 1]]
+        both = (fi >= 0) & (fj >= 0)
+        self.chol = BlockCholesky(self.free.size, np.column_stack([fi[both], fj[both]]))
+        self.slot = np.full(graph.n_edges, -1, np.int64)
+        self.slot[both] = self.chol.pair_slot
+        self.upper = np.ones(graph.n_edges, np.bool_)
+        self.upper[both] = self.chol.pair_upper
 
 
 def _linearise(graph: PoseGraph, poses: np.ndarray, weights: np.ndarray):
-    """Residuals, and the blocks JᵀWΩJ and gradients JᵀWΩr of every edge."""
+    """Residuals, and the blocks JᵀWΩJ and gradients JᵀWΩr of every edge: the NumPy
+    reference of the Numba assembly (a test holds them equal), used by landmark SLAM."""
     xi, xj = poses[graph.edges[:, 0]], poses[graph.edges[:, 1]]
     r = se2_log(_between(_between(xi, xj), graph.measurements, inverse_first=True))
     jinv = se2_right_jacobian_inv(r)
@@ -322,15 +304,23 @@ def optimize_pose_graph(
         raise ConfigError(f"robust_edges must have shape ({graph.n_edges},) (got {mask.shape})")
     start = time.perf_counter()
     chi2_initial = graph_chi2(graph)
-    poses = graph.poses.copy() if initial == "graph" else chordal_initialization(graph)
     fixed = graph.fixed.copy()
     if not fixed.any():
         fixed[0] = True
-    structure = _Structure(graph, fixed)
-    free = structure.free
+    system = _GraphSystem(graph, fixed)
+    if initial == "graph":
+        poses = graph.poses.copy()
+    else:  # the chordal problems hold vertex 0: the same pattern when it is the one fixed
+        anchored = np.zeros(graph.n_vertices, bool)
+        anchored[0] = True
+        same = np.array_equal(fixed, anchored)
+        poses = _chordal(graph, system if same else _GraphSystem(graph, anchored))
+    free = system.free
+    edges, z, info = system.edges, system.measurements, system.information
+    zcs = system.measured_cos_sin
 
     def cost_of(p: np.ndarray) -> tuple[float, np.ndarray]:
-        s = edge_chi2(graph, p)
+        s = edge_chi2_kernel(p, edges, z, zcs, info)
         if robust != "none":
             s = np.where(mask, _robust_cost(s, robust, k), s)
         return float(s.sum()), s
@@ -338,39 +328,42 @@ def optimize_pose_graph(
     def weights_of(p: np.ndarray) -> np.ndarray:
         if robust == "none":
             return np.ones(graph.n_edges)
-        return np.where(mask, _weights(edge_chi2(graph, p), robust, k), 1.0)
+        return np.where(mask, _weights(edge_chi2_kernel(p, edges, z, zcs, info), robust, k), 1.0)
 
+    poses = np.ascontiguousarray(poses, dtype=np.float64)
     cost, _ = cost_of(poses)
     history = [cost]
     lam, nu = 0.0, 2.0
     iterations = 0
     converged = False
     weights = weights_of(poses)
+    n_free = free.size
+    diag, off = np.empty((n_free, 3, 3)), np.empty((system.chol.n_off, 3, 3))
+    g = np.empty((n_free, 3))
     while iterations < max_iterations and not converged:
-        _, blocks, gi, gj = _linearise(graph, poses, weights)
-        h = structure.matrix(blocks)
-        g = structure.gradient(gi, gj)
-        diag = np.maximum(h.diagonal(), 1e-12)
+        assemble_kernel(poses, edges, z, zcs, info, weights, system.free_index, system.slot,
+                        system.upper, diag, off, g)  # fmt: skip
+        scale = np.maximum(np.diagonal(diag, axis1=1, axis2=2), 1e-12)
         while iterations < max_iterations:
             iterations += 1
-            damped = h
-            if lam > 0.0:
-                damped = h.copy()
-                damped.data[structure.diag_slot] += lam * diag
-            try:
-                step = -_solve(damped, g)
-            except RuntimeError as exc:  # "Factor is exactly singular"
-                if lam == 0.0:
-                    raise EstimationError(
-                        f"pose graph: singular normal equations ({exc}); a vertex is not fully "
-                        "constrained by its edges"
-                    ) from None
+            if system.chol.factor(diag, off, lam * scale if lam > 0.0 else None):
+                step = -system.chol.solve(g)
+            elif lam == 0.0:
+                raise EstimationError(
+                    "pose graph: singular normal equations; a vertex is not fully "
+                    "constrained by its edges"
+                )
+            else:
                 step = np.full(g.shape, np.nan)
-            trial = poses.copy()
-            trial[free] = _retract(poses[free], structure.steps(step))
-            new_cost = cost_of(trial)[0] if np.all(np.isfinite(step)) else math.inf
-            # the decrease the quadratic model predicts, L(0) − L(δ) = −(gᵀδ + ½δᵀHδ), times 2
-            predicted = -(2.0 * g @ step + step @ (h @ step))
+            if np.all(np.isfinite(step)):
+                trial = retract_kernel(poses, free, step)
+                new_cost = cost_of(trial)[0]
+            else:
+                trial, new_cost = poses, math.inf
+            # the decrease the quadratic model predicts, L(0) − L(δ) = −(gᵀδ + ½δᵀHδ), times
+            # 2; with (H + λD)δ = −g, δᵀHδ = −gᵀδ − λδᵀDδ. Sums, not np.vdot: OpenBLAS's dot
+            # of 10⁴ numbers wakes its threads, which wait for a busy core on a loaded machine
+            predicted = float(((lam * scale * step - g) * step).sum())
             if new_cost <= cost:
                 decrease = (cost - new_cost) / max(cost, 1e-300)
                 gain = (cost - new_cost) / predicted if predicted > 0 else 1.0
@@ -427,67 +420,57 @@ def chordal_initialization(graph: PoseGraph) -> np.ndarray:
     -------
     numpy.ndarray, shape (V, 3)
     """
-    n, i, j = graph.n_vertices, graph.edges[:, 0], graph.edges[:, 1]
-    e = graph.n_edges
-    # rotations: residual q_j − R(z) q_i, 2 rows per edge, unknowns 2 per vertex
+    anchored = np.zeros(graph.n_vertices, bool)
+    anchored[0] = True
+    return _chordal(graph, _GraphSystem(graph, anchored))
+
+
+def _chordal(graph: PoseGraph, system: _GraphSystem) -> np.ndarray:
+    """:func:`chordal_initialization` on the pattern of a system that holds vertex 0 only."""
+    n, e = graph.n_vertices, graph.n_edges
+    edges = system.edges
+    i = edges[:, 0]
+    n_free, n_off = system.free.size, system.chol.n_off
+    diag, off, rhs = np.empty((n_free, 2, 2)), np.empty((n_off, 2, 2)), np.empty((n_free, 2))
+    held = np.zeros((n, 2))
+
+    def solve(ji, jj, weight, target):
+        accumulate_linear(ji, jj, weight, target, edges, held, system.free_index, system.slot,
+                          system.upper, diag, off, rhs)  # fmt: skip
+        if not system.chol.factor(diag, off):
+            raise EstimationError(
+                "chordal initialisation: singular system; the graph is not connected"
+            )
+        x = held.copy()
+        x[system.free] = system.chol.solve(rhs)
+        return x
+
+    # rotations: q_j = R(z) q_i, weight Ω_θθ; unknowns q = (cos θ, sin θ) relaxed, q_0 = (1, 0)
     c, s = np.cos(graph.measurements[:, 2]), np.sin(graph.measurements[:, 2])
-    w = np.sqrt(np.maximum(graph.information[:, 2, 2], 1e-12))
-    row = np.repeat(np.arange(2 * e), 3).reshape(e, 2, 3)
-    rows = np.concatenate([row[:, 0], row[:, 1]], 1).ravel()
-    cols = np.stack([2 * j, 2 * i, 2 * i + 1, 2 * j + 1, 2 * i, 2 * i + 1], 1).ravel()
-    vals = (np.stack([np.ones(e), -c, s, np.ones(e), -s, -c], 1) * w[:, None]).ravel()
-    a = sparse.csr_matrix((vals, (rows, cols)), shape=(2 * e, 2 * n))
-    q0 = np.array([math.cos(0.0), math.sin(0.0)])
-    q = _anchored_lsq(a, np.zeros(2 * e), 2, q0).reshape(n, 2)
+    rot_z = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    eye = np.ascontiguousarray(np.broadcast_to(np.eye(2), (e, 2, 2)))
+    weight = np.maximum(graph.information[:, 2, 2], 1e-12)[:, None, None] * eye
+    held[0] = [math.cos(0.0), math.sin(0.0)]
+    q = solve(-rot_z, eye, weight, np.zeros((e, 2)))
     norm = np.hypot(q[:, 0], q[:, 1])
     theta = np.arctan2(q[:, 1], q[:, 0])
     if np.any(norm < 1e-9):
         theta = np.where(norm < 1e-9, 0.0, theta)
-    # translations: t_j − t_i = R_i z_t, whitened by the Cholesky factor of R_i Ω_tt R_iᵀ
+    # translations: t_j − t_i = R_i z_t, weight R_i Ω_tt R_iᵀ (Ω_tt positive definite where Ω
+    # is; an identity weight where a graph built by hand has one that is not)
     ci, si = np.cos(theta[i]), np.sin(theta[i])
     zt = graph.measurements[:, :2]
-    rhs = np.stack([ci * zt[:, 0] - si * zt[:, 1], si * zt[:, 0] + ci * zt[:, 1]], -1)
+    rhs_t = np.stack([ci * zt[:, 0] - si * zt[:, 1], si * zt[:, 0] + ci * zt[:, 1]], -1)
     rot = np.stack([np.stack([ci, -si], -1), np.stack([si, ci], -1)], -2)
-    cov_inv = rot @ graph.information[:, :2, :2] @ np.swapaxes(rot, 1, 2)
-    try:
-        chol = np.swapaxes(np.linalg.cholesky(cov_inv), 1, 2)  # Lᵀ: ‖Lᵀ r‖² = rᵀ Ω r
-    except np.linalg.LinAlgError:
-        chol = np.broadcast_to(np.eye(2), (e, 2, 2))
-    rows = np.repeat(np.arange(2 * e), 4)
-    blk = np.arange(2)
-    cols_j = 2 * j[:, None, None] + blk[None, None, :]
-    cols_i = 2 * i[:, None, None] + blk[None, None, :]
-    cols = np.concatenate([np.broadcast_to(cols_j, (e, 2, 2)),
-                           np.broadcast_to(cols_i, (e, 2, 2))], 2).ravel()  # fmt: skip
-    vals = np.concatenate([chol, -chol], 2).ravel()
-    a = sparse.csr_matrix((vals, (rows, cols)), shape=(2 * e, 2 * n))
-    b = np.einsum("eij,ej->ei", chol, rhs).ravel()
-    t = _anchored_lsq(a, b, 2, np.zeros(2)).reshape(n, 2)
+    omega_t = graph.information[:, :2, :2]
+    det = omega_t[:, 0, 0] * omega_t[:, 1, 1] - omega_t[:, 0, 1] * omega_t[:, 1, 0]
+    if np.all((det > 0.0) & (omega_t[:, 0, 0] > 0.0)):
+        weight = np.ascontiguousarray(rot @ omega_t @ np.swapaxes(rot, 1, 2))
+    else:
+        weight = eye
+    held[0] = 0.0
+    t = solve(-eye, eye, weight, np.ascontiguousarray(rhs_t))
     poses = np.column_stack([t, wrap_angle(theta)])
     # place the first vertex where the graph has it
     anchor = graph.poses[0] if np.all(np.isfinite(graph.poses[0])) else np.zeros(3)
     return compose(compose(anchor, inverse_pose(poses[0])), poses)
-
-
-def _anchored_lsq(a: sparse.csr_matrix, b: np.ndarray, block: int, value: np.ndarray):
-    """Least squares min ‖A x − b‖ with the first ``block`` unknowns held at ``value``."""
-    a = a.tocsc()
-    rest = a[:, block:]
-    rhs = b - a[:, :block] @ value
-    normal = (rest.T @ rest).tocsc()
-    try:
-        x = splu(normal, permc_spec="MMD_AT_PLUS_A").solve(rest.T @ rhs)
-    except RuntimeError as exc:
-        raise EstimationError(
-            f"chordal initialisation: singular system ({exc}); the graph is not connected"
-        ) from None
-    return np.concatenate([value, x])
-
-
-def _solve(h: sparse.csc_matrix, g: np.ndarray) -> np.ndarray:
-    """H⁻¹g by SuperLU in symmetric mode (no pivoting off the diagonal: H is positive
-    definite), H already in the fill-reducing order of :class:`_Structure`: on manhattan's
-    10,497 unknowns 0.05 s against 0.7 s with SuperLU's default partial pivoting, which
-    destroys the ordering."""
-    lu = splu(h, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    return lu.solve(g)
