@@ -47,7 +47,7 @@ sightings are taken as independent there (spread over a batch solution, the filt
 of the later ones of a run would weigh the first one most; with it robot 1 reads 0.149 m
 robot and 0.171 m landmark RMSE, without it 0.132 m and 0.172 m). The gauge is a prior on the
 pose of the first sighting: the anchor moved by the odometry, with the motion model's
-covariance over that stretch expressed in that pose's frame (:func:`_relative_information`,
+covariance over that stretch expressed in that pose's frame (``_relative_information``,
 the odometry edges' too). Poses between sightings follow the odometry from the previous one.
 """
 
