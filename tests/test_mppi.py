@@ -738,3 +738,28 @@ def test_a_long_horizon_smooths_without_a_horizon_squared_matrix():
     np.testing.assert_allclose(
         short._smooth(small), savgol_filter(small, 9, 3, axis=0, mode="interp"), atol=1e-12
     )
+
+
+@pytest.mark.parametrize("step", [0.01, 0.025, 0.05, 0.2])
+def test_the_path_window_holds_its_reach_however_finely_the_path_is_sampled(step):
+    from wheelbase.control.local_path import PathWindow
+
+    # a Hybrid A* path comes every 0.025 m: a window counted in points of the 0.05 m spacing
+    # held 1.75 m instead of 3.5 m, and the robot never went faster than half its top speed
+    reach = 3.5
+    x = np.arange(0.0, 20.0 + step / 2, step)
+    path = PlannedPath.from_points(np.stack([x, 0.3 * np.sin(x / 3.0)], -1))
+    window = PathWindow(0.05, reach, 0.5, 0.05)
+    tables = window.tables(path)
+    cut, _info = window.window(np.array([4.0, 0.3 * math.sin(4.0 / 3.0), 0.0]), tables)
+    assert reach - max(step, 0.05) <= cut[-1, 3] <= reach + 1e-9
+    assert np.all(np.diff(cut[:, 3]) >= 0.0)
+
+
+def test_mppi_reaches_its_top_speed_on_a_finely_sampled_straight_path():
+    x = np.arange(0.0, 12.0 + 1e-9, 0.025)
+    path = PlannedPath.from_points(np.stack([x, np.zeros_like(x)], -1))
+    mppi = MPPI.from_gains(Unicycle(), samples=300, max_speed=1.0, seed=3)
+    result = closed_loop(mppi, Unicycle(), np.array([0.0, 0.0, 0.0]), path, 6.0, 0.05)
+    speed = result.twist[0, 40:100, 0]  # 2-5 s: past the start, before the goal's approach
+    assert speed.mean() > 0.85  # measured 0.6 m/s with the window counted in points

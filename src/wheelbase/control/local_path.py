@@ -137,6 +137,7 @@ class PathWindow:
         self.spacing = spacing
         self.goal_distance = goal_distance
         self.cusp_tolerance = cusp_tolerance
+        self._reach = reach
         self._reach_points = math.ceil(min(reach / spacing, 1e12)) + 1
         self.window_points = self._reach_points
         self._tables: tuple[object, PathTables, tuple] | None = None
@@ -175,8 +176,14 @@ class PathWindow:
         tables = PathTables(points - self._anchor, np.asarray(line.directions), self.spacing,
                             key[2])  # fmt: skip
         self._tables = (reference, tables, key)
-        # A window never holds more points than the path (a huge dt reaches 1e6 m ahead).
-        self.window_points = min(self._reach_points, len(tables.xy) + 1)
+        # The window holds `reach` metres of path, however finely the path was sampled (a
+        # Hybrid A* path every 0.025 m gave half the reach at 0.05 m spacing, and the robot
+        # never went faster than half its top speed): as many points as the densest stretch
+        # needs, cut at the reach in window(). Never more points than the path (a huge dt
+        # reaches 1e6 m ahead).
+        arc = tables.arc
+        ahead = np.searchsorted(arc, arc + self._reach, side="right") - np.arange(len(arc))
+        self.window_points = int(min(max(self._reach_points, int(ahead.max())), len(arc) + 1))
         self.reset()
         return tables
 
@@ -221,7 +228,7 @@ class PathWindow:
             lo, hi = start, end + 1
         else:
             lo = max(start, self._progress - 10)
-            hi = min(end + 1, self._progress + 4 * self.window_points)
+            hi = min(end + 1, self._progress + 4 * min(self._reach_points, len(tab.arc) + 1))
         d2 = np.sum((tab.xy[lo:hi] - rel) ** 2, axis=1)
         index = lo + int(np.argmin(d2))
         if self._progress is None:
@@ -235,6 +242,9 @@ class PathWindow:
             self._progress = end
             return self.window(pose, tab)
         stop = min(self._progress + self.window_points, end + 1)
+        # the last point within the reach (past it, the window repeats it, as at a section end)
+        last = int(np.searchsorted(tab.arc, tab.arc[self._progress] + self._reach, "right")) - 1
+        stop = min(stop, max(last, self._progress) + 1)
         idx = np.arange(self._progress, self._progress + self.window_points)
         idx = np.minimum(idx, stop - 1)
         along = tab.arc[idx] - tab.arc[self._progress]
