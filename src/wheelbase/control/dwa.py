@@ -29,7 +29,7 @@ critic (weight)       score of one trajectory                                   
 ``obstacle``          mean over its steps of (r_infl − c)², c the footprint's       320 /m²
                       clearance on the static map, as MPPI's (half ``path_dist``,
                       MPPI's balance)
-``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /         5000 /m²
+``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /        10000 /m²
                       steps, g the scaled gap, against the tracks predicted at
                       each step (shared with MPPI:
                       :mod:`wheelbase.control.obstacle_critics`)
@@ -41,7 +41,8 @@ Two defaults were set on the cases of ``tests/test_dwa.py``, not taken from Nav2
 (DWB's BaseObstacle scale, 0.02 per cost unit summed over the 9 poses of its default
 trajectory, is 45 here: DWA then grazed a 0.6 m box on the path, 0 m; 1000: 0 m; 3000: 6.5 cm
 off) and ``dynamic_obstacle`` (a disc coming head-on at 0.5 m/s: 3000 passed it 2 cm off,
-5000 0.42 m).
+5000 0.42 m; since the tracks' soft cost is weighted by their certainty, 5000 passed it 9 cm
+off, 10000 0.54 m).
 Collisions (the static map's footprint disks, the costmap's lethal and inscribed cells,
 contact with a predicted track) make a trajectory inadmissible, as Fox et al.'s admissible
 velocities; ``path_align`` and ``goal_align`` are off within ``forward_point_distance`` of the
@@ -150,7 +151,7 @@ class DWACritics:
     goal_align: float = 480.0
     costmap: float = 3000.0
     obstacle: float = 320.0
-    dynamic_obstacle: float = 5000.0
+    dynamic_obstacle: float = 10000.0
     rotate_to_goal: float = 32.0
     slowing_factor: float = 5.0
     forward_point_distance: float = 0.1

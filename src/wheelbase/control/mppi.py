@@ -16,7 +16,13 @@ ICRA 2017; the form of Nav2's MPPI controller):
 6. U ← Savitzky–Golay(Σ w_i V_i) along the horizon, clipped; the command is U[0].
 
 When every sample collides (min S >= the collision cost) the command is a stop (0, 0), the
-warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"``.
+warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"`` — unless, with a
+``perception=`` view, standing still collides too, sooner than some sample does: a walker that
+does not avoid the robot strikes a stopped one (measured: every contact of the crowd benchmark
+was a walker striking the robot stopped by ``all_collide``). The command is then the first of
+the sample that stays clear longest (at least :data:`EVADE_STEPS` steps; the cheapest of those),
+its sequence the warm start, and the status ``"evading"``. A static obstacle never strikes a
+stopped robot, so among static obstacles the rule is the stop it always was.
 
 With a ``perception=`` view (a :class:`wheelbase.perception.LocalView`: costmap, tracks of
 moving obstacles, time) the critics also score the costmap and the tracks predicted over the
@@ -87,7 +93,7 @@ from wheelbase.control.mppi_bounds import (
 from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
 from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, run_kernel
-from wheelbase.control.mppi_numpy import numpy_costs, rollout
+from wheelbase.control.mppi_numpy import contact_steps, numpy_costs, rollout
 from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -96,7 +102,11 @@ from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
 __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
-STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
+STATUSES: tuple[str, ...] = ("ok", "all_collide", "evading", "arrived")
+
+EVADE_STEPS = 2
+"""Steps a sample must stay clear, when every sample collides, to be driven instead of a stop
+(and it must stay clear longer than standing still would)."""
 
 
 @dataclass(frozen=True)
@@ -114,7 +124,7 @@ class MPPIPlan:
     weights : numpy.ndarray, shape (K,)
         Softmin weights (sum 1).
     status : str
-        ``"ok"`` or ``"all_collide"``.
+        ``"ok"``, ``"all_collide"``, ``"evading"`` or ``"arrived"``.
     pose : numpy.ndarray, shape (3,)
         The measured pose the plan starts from (see :meth:`MPPI.predict`).
     samples : numpy.ndarray, shape (K, T, m)
@@ -559,7 +569,33 @@ class MPPI:
                     f"extra critic must return shape ({self.samples},) (got {extra.shape})"
                 )
             costs = costs + np.where(np.isfinite(extra), np.maximum(extra, 0.0), 1e6)
-        return self._update(pose, costs, controls, lo, hi)
+        evasion = None
+        if perception is not None and float(np.min(costs)) >= self.critics.collision_cost:
+            evasion = self._evasion(local, controls, costs, info, local_map, seen)
+        return self._update(pose, costs, controls, lo, hi, evasion)
+
+    def _evasion(
+        self,
+        local: np.ndarray,
+        controls: np.ndarray,
+        costs: np.ndarray,
+        info: np.ndarray,
+        local_map: np.ndarray,
+        seen: PerceptionArrays,
+    ) -> int | None:
+        """When every sample collides: the sample that stays clear longest (the cheapest of
+        those), if it stays clear for EVADE_STEPS steps and longer than standing still would;
+        else None (a stop)."""
+        controls = np.asarray(controls, np.float64)
+        stop = np.zeros((1, *controls.shape[1:]))
+        first = contact_steps(self, local, np.concatenate([stop, controls]), info, local_map,
+                              seen)  # fmt: skip
+        standing, first = int(first[0]), first[1:]
+        latest = int(first.max())
+        if latest <= standing or latest < EVADE_STEPS:
+            return None
+        candidates = np.flatnonzero(first == latest)
+        return int(candidates[np.argmin(costs[candidates])])
 
     def _costs_numba(
         self,
@@ -605,12 +641,18 @@ class MPPI:
         controls: np.ndarray,
         lo: np.ndarray,
         hi: np.ndarray,
+        evasion: int | None = None,
     ) -> MPPIPlan:
         best = float(np.min(costs))
         with np.errstate(over="ignore", under="ignore"):  # exp(−inf) = 0: the intended limit
             weights = np.exp(-(costs - best) / self.temperature)
         weights /= np.sum(weights)
-        if best >= self.critics.collision_cost:
+        if evasion is not None:
+            self.status = "evading"
+            sequence = np.array(controls[evasion], np.float64)
+            command = sequence[0].copy()
+            self._mean = np.concatenate([sequence[1:], sequence[-1:]], axis=0)
+        elif best >= self.critics.collision_cost:
             self.status = "all_collide"
             command = np.zeros(self.nu)
             sequence = np.zeros_like(self._mean)

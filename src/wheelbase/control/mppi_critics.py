@@ -79,10 +79,11 @@ class MPPICritics:
         Weight of the costmap critic, >= 0 (default 3.81: Nav2's ``CostCritic.cost_weight``,
         whose cost is also the mean over the trajectory of the cell cost / 254).
     dynamic_obstacle : float
-        Weight [1/m²] of the dynamic-obstacle critic, >= 0 (default 100, set on a disc coming
-        head-on at 0.5 m/s, ``tests/test_mppi_perception.py``: 30 and 60 passed it 2-7 cm off,
-        100 0.30-0.35 m; inside r_dyn of a track all along then costs 25, what 1.25 m off the
-        path for the whole horizon does).
+        Weight [1/m²] of the dynamic-obstacle critic, >= 0 (default 200, set on a disc coming
+        head-on at 0.5 m/s, ``tests/test_mppi_perception.py``: with the tracks' soft cost
+        weighted by their certainty, 100 passed it 2-5 cm off, 200 0.21-0.30 m; a sure track
+        within r_dyn all along then costs 50, what 2.5 m off the path for the whole horizon
+        does).
     inflation : float
         Clearance r_infl [m] below which the obstacle critic starts to cost, > 0.
     dynamic_inflation : float
@@ -128,7 +129,7 @@ class MPPICritics:
     rate: float = 0.1
     twirl: float = 0.0
     costmap: float = 3.81
-    dynamic_obstacle: float = 100.0
+    dynamic_obstacle: float = 200.0
     inflation: float = 0.4
     collision_cost: float = 1.0e6
     dynamic_inflation: float = 0.5

@@ -150,3 +150,47 @@ def numpy_costs(
     if mppi._kind in (KIND_VELOCITY, KIND_HOLONOMIC):
         cost += c.twirl * np.sum(np.abs(controls[..., -1]), axis=1) / (steps * scale[-1])
     return cost, controls
+
+
+def contact_steps(
+    mppi: Any,
+    pose: np.ndarray,
+    controls: np.ndarray,
+    info: np.ndarray,
+    mp: np.ndarray,
+    seen: PerceptionArrays,
+) -> np.ndarray:
+    """The first step of each sequence at which its rollout collides: the static map, the
+    costmap or a track (the lethal rules of :func:`numpy_costs`); T where it never does.
+
+    Parameters
+    ----------
+    mppi : MPPI
+        The controller (read only).
+    pose : numpy.ndarray, shape (3,)
+        (0, 0, θ): the robot, positions relative to it.
+    controls : numpy.ndarray, shape (N, T, m)
+        Command sequences.
+    info : numpy.ndarray
+        The path window's scalars (its slot 6: the collision relief).
+    mp : numpy.ndarray, shape (4,)
+        The map's (x0, y0, resolution, enabled), origin relative to the robot.
+    seen : PerceptionArrays
+        The costmap and tracks, relative to the robot.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (N,)
+        Index (0-based, the pose after step k + 1) of the first collision, T if none.
+    """
+    after = rollout(mppi, pose, controls)[:, 1:]
+    steps = after.shape[1]
+    collided = np.zeros(after.shape[:2], bool)
+    if mppi._field.enabled:
+        collided |= mppi._field.clearance(after, info[6], mp)[1]
+    if seen.has_costmap:
+        collided |= costmap_costs(after, seen.cost, seen.near, seen.geometry, seen.polygon)[1]
+    if seen.has_tracks:
+        inflation = mppi.critics.dynamic_inflation
+        collided |= track_costs(after, seen.table, seen.relief, seen.disks, inflation)[1][:, :steps]
+    return np.where(collided.any(axis=1), np.argmax(collided, axis=1), steps)
