@@ -196,18 +196,6 @@ def test_a_graph_the_kernels_cannot_index_is_refused():
         graph_chi2(graph, graph.poses[:, :2])
 
 
-def test_the_kernels_wrap_angles_as_wrap_angle():
-    from wheelbase.geometry import wrap_angle
-    from wheelbase.mapping._posegraph_kernels import _wrap
-
-    angles = np.concatenate([np.linspace(-63.9, 63.9, 20001), np.pi * np.arange(-9, 10),
-                             [63.99, 64.0, -64.0, 7e8, -1e17, 1e300]])  # fmt: skip
-    ours = np.array([_wrap(a) for a in angles])
-    assert np.all((ours > -np.pi) & (ours <= np.pi))
-    gap = np.abs(ours - wrap_angle(angles))
-    assert np.minimum(gap, 2 * np.pi - gap).max() < 1e-14
-
-
 def test_an_unconstrained_vertex_is_a_clear_error():
     # vertex 3 has no edge: H is singular there (the Cholesky pivot vanishes), and the
     # chordal problems have a second component

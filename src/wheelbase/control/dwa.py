@@ -29,7 +29,7 @@ critic (weight)       score of one trajectory                                   
 ``obstacle``          mean over its steps of (r_infl − c)², c the footprint's       320 /m²
                       clearance on the static map, as MPPI's (half ``path_dist``,
                       MPPI's balance)
-``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /        10000 /m²
+``dynamic_obstacle``  Σ over its steps (and its held end) of Σ_tracks g², /         1e4 /m²
                       steps, g the scaled gap, against the tracks predicted at
                       each step (shared with MPPI:
                       :mod:`wheelbase.control.obstacle_critics`)

@@ -13,22 +13,11 @@ import math
 import numba
 import numpy as np
 
+from wheelbase.geometry_numba import wrap_angle_scalar
+
 __all__: list[str] = []
 
 _SMALL = 1e-5  # as se2._SMALL: |φ| below which the series of J_r's third column are used
-
-
-_TWO_PI = 2.0 * math.pi
-
-
-@numba.njit(cache=True, inline="always")
-def _wrap(angle):  # pragma: no cover - compiled
-    """angle to (−π, π], as geometry.wrap_angle (to rounding), without three trig calls."""
-    if abs(angle) < 64.0:  # a few turns (what the kernels see): within 1e-14 of atan2
-        w = angle - _TWO_PI * math.floor((angle + math.pi) / _TWO_PI)
-    else:  # far out, where the turn count times 2π would round: libm's reduction
-        w = math.atan2(math.sin(angle), math.cos(angle))
-    return math.pi if w <= -math.pi else w
 
 
 @numba.njit(cache=True, inline="always")
@@ -57,7 +46,7 @@ def _residual(poses, cs, i, j, z, zcs):  # pragma: no cover - compiled
     cz, sz = zcs[0], zcs[1]
     ex, ey = tx - z[0], ty - z[1]
     mx, my = cz * ex + sz * ey, -sz * ex + cz * ey
-    phi = _wrap(poses[j, 2] - poses[i, 2] - z[2])
+    phi = wrap_angle_scalar(poses[j, 2] - poses[i, 2] - z[2])
     sin_phi, one_minus_cos = _half_angle(phi)
     if phi == 0.0:
         a, b = 1.0, 0.0
@@ -242,5 +231,5 @@ def retract_kernel(poses, free, step):  # pragma: no cover - compiled
         c, s = math.cos(poses[v, 2]), math.sin(poses[v, 2])
         out[v, 0] = poses[v, 0] + c * ex - s * ey
         out[v, 1] = poses[v, 1] + s * ex + c * ey
-        out[v, 2] = _wrap(poses[v, 2] + _wrap(phi))
+        out[v, 2] = wrap_angle_scalar(poses[v, 2] + wrap_angle_scalar(phi))
     return out
