@@ -55,6 +55,7 @@ __all__ = [
     "GoalController",
     "SteeringLimits",
     "VelocityLimits",
+    "WrappedLaw",
     "command_to_inputs",
     "saturate_steering",
     "saturate_velocity",
@@ -71,6 +72,30 @@ STEERING_COMMAND: tuple[str, str] = ("speed", "steering")
 
 HOLONOMIC_COMMAND: tuple[str, str, str] = ("vx", "vy", "omega")
 """Names of a holonomic-base command, the body twist ``(v_x [m/s], v_y [m/s], ω [rad/s])``."""
+
+
+class WrappedLaw:
+    """A controller that wraps another one, ``law`` (slope feed-forward, traction control, a model
+    schedule, the twist-to-torque loop): the wrapped law's ``reset``, ``per_robot`` (the engine
+    runs one copy per robot) and ``status`` pass through. A subclass sets ``self.law``."""
+
+    law: Any
+
+    def reset(self) -> None:
+        """Reset the wrapped law (if it has a reset)."""
+        reset = getattr(self.law, "reset", None)
+        if reset is not None:
+            reset()
+
+    @property
+    def per_robot(self) -> bool:
+        """Whether the wrapped law needs one copy per robot (MPPI), as the engine asks."""
+        return bool(getattr(self.law, "per_robot", False))
+
+    @property
+    def status(self) -> str | None:
+        """The wrapped law's status (MPPI's ``ok`` / ``all_collide`` / ...), if it has one."""
+        return getattr(self.law, "status", None)
 
 
 @runtime_checkable

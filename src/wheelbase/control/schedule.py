@@ -12,13 +12,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
+from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
 __all__ = ["ModelSchedule"]
 
 
-class ModelSchedule:
+class ModelSchedule(WrappedLaw):
     """Set the wrapped controller's ``model`` from a timetable before each call.
 
     Parameters
@@ -62,19 +63,7 @@ class ModelSchedule:
     def reset(self) -> None:
         """Back to the first model; reset the law."""
         self.law.model = self.first
-        reset = getattr(self.law, "reset", None)
-        if reset is not None:
-            reset()
-
-    @property
-    def per_robot(self) -> bool:
-        """Whether the wrapped law needs one copy per robot."""
-        return bool(getattr(self.law, "per_robot", False))
-
-    @property
-    def status(self) -> str | None:
-        """The wrapped law's status, if it has one."""
-        return getattr(self.law, "status", None)
+        super().reset()
 
     @property
     def model(self) -> DiffDriveDynamics:

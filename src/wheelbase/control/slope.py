@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array
+from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
@@ -77,7 +78,7 @@ def slope_torques(model: DiffDriveDynamics, state: ArrayLike, slope: ArrayLike) 
     return np.stack([a * (-0.5 * fx + 0.5 * mz / d), a * (-0.5 * fx - 0.5 * mz / d)], axis=-1)
 
 
-class SlopeFeedForward:
+class SlopeFeedForward(WrappedLaw):
     """Wrap a torque controller: add the torques that hold its model on the slope (module
     docstring).
 
@@ -131,22 +132,6 @@ class SlopeFeedForward:
     def max_torque(self) -> float:
         """The wrapped law's torque limit [N·m] (infinite without one)."""
         return float(getattr(self.law, "max_torque", math.inf))
-
-    def reset(self) -> None:
-        """Reset the wrapped law."""
-        reset = getattr(self.law, "reset", None)
-        if reset is not None:
-            reset()
-
-    @property
-    def per_robot(self) -> bool:
-        """Whether the wrapped law needs one copy per robot."""
-        return bool(getattr(self.law, "per_robot", False))
-
-    @property
-    def status(self) -> str | None:
-        """The wrapped law's status, if it has one."""
-        return getattr(self.law, "status", None)
 
     def __getattr__(self, name: str) -> Any:  # estimates, history, row: the wrapped law's
         if name.startswith("_") or name in {"law", "terrain"}:

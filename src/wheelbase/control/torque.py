@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite, nonnegative, positive
+from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import DiffDriveDynamics
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry_numba import wrap_angle_scalar
@@ -442,7 +443,7 @@ def velocity_torques(
     return np.clip(torques, -max_torque, max_torque)
 
 
-class TwistTorqueLoop:
+class TwistTorqueLoop(WrappedLaw):
     """A kinematic control law on the dynamic plant: its (v, ω) tracked by computed torque.
 
     Any law of :mod:`wheelbase.control` with velocity commands (pure pursuit, Kanayama, MPPI,
@@ -500,17 +501,6 @@ class TwistTorqueLoop:
             max_torque = positive("max_torque", max_torque, "N·m")
         self.max_torque = float(max_torque)
 
-    def reset(self) -> None:
-        """Reset the law."""
-        reset = getattr(self.law, "reset", None)
-        if reset is not None:
-            reset()
-
-    @property
-    def status(self) -> str | None:
-        """The law's status (MPPI's ``ok`` / ``all_collide`` / ``arrived``), if it has one."""
-        return getattr(self.law, "status", None)
-
     @property
     def last_plan(self) -> object:
         """The law's last plan (MPPI), if it has one."""
@@ -519,11 +509,6 @@ class TwistTorqueLoop:
     def predict(self, *args: object, **kwargs: object) -> np.ndarray:
         """The law's rollouts (MPPI's :meth:`~wheelbase.control.MPPI.predict`)."""
         return self.law.predict(*args, **kwargs)  # type: ignore[attr-defined]
-
-    @property
-    def per_robot(self) -> bool:
-        """Whether the law needs one copy per robot (MPPI), as the engine asks."""
-        return bool(getattr(self.law, "per_robot", False))
 
     def summary(self) -> dict:
         """The law's account of its run (a navigator's replans and recoveries), if any."""

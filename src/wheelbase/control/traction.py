@@ -49,6 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite
+from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
@@ -58,7 +59,7 @@ SLOW_DOWN_RATE = 0.5
 """Fastest change of the reference clock's rate κ with ``slow_down`` [1/s]."""
 
 
-class TractionControl:
+class TractionControl(WrappedLaw):
     """Wrap a torque controller: each wheel's torque limited by the friction (module docstring).
 
     Parameters
@@ -156,19 +157,7 @@ class TractionControl:
         self._clock = None
         if self.estimator is not None:
             self.estimator.reset()
-        reset = getattr(self.law, "reset", None)
-        if reset is not None:
-            reset()
-
-    @property
-    def per_robot(self) -> bool:
-        """Whether the wrapped law needs one copy per robot."""
-        return bool(getattr(self.law, "per_robot", False))
-
-    @property
-    def status(self) -> str | None:
-        """The wrapped law's status, if it has one."""
-        return getattr(self.law, "status", None)
+        super().reset()
 
     # ------------------------------------------------------------------ limits
     def friction_at(self, state: ArrayLike) -> np.ndarray:
