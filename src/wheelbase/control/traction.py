@@ -176,13 +176,7 @@ class TractionControl(WrappedLaw):
             return known.copy()
         if self.friction != "map":
             return np.full((s.shape[0], 2), float(self.friction))
-        d = self.model.half_track
-        c, sn = np.cos(s[:, 2]), np.sin(s[:, 2])
-        wheels = np.stack(
-            [np.column_stack([s[:, 0] - sn * d, s[:, 1] + c * d]),
-             np.column_stack([s[:, 0] + sn * d, s[:, 1] - c * d])], axis=1,
-        )  # fmt: skip
-        return self._peaks[self.terrain.index(wheels)]
+        return self._peaks[self.terrain.under_wheels(s, self.model.half_track)]
 
     def limits(self, state: ArrayLike) -> np.ndarray:
         """The torque limits ``(N, 2)`` [N·m] at the estimated states (module docstring).

@@ -201,10 +201,30 @@ class EncoderOdometry(_EstimateOnly):
         readings : Readings, optional
             Sensor readings (unused: odometry alone).
         """
+        distance, rotation = self.odometry.increments(ticks)
+        return (*self.dead_reckon(estimate, distance, rotation, dt), state)
+
+    def dead_reckon(
+        self, estimate: np.ndarray, distance: np.ndarray, rotation: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The estimate moved by one step's travel, and the twist it implies.
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (N, 3)
+            The estimate at the start of the step.
+        distance, rotation : numpy.ndarray, shape (N,)
+            Distance travelled [m] and rotation [rad] over the step.
+        dt : float
+            Step [s].
+
+        Returns
+        -------
+        pose, twist : numpy.ndarray, shape (N, 3)
+        """
         from wheelbase.odometry.dead_reckoning import pose_increment
 
-        distance, rotation = self.odometry.increments(ticks)
         new = estimate.copy()
         new[:, :2] += pose_increment(estimate[:, 2], distance, rotation, self.odometry.method)
         new[:, 2] = wrap_angle(estimate[:, 2] + rotation)
-        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1), state
+        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)

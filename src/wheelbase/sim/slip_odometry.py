@@ -37,7 +37,6 @@ import numpy as np
 
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
-from wheelbase.geometry import wrap_angle
 from wheelbase.sim.sensing import EncoderOdometry
 
 __all__ = ["SlipCompensatedOdometry", "slip_from_force"]
@@ -173,19 +172,13 @@ class SlipCompensatedOdometry(EncoderOdometry):
         """
         if command is None:
             return super().update(estimate, ticks, dt, pose, twist, state=state, index=index)
-        from wheelbase.odometry.dead_reckoning import pose_increment
 
         distances = self.odometry.wheel_distances(ticks)
         rim = distances / dt
         tau = np.asarray(command, dtype=np.float64).reshape(-1, 2)
-        a, d = self.model.wheel_radius, self.model.half_track
-        c, s = np.cos(estimate[:, 2]), np.sin(estimate[:, 2])
-        wheels = np.stack(
-            [np.column_stack([estimate[:, 0] - s * d, estimate[:, 1] + c * d]),
-             np.column_stack([estimate[:, 0] + s * d, estimate[:, 1] - c * d])], axis=1,
-        )  # fmt: skip
-        rows = self._table[self.terrain.index(wheels)]  # (N, 2, 4): B, C, D, c_rr
-        pushed = tau / a
+        under = self.terrain.under_wheels(estimate, self.model.half_track)
+        rows = self._table[under]  # (N, 2, 4): B, C, D, c_rr
+        pushed = tau / self.model.wheel_radius
         loads = self.wheel_loads(estimate, pushed.sum(axis=1))
         force = pushed - rows[..., 3] * loads * np.sign(rim)
         kappa = slip_from_force(force, loads, rows[..., :3])
@@ -193,8 +186,4 @@ class SlipCompensatedOdometry(EncoderOdometry):
         corrected = ground * dt
         left, right = corrected[:, 0], corrected[:, 1]
         distance, rotation = 0.5 * (left + right), (right - left) / self.odometry.track
-        new = estimate.copy()
-        new[:, :2] += pose_increment(estimate[:, 2], distance, rotation, self.odometry.method)
-        new[:, 2] = wrap_angle(estimate[:, 2] + rotation)
-        twist_out = np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
-        return new, twist_out, state
+        return (*self.dead_reckon(estimate, distance, rotation, dt), state)

@@ -288,6 +288,24 @@ class TerrainMap:
         out[inside] = self.cells[row[inside], col[inside]]
         return out
 
+    def under_wheels(self, poses: ArrayLike, half_track: float) -> np.ndarray:
+        """Surface index ``(N, 2)`` under the (left, right) wheels of robots at poses ``(N, 3)``.
+
+        Parameters
+        ----------
+        poses : array_like, shape (N, 3) or more columns
+            Poses (x [m], y [m], θ [rad], ...) of the axle's midpoint in the map frame.
+        half_track : float
+            Half the distance between the wheels [m] (the left wheel is on the +y side).
+        """
+        xy = np.asarray(poses, dtype=np.float64)
+        c, s = np.cos(xy[:, 2]), np.sin(xy[:, 2])
+        wheels = np.stack(
+            [np.column_stack([xy[:, 0] - s * half_track, xy[:, 1] + c * half_track]),
+             np.column_stack([xy[:, 0] + s * half_track, xy[:, 1] - c * half_track])], axis=1,
+        )  # fmt: skip
+        return self.index(wheels)
+
     def inside(self, points: ArrayLike) -> np.ndarray:
         """Whether points ``(..., 2)`` [m] lie on the raster.
 
