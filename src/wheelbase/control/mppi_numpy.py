@@ -124,22 +124,15 @@ def numpy_costs(
         dist = np.hypot(after[..., 0] - info[1], after[..., 1] - info[2])
         cost += c.goal * np.sum(dist, axis=1) / steps
         cost += c.goal_heading * np.abs(wrap_angle(after[:, -1, 2] - info[3]))
-    collided = np.zeros(mppi.samples, bool)
-    if mppi._field.enabled:
-        clearance, hit = mppi._field.clearance(after, info[6], mp)
-        collided |= np.any(hit, axis=1)
+    hit, clearance, costmap_soft, track_soft = _obstacles(mppi, after, info, mp, seen, w[14])
+    if clearance is not None:
         gap = np.where(clearance > 0.0, np.maximum(c.inflation - clearance, 0.0), 0.0)
         cost += w[5] * np.sum(gap * gap, axis=1) / steps
-    if seen.has_costmap:
-        soft, hit = costmap_costs(after, seen.cost, seen.near, seen.geometry, seen.polygon)
-        cost += w[12] * np.sum(soft, axis=1) / steps
-        collided |= np.any(hit, axis=1)
-    if seen.has_tracks:
-        soft, hit = track_costs(after, seen.table, seen.relief, seen.disks, w[14],
-                                HOLD_STEP / mppi.dt)  # fmt: skip
-        cost += w[13] * np.sum(soft, axis=1) / steps
-        collided |= np.any(hit, axis=1)
-    cost += np.where(collided, w[11], 0.0)
+    if costmap_soft is not None:
+        cost += w[12] * np.sum(costmap_soft, axis=1) / steps
+    if track_soft is not None:
+        cost += w[13] * np.sum(track_soft, axis=1) / steps
+    cost += np.where(hit.any(axis=1), w[11], 0.0)
     v = controls[..., 0]
     cost += c.prefer_forward * np.sum(np.maximum(-info[4] * v, 0.0), axis=1) * mppi.dt
     cost += c.effort * np.sum((controls / scale) ** 2, axis=(1, 2)) / steps
@@ -184,13 +177,33 @@ def contact_steps(
         Index (0-based, the pose after step k + 1) of the first collision, T if none.
     """
     after = rollout(mppi, pose, controls)[:, 1:]
+    hit = _obstacles(mppi, after, info, mp, seen, mppi.critics.dynamic_inflation)[0]
+    return np.where(hit.any(axis=1), np.argmax(hit, axis=1), after.shape[1])
+
+
+def _obstacles(
+    mppi: Any,
+    after: np.ndarray,
+    info: np.ndarray,
+    mp: np.ndarray,
+    seen: PerceptionArrays,
+    dynamic_inflation: float,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """What the static map, the costmap and the tracks say of rollout poses ``(N, T, 3)``:
+    whether each step collides ``(N, T)``, and the map's clearance ``(N, T)``, the costmap's
+    soft costs ``(N, T)`` and the tracks' ``(N, T + H)`` (``None`` for what is not there)."""
     steps = after.shape[1]
-    collided = np.zeros(after.shape[:2], bool)
+    hit = np.zeros(after.shape[:2], bool)
+    clearance = costmap_soft = track_soft = None
     if mppi._field.enabled:
-        collided |= mppi._field.clearance(after, info[6], mp)[1]
+        clearance, map_hit = mppi._field.clearance(after, info[6], mp)
+        hit |= map_hit
     if seen.has_costmap:
-        collided |= costmap_costs(after, seen.cost, seen.near, seen.geometry, seen.polygon)[1]
+        costmap_soft, costmap_hit = costmap_costs(after, seen.cost, seen.near, seen.geometry,
+                                              seen.polygon)  # fmt: skip
+        hit |= costmap_hit
     if seen.has_tracks:
-        inflation = mppi.critics.dynamic_inflation
-        collided |= track_costs(after, seen.table, seen.relief, seen.disks, inflation)[1][:, :steps]
-    return np.where(collided.any(axis=1), np.argmax(collided, axis=1), steps)
+        track_soft, track_hit = track_costs(after, seen.table, seen.relief, seen.disks,
+                                            dynamic_inflation, HOLD_STEP / mppi.dt)  # fmt: skip
+        hit |= track_hit[:, :steps]  # the held rows are never lethal
+    return hit, clearance, costmap_soft, track_soft
