@@ -140,6 +140,9 @@ def test_world_on_a_grid_combines_both():
         ),
         ([], [[1.0, 1.0, 0.0]], r"disc 0: .*radius > 0"),
         ([], [], "needs bounds"),
+        # an empty pair: the fuzz run raised IndexError telling exterior-and-holes apart
+        ([([], [])], [], "polygon 0: exterior must have shape"),
+        ([((), [[0, 0]])], [], "polygon 0: exterior must be a list of"),
     ],
 )
 def test_bad_worlds_name_the_polygon(polygons, discs, match):

@@ -456,8 +456,18 @@ def _ring(index: int, ring: object, what: str) -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
+def _is_ring(value: object) -> bool:
+    """Whether ``value`` looks like a ring of vertices (its first item is not a number), so that
+    a pair (exterior, holes) is told from a two-vertex exterior; an empty or unindexable value
+    is not one (the ring check then names what is wrong)."""
+    try:
+        return len(value) > 0 and not np.isscalar(value[0])  # type: ignore[arg-type, index]
+    except (TypeError, KeyError, IndexError):
+        return False
+
+
 def _polygon_rings(index: int, polygon: object) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
-    if isinstance(polygon, tuple) and len(polygon) == 2 and not np.isscalar(polygon[0][0]):
+    if isinstance(polygon, tuple) and len(polygon) == 2 and _is_ring(polygon[0]):
         exterior, holes = polygon
     else:
         exterior, holes = polygon, ()
