@@ -244,6 +244,36 @@ def test_numpy_and_numba_agree_on_the_same_noise_with_a_view(model):
         assert (plans["numpy"].costs >= 1e6).any()  # the view does make some rollouts lethal
 
 
+def test_the_kernels_first_contacts_are_those_of_its_rollouts():
+    # the evasion reads each sample's first colliding step from the cost kernel; it must be the
+    # step the vectorised check finds on the same commands
+    from wheelbase.control.mppi_numpy import contact_steps, numpy_costs
+
+    costmap = inflated_costmap([BOX], (-1.0, -3.0, 8.0, 3.0))
+    view = local_view(np.array([[2.5, 0.4], [1.5, -0.6]]), np.array([[-0.5, 0.0], [0.0, 0.6]]),
+                      np.array([0.3, 0.25]), 0.0, costmap=costmap)  # fmt: skip
+    controller = MPPI(Unicycle(), 24, 0.05, 256, (0.4, 0.8), 0.05, None, LIMITS,
+                      footprint=ROBOT)  # fmt: skip
+    pose = np.array([1.0, 0.05, 0.1])
+    local = np.array([0.0, 0.0, pose[2]])
+    local_map = controller._field.geometry.copy()
+    local_map[:2] -= pose[:2]
+    seen = controller._perception.arrays(view, pose, 0.0, controller._step_times, 0.5)
+    window, info = controller._path.window(pose, controller._path.tables(LINE))
+    info[6] = controller._field.relief(pose, local_map)
+    weights = controller.critics.vector()
+    hi = controller._hi
+    args = (local, controller._mean, controller._lo, hi, hi, window, info, controller._last,
+            weights)  # fmt: skip
+    _costs, controls, first = controller._costs_numba(args, None, local_map, seen, 256)
+    expected = contact_steps(controller, local, controls, info, local_map, seen)
+    assert 0 < np.count_nonzero(first < 24) < 256  # some collide, some stay clear
+    np.testing.assert_array_equal(first, expected)
+    noise = controls - controller._mean[None]
+    _costs, _controls, numpy_first = numpy_costs(controller, *args, noise, local_map, seen)
+    np.testing.assert_array_equal(numpy_first, expected)
+
+
 def test_held_samples_keep_their_first_perturbation():
     controller = MPPI(Unicycle(), 20, 0.05, 50, (0.2, 0.4), 0.05, None, LIMITS, footprint=ROBOT,
                       held_noise_fraction=0.2, allow_reverse=False)  # fmt: skip

@@ -553,11 +553,12 @@ class MPPI:
                 noise *= self.noise_std
             noise = noise.copy()
             noise[held_from:] = noise[held_from:, :1]
-            costs, controls = numpy_costs(self, *args, noise, local_map, seen)
+            costs, controls, first = numpy_costs(self, *args, noise, local_map, seen)
         elif self.backend == "numba":
-            costs, controls = self._costs_numba(args, noise, local_map, seen, held_from)
+            costs, controls, first = self._costs_numba(args, noise, local_map, seen, held_from)
         else:
             costs, controls = jax_costs(self, *args, noise, local_map)
+            first = None  # no perception on this backend: never evading
         self._calls += 1
         if self.critics.extra is not None:
             controls = np.asarray(controls, np.float64)  # the user's critic is NumPy code
@@ -571,13 +572,13 @@ class MPPI:
             costs = costs + np.where(np.isfinite(extra), np.maximum(extra, 0.0), 1e6)
         evasion = None
         if perception is not None and float(np.min(costs)) >= self.critics.collision_cost:
-            evasion = self._evasion(local, controls, costs, info, local_map, seen)
+            evasion = self._evasion(local, first, costs, info, local_map, seen)
         return self._update(pose, costs, controls, lo, hi, evasion)
 
     def _evasion(
         self,
         local: np.ndarray,
-        controls: np.ndarray,
+        first: np.ndarray,
         costs: np.ndarray,
         info: np.ndarray,
         local_map: np.ndarray,
@@ -585,12 +586,9 @@ class MPPI:
     ) -> int | None:
         """When every sample collides: the sample that stays clear longest (the cheapest of
         those), if it stays clear for EVADE_STEPS steps and longer than standing still would;
-        else None (a stop)."""
-        controls = np.asarray(controls, np.float64)
-        stop = np.zeros((1, *controls.shape[1:]))
-        first = contact_steps(self, local, np.concatenate([stop, controls]), info, local_map,
-                              seen)  # fmt: skip
-        standing, first = int(first[0]), first[1:]
+        else None (a stop). ``first``: each sample's first colliding step, from the costs."""
+        stop = np.zeros((1, self.horizon_steps, self.nu))
+        standing = int(contact_steps(self, local, stop, info, local_map, seen)[0])
         latest = int(first.max())
         if latest <= standing or latest < EVADE_STEPS:
             return None
@@ -604,11 +602,12 @@ class MPPI:
         local_map: np.ndarray,
         seen: PerceptionArrays,
         held_from: int,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         has_noise = noise is not None
         buffer = np.ascontiguousarray(noise) if has_noise else np.zeros((1, 1, self.nu))
         costs = np.empty(self.samples)
         controls = np.empty((self.samples, self.horizon_steps, self.nu))
+        first = np.empty(self.samples, np.int64)
         local, mean, lo, hi, scale, window, info, last, weights = args
         run_kernel(
             mppi_kernel, self.samples * self.horizon_steps,
@@ -617,9 +616,9 @@ class MPPI:
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
             weights, self._field.distance_field, local_map, self._field.circles,
             int(self.critics.path_stride), NORMAL_TABLE, seen.cost, seen.near, seen.geometry,
-            seen.polygon, seen.table, seen.relief, seen.disks, costs, controls,
+            seen.polygon, seen.table, seen.relief, seen.disks, costs, controls, first,
         )  # fmt: skip
-        return costs, controls
+        return costs, controls, first
 
     def _stop(self, pose: np.ndarray, status: str) -> MPPIPlan:
         self.status = status

@@ -113,7 +113,7 @@ def mppi_kernel(
     pose, mean, lo, hi, scale, window, info, last, noise, has_noise, held_from, sigma, seed, call,
     kind,
     wheel_base, dt, w, df, mp, circles, stride, table, cost_map, near, cgeo, polygon, tracks,
-    relief, disks, costs, controls,
+    relief, disks, costs, controls, first_contact,
 ):  # fmt: skip
     """Draw, roll out and score every sample in one pass (the numba backend).
 
@@ -121,7 +121,9 @@ def mppi_kernel(
     The same costs as :func:`wheelbase.control.mppi_numpy.numpy_costs` (to rounding:
     ``fastmath`` lets the compiler reorder the sums), one sample per iteration of the parallel
     loop. ``cost_map`` … ``disks`` are the fields of
-    :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`."""
+    :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`. ``first_contact`` receives
+    each sample's first colliding step (T where it never collides), as
+    :func:`~wheelbase.control.mppi_numpy.contact_steps` counts them."""
     n, steps = controls.shape[0], controls.shape[1]
     m = window.shape[0]
     goal_mode = info[0] > 0.5
@@ -149,6 +151,7 @@ def mppi_kernel(
         p2 = last[2] if holonomic else 0.0
         cost = 0.0
         collided = False
+        first = steps
         next_check = stride - 1
         held = i >= held_from  # this sample holds its first perturbation all along
         for t in range(steps):
@@ -221,6 +224,8 @@ def mppi_kernel(
                 )
                 cost += w_dynamic * soft
                 collided = collided or hit
+            if collided and first == steps:
+                first = t
             cost += w_forward * max(-direction * u0, 0.0)
             q0, q1, q2 = u0 * a0, u1 * a1, u2 * a2
             r0, r1, r2 = (u0 - p0) * a0, (u1 - p1) * a1, (u2 - p2) * a2
@@ -246,3 +251,4 @@ def mppi_kernel(
         if collided:
             cost += w[11]
         costs[i] = cost
+        first_contact[i] = first

@@ -68,8 +68,9 @@ def numpy_costs(
     noise: np.ndarray,
     mp: np.ndarray,
     seen: PerceptionArrays,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Costs ``(K,)`` and sampled commands ``(K, T, m)`` of one MPPI iteration.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Costs ``(K,)``, sampled commands ``(K, T, m)`` and first contacts ``(K,)`` of one MPPI
+    iteration.
 
     Parameters
     ----------
@@ -99,6 +100,9 @@ def numpy_costs(
     Returns
     -------
     costs, controls : numpy.ndarray
+    first_contact : numpy.ndarray of int, shape (K,)
+        Each sample's first colliding step, T where it never collides (as
+        :func:`contact_steps`).
     """
     c = mppi.critics
     controls = clip_commands(mppi._kind, mean[None] + noise, lo, hi)
@@ -142,7 +146,7 @@ def numpy_costs(
     cost += c.rate * np.sum(((controls - previous) / scale) ** 2, axis=(1, 2)) / steps
     if mppi._kind in (KIND_VELOCITY, KIND_HOLONOMIC):
         cost += c.twirl * np.sum(np.abs(controls[..., -1]), axis=1) / (steps * scale[-1])
-    return cost, controls
+    return cost, controls, _first(hit)
 
 
 def contact_steps(
@@ -177,8 +181,12 @@ def contact_steps(
         Index (0-based, the pose after step k + 1) of the first collision, T if none.
     """
     after = rollout(mppi, pose, controls)[:, 1:]
-    hit = _obstacles(mppi, after, info, mp, seen, mppi.critics.dynamic_inflation)[0]
-    return np.where(hit.any(axis=1), np.argmax(hit, axis=1), after.shape[1])
+    return _first(_obstacles(mppi, after, info, mp, seen, mppi.critics.dynamic_inflation)[0])
+
+
+def _first(hit: np.ndarray) -> np.ndarray:
+    """The first True step of each row of ``hit`` (N, T); T where none is."""
+    return np.where(hit.any(axis=1), np.argmax(hit, axis=1), hit.shape[1])
 
 
 def _obstacles(
