@@ -29,6 +29,11 @@ class Tracks:
 
 
 @dataclass(frozen=True)
+class TrackerTracks(Tracks):
+    confirmed: np.ndarray
+
+
+@dataclass(frozen=True)
 class View:
     costmap: Costmap
     tracks: Tracks | None = None
@@ -125,6 +130,21 @@ def test_a_walker_crossing_the_path_does_not_block_the_route():
     standing = Tracks(np.array([[3.0, 2.0]]), np.array([[0.0, 0.05]]), np.array([0.3]))
     nav(0.1, START, first, perception=View(Costmap(walker), standing))
     assert nav.replans == 1  # a person standing still is planned around
+
+
+def test_a_tentative_track_does_not_block_the_route_until_it_is_confirmed():
+    # a new track (a walker the tracker lost and found again, speed 0 at birth) is not yet an
+    # obstacle that stays; confirmed and still standing, it is planned around
+    nav, local, first = navigator(rate_hz=0.0)
+    marked = box(room(), 2.7, 3.3, 1.7, 2.3)
+    born = TrackerTracks(np.array([[3.0, 2.0]]), np.zeros((1, 2)), np.array([0.3]),
+                         np.array([False]))  # fmt: skip
+    nav(0.0, START, first, perception=View(Costmap(marked), born))
+    assert nav.replans == 0 and nav.status != "recovering"
+    assert believed_grid(View(Costmap(marked), born), 0.2).occupied.sum() == (room() > 0).sum()
+    confirmed = TrackerTracks(born.position, born.velocity, born.radius, np.array([True]))
+    nav(0.1, START, first, perception=View(Costmap(marked), confirmed))
+    assert nav.replans == 1
 
 
 def test_periodic_replans_are_skipped_while_nothing_changes():

@@ -143,9 +143,14 @@ def believed_grid(view: Any, moving_speed: float) -> Any:
     """What the global planner believes from a robot's perception: an OccupancyGrid.
 
     The costmap's lethal cells, less the discs of the tracks faster than ``moving_speed`` (a
-    walker crossing is the local controller's business), plus the discs of the confirmed
-    tracks slower than that: a box or a person standing still is planned around as soon as
-    it is tracked, before it comes within the costmap's marking range.
+    walker crossing is the local controller's business) and of the tentative tracks, plus the
+    discs of the confirmed tracks slower than that: a box or a person standing still is planned
+    around as soon as it is tracked, before it comes within the costmap's marking range. A
+    tentative track is not yet evidence of an obstacle that stays: in ``crowd_crossing`` the
+    tracker lost a walker passing 0.4 m away and started a new track on its returns (speed 0,
+    tentative); its marks blocked the plan, the replan failed, and the robot stopped for a
+    recovery where the walker struck it. The local controller still sees those marks in its
+    costmap.
 
     Parameters
     ----------
@@ -170,9 +175,10 @@ def believed_grid(view: Any, moving_speed: float) -> Any:
         moving = speed > moving_speed
         confirmed = np.asarray(getattr(tracks, "confirmed", np.ones(len(speed), bool)), bool)
         standing = ~moving & confirmed
-        if moving.any() or standing.any():
+        passing = moving | ~confirmed
+        if passing.any() or standing.any():
             lethal = lethal.copy()
-            for which, value in ((moving, False), (standing, True)):
+            for which, value in ((passing, False), (standing, True)):
                 for centre, radius in zip(
                     tracks.position[which], tracks.radius[which], strict=True
                 ):
