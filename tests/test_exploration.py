@@ -68,6 +68,40 @@ def test_a_long_plan_is_cut_at_the_replan_distance():
     assert _cut(plan, 0.0) is plan and _cut(plan, 7.0) is plan  # no stop just before the goal
 
 
+def test_a_start_too_near_a_wall_for_the_margin_moves_to_the_nearest_with_room():
+    from types import SimpleNamespace
+
+    from wheelbase.exploration import _free_start
+    from wheelbase.planning import Footprint, OccupancyGrid
+
+    res, length, width = 0.05, 0.86, 0.655  # the planning footprint: robot + margins
+    occupied = np.zeros((80, 80), bool)
+    occupied[:20] = True  # a wall below y = 1.0 m
+    grid = OccupancyGrid.from_array(occupied, res)
+    planner = SimpleNamespace(footprint=Footprint.rectangle(length, width))
+    open_pose = np.array([2.0, 2.5, 0.0])
+    assert np.array_equal(_free_start(planner, grid, open_pose), open_pose)  # room all round
+    near = np.array([2.0, 1.0 + 0.5 * width - 0.04, 0.0])  # 4 cm into the wall for the margin
+    moved = _free_start(planner, grid, near)
+    # straight up, to where the footprint clears the wall by a cell (on the 2.5 cm lattice)
+    assert moved[0] == pytest.approx(near[0]) and moved[2] == near[2]
+    need = 1.0 + 0.5 * width + res
+    assert need <= moved[1] < need + 0.5 * res + 1e-9
+    assert not grid.in_collision(planner.footprint.inflated(res), moved)
+    # a corridor the footprint fits in with less than a cell to spare: the free pose in it
+    corridor = np.ones((80, 80), bool)
+    corridor[20 : 20 + round((width + 0.04) / res)] = False  # 0.70 m
+    tight = OccupancyGrid.from_array(corridor, res)
+    inside = _free_start(planner, tight, np.array([2.0, 1.05 + 0.5 * width, 0.0]))
+    assert inside is not None and not tight.in_collision(planner.footprint, inside)
+    assert tight.in_collision(planner.footprint.inflated(res), inside)
+    # too narrow for the footprint anywhere within half its width: no start (status stuck)
+    narrow = np.ones((80, 80), bool)
+    narrow[20:30] = False
+    thin = OccupancyGrid.from_array(narrow, res)
+    assert _free_start(planner, thin, np.array([2.0, 1.25, 0.0])) is None
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
