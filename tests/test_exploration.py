@@ -68,6 +68,35 @@ def test_a_long_plan_is_cut_at_the_replan_distance():
     assert _cut(plan, 0.0) is plan and _cut(plan, 7.0) is plan  # no stop just before the goal
 
 
+def test_a_cut_plan_stops_where_it_has_most_room_in_the_last_half_of_the_cut():
+    from scipy import ndimage
+
+    from wheelbase.exploration import _cut
+    from wheelbase.planning import OccupancyGrid
+    from wheelbase.planning.path import PlannedPath
+
+    # a plan along y = 1.15 m in a corridor (walls below 0.6 m, above 1.4 m) whose north wall
+    # has a 0.3 m deep recess at x 2.0-2.6 m
+    occupied = np.zeros((40, 220), bool)
+    occupied[:12] = occupied[28:] = True  # walls below y = 0.6 m and above y = 1.4 m
+    occupied[28:34, 40:52] = False  # the recess
+    grid = OccupancyGrid.from_array(occupied, 0.05)
+    room = ndimage.distance_transform_edt(~grid.occupied) * grid.resolution
+    x = np.linspace(0.0, 10.0, 201)
+    poses = np.stack([x, np.full_like(x, 1.15), np.zeros_like(x)], -1)
+    plan = PlannedPath(poses, np.ones(201), np.zeros(201), x)
+    cut = _cut(plan, 3.0, room, grid)
+    end = cut.poses[-1]
+    assert np.array_equal(cut.poses, poses[: len(cut.poses)])
+    assert 2.0 <= end[0] <= 2.6  # in the recess, within [1.5, 3.0] m along the plan
+    cell = grid.world_to_cell(poses[:, :2])
+    along = room[cell[:, 0], cell[:, 1]]
+    window = (x >= 1.5) & (x <= 3.0 + 1e-9)
+    assert room[tuple(grid.world_to_cell(end[:2]))] == pytest.approx(along[window].max())
+    assert end[0] == x[window][along[window] == along[window].max()][-1]  # the farthest
+    assert _cut(plan, 7.0, room, grid) is plan
+
+
 def test_a_start_too_near_a_wall_for_the_margin_moves_to_the_nearest_with_room():
     from types import SimpleNamespace
 
