@@ -23,15 +23,18 @@ def test_exploration_ends_with_no_reachable_frontier(explored):
     assert m["map_agreement"] >= 0.97
     assert m["position_rmse_m"] < 0.1
     # the same choice again on the final map finds nothing reachable
-    from wheelbase.exploration import _distance_field, _parts
+    from wheelbase.exploration import _distance_field, _free_start, _parts, _planner
     from wheelbase.mapping.frontiers import choose_frontier, find_frontiers
 
     parts = _parts(explored.scenario, explored.truth)
-    field, targets = _distance_field(explored.grid, parts, explored.estimated_path[-1])
-    visited = np.vstack([explored.frontiers, explored.frontiers])
     grid = explored.grid
-    ranked = choose_frontier(find_frontiers(grid, 10), field, grid.resolution, targets=targets,
-                             blacklist=visited, origin=grid.origin)  # fmt: skip
+    start = _free_start(_planner(grid, parts, explored.scenario), grid,
+                        explored.estimated_path[-1])  # fmt: skip
+    field, targets = _distance_field(grid, parts, start)
+    visited = np.vstack([explored.frontiers, explored.frontiers])
+    found = find_frontiers(grid, 10, explored.spec.wall_fringe)
+    ranked = choose_frontier(found, field, grid.resolution, targets=targets, blacklist=visited,
+                             origin=grid.origin)  # fmt: skip
     assert all(np.min(np.hypot(*(explored.frontiers - f.centroid).T)) < 1.5 for _, f, _ in ranked)
 
 
