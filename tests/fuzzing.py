@@ -1554,6 +1554,7 @@ _EXPLORATION_PATHS: list[tuple[str, ...]] = [
     ("exploration", "resolution"), ("exploration", "initial_scans"),
     ("exploration", "approach"), ("exploration", "distance_weight"),
     ("exploration", "leg_slack"), ("exploration", "slam"), ("exploration", "replan_distance"),
+    ("exploration", "wall_fringe"),
     ("start",), ("goal",),
     ("sensors",), ("sensors", "lidar"), ("sensors", "lidar", "max_range"),
     ("sensors", "lidar", "beams"), ("duration",), ("dt",), ("plant",), ("controller", "law"),

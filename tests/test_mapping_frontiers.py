@@ -99,3 +99,40 @@ def test_bad_input_errors():
         choose_frontier([], np.zeros(3), 0.5)
     with pytest.raises(ConfigError, match="targets"):
         choose_frontier([], np.zeros((2, 3)), 0.5, targets=np.ones((3, 3), bool))
+
+
+def test_a_walls_fringe_makes_no_frontier_but_open_unknown_space_does():
+    # a wall along the top with a one-cell unknown strip under it (its blurred surface), and
+    # an opening to unknown space on the right; 0.05 m cells
+    grid = grid_of([
+        "###########?????",
+        "#???????????????",
+        "#..........?????",
+        "#..........?????",
+        "#..........?????",
+        "#...............",
+        "################",
+    ], resolution=0.05)  # fmt: skip
+    strip = frontier_mask(grid)[4, 1:11]
+    assert strip.all()  # without a fringe: the whole strip under the wall is a frontier
+    mask = frontier_mask(grid, fringe=0.1)
+    assert not mask[4, 1:9].any()  # its cells' unknown neighbour lies 0.05 m from the wall
+    # the opening: free cells beside unknown cells farther than 0.1 m from every wall cell
+    assert mask[3:5, 10].all()
+    # (2, 10)'s unknown neighbour lies 0.1 m above the bottom wall: the fringe's end
+    assert not mask[2, 10] and frontier_mask(grid)[2, 10]
+    assert frontier_mask(grid, fringe=0.0).sum() > mask.sum()
+    with pytest.raises(ConfigError, match="fringe"):
+        frontier_mask(grid, fringe=-0.1)
+
+
+def test_the_fringe_is_a_distance_so_coarse_cells_keep_their_frontiers():
+    # at 0.5 m cells no unknown cell lies within 0.1 m of a wall's centre: nothing changes
+    grid = grid_of([
+        "######",
+        "#...??",
+        "#...??",
+        "#.....",
+        "######",
+    ])  # fmt: skip
+    assert np.array_equal(frontier_mask(grid, fringe=0.1), frontier_mask(grid))
