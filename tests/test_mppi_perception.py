@@ -320,6 +320,30 @@ def test_when_every_rollout_collides_with_walkers_it_evades_rather_than_wait_to_
     # (test_a_robot_inside_a_lethal_region_stops)
 
 
+def test_a_mean_that_runs_into_a_walker_its_samples_avoid_is_not_driven():
+    # half the samples swerve left of a walker standing on the path, half right, at equal
+    # cost: their weighted mean drives straight into it. The guard drives the cheapest sample.
+    from wheelbase.control.mppi_numpy import contact_steps
+
+    view = local_view(np.array([[0.9, 0.0]]), np.zeros((1, 2)), np.array([0.3]), 0.0)
+    controller = MPPI(Unicycle(), 24, 0.05, 2, (0.2, 0.4), 0.05, None, LIMITS, backend="numpy",
+                      footprint=ROBOT, savgol_window=0)  # fmt: skip
+    noise = np.zeros((2, 24, 2))
+    noise[:, :, 0] = 0.4
+    noise[0, :, 1], noise[1, :, 1] = 1.5, -1.5
+    plan = controller.plan((0.0, 0.0, 0.0), LINE, noise, perception=view, t=0.0)
+    assert plan.costs[0] == pytest.approx(plan.costs[1])  # a mirror pair
+    assert plan.costs.max() < controller.critics.collision_cost  # each of them clear
+    assert plan.status == "guarded"
+    assert abs(plan.command[1]) == pytest.approx(1.5)  # one of the swerves, not their mean
+    local = np.zeros(3)
+    seen = controller._perception.arrays(view, local, 0.0, controller._step_times, 0.5)
+    _window, info = controller._path.window(local, controller._path.tables(LINE))
+    straight = np.tile([0.4, 0.0], (1, 24, 1))  # the mean of the pair
+    first = contact_steps(controller, local, straight, info, controller._field.geometry, seen)
+    assert first[0] < 24
+
+
 def test_a_track_touching_the_robot_lets_it_back_away():
     # a walker already in contact: only rollouts that get deeper are lethal, so it is not frozen
     view = local_view(np.array([[0.45, 0.0]]), np.zeros((1, 2)), np.array([0.3]), 0.0)

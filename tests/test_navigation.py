@@ -135,7 +135,7 @@ def test_a_walker_crossing_the_path_does_not_block_the_route():
 def test_a_tentative_track_does_not_block_the_route_until_it_is_confirmed():
     # a new track (a walker the tracker lost and found again, speed 0 at birth) is not yet an
     # obstacle that stays; confirmed and still standing, it is planned around
-    nav, local, first = navigator(rate_hz=0.0)
+    nav, _local, first = navigator(rate_hz=0.0)
     marked = box(room(), 2.7, 3.3, 1.7, 2.3)
     born = TrackerTracks(np.array([[3.0, 2.0]]), np.zeros((1, 2)), np.array([0.3]),
                          np.array([False]))  # fmt: skip
