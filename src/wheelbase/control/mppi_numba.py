@@ -52,8 +52,8 @@ def run_kernel(kernel, work: float, *args) -> None:
     ----------
     kernel : numba dispatcher
         The kernel.
-    work : int
-        Samples × steps of this call.
+    work : float
+        Samples × steps of this call (MPPI: :func:`mppi_work`).
     *args
         The kernel's arguments.
     """
