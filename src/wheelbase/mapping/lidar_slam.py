@@ -57,6 +57,8 @@ from wheelbase.mapping.scan_matching import (
 
 __all__ = ["LidarSlam", "SlamResult", "SlamSession"]
 
+_LOOP_TABLES_KEPT = 8  # candidate submaps whose tables a session keeps
+
 
 @dataclass(frozen=True)
 class LidarSlam:
@@ -65,8 +67,8 @@ class LidarSlam:
     Parameters
     ----------
     matcher : ScanMatcher
-        Scan-to-submap matcher (search cell 0.1 m, σ 0.1 m, ±1.2 m, ±60° by default: the
-        CARMEN logs' scans are up to 1.5 m and 78° apart, without odometry).
+        Scan-to-submap matcher (search cell 0.1 m, σ 0.05 m, ±1.5 m, ±90° by default, σ 0.1 m
+        in :meth:`without_odometry`: the CARMEN logs' scans are up to 1.5 m and 78° apart).
     max_range : float
         Readings beyond this are not matched [m].
     min_score : float
@@ -299,7 +301,11 @@ class LidarSlam:
         return np.linalg.inv(body)
 
     def _close_loops(self, points, kf_points, kf_scan, kf_pose, edges, meas, info, loop_edge,
-                     stats):  # fmt: skip
+                     stats, cache=None):  # fmt: skip
+        """Step 4 of the module docstring at the newest keyframe; True when a closure was
+        accepted. ``cache`` (a dict kept by the session) holds the tables of the last
+        candidate submaps with their keyframes' poses: the next search usually picks the same
+        candidate, and until the graph is optimised its submap is the same."""
         j = len(kf_scan) - 1
         if j < self.loop_min_separation:
             return False
@@ -324,8 +330,18 @@ class LidarSlam:
             lo, hi = max(0, c - self.loop_submap), min(j - self.loop_min_separation,
                                                        c + self.loop_submap)  # fmt: skip
             keys = range(lo, hi + 1)
-            world = np.vstack([_transform(kf_pose[i], kf_points[i]) for i in keys])
-            table, reference = self._tables(world)
+            poses = np.array([kf_pose[i] for i in keys])
+            hit = cache.get((lo, hi)) if cache is not None else None
+            if hit is not None and np.array_equal(hit[0], poses):
+                table, reference = hit[1], hit[2]
+            else:
+                world = np.vstack([_transform(kf_pose[i], kf_points[i]) for i in keys])
+                table, reference = self._tables(world)
+                if cache is not None:
+                    cache.pop((lo, hi), None)
+                    cache[(lo, hi)] = (poses, table, reference)
+                    while len(cache) > _LOOP_TABLES_KEPT:
+                        cache.pop(next(iter(cache)))
             found = matcher.match(table, reference, points[kf_scan[j]], current,
                                   linear_window=self.loop_linear_window,
                                   angular_window=self.loop_angular_window,
@@ -381,6 +397,7 @@ class SlamSession:
         self.anchor: list[int] = []  # the keyframe each scan hangs from
         self.kf_scan: list[int] = []
         self.kf_points: list[np.ndarray] = []  # a keyframe's points in submaps (``surfaces``)
+        self.loop_tables: dict = {}  # candidate submaps' tables (LidarSlam._close_loops)
         self.kf_pose: list[np.ndarray] = []
         self.edges: list[tuple[int, int]] = []
         self.meas: list[np.ndarray] = []
@@ -521,7 +538,7 @@ class SlamSession:
             if len(self.kf_scan) % slam.loop_every == 0:
                 closed = slam._close_loops(self.points, self.kf_points, self.kf_scan,
                                            self.kf_pose, self.edges, self.meas, self.info,
-                                           self.loop_edge, stats)  # fmt: skip
+                                           self.loop_edge, stats, self.loop_tables)  # fmt: skip
             if closed:
                 self.pending_optimizations += 1
             if self.pending_optimizations >= slam.optimize_every:
