@@ -22,6 +22,7 @@ from wheelbase.mapping.scan_matching import (
     _score,
     _transform,
     scan_points,
+    surface_points,
 )
 from wheelbase.planning import load_map
 from wheelbase.sensors import Lidar
@@ -54,6 +55,31 @@ def test_branch_and_bound_finds_the_brute_force_optimum(seed):
         for k in range(5) for u in range(-9, 10) for v in range(-9, 10)
     )  # fmt: skip
     assert best == pytest.approx(brute[0], abs=1e-9) and (a, di, dj) == brute[1:]
+
+
+def test_surface_points_fill_a_grazing_wall_and_leave_a_depth_jump_open():
+    # a corridor's side wall y = 1 seen from the origin at 1° per beam (returns up to 0.6 m
+    # apart), then the beams jump to a far wall x = 9 behind an opening
+    angles = np.radians(np.arange(10.0, 60.0))
+    wall = np.column_stack([1.0 / np.tan(angles), np.ones(angles.size)])[::-1]
+    far = np.column_stack([np.full(5, 9.0), np.linspace(2.0, 2.6, 5)])
+    points = np.vstack([wall, far])
+    dense = surface_points(points, step=0.05)
+    assert np.array_equal(dense[: len(points)], points)  # the returns first, unchanged
+    added = dense[len(points) :]
+    on_wall = np.abs(added[:, 1] - 1.0) < 1e-12
+    on_far = np.abs(added[:, 0] - 9.0) < 1e-12
+    assert (on_wall | on_far).all()  # nothing in the opening between the two walls
+    # the wall is sampled every 5 cm or closer from its first return to its last
+    xs = np.sort(np.concatenate([wall[:, 0], added[on_wall, 0]]))
+    assert np.diff(xs).max() <= 0.05 + 1e-12 and xs[0] == wall[:, 0].min()
+    gaps = np.hypot(*np.diff(wall, axis=0).T)
+    assert gaps.max() > 0.5  # the test's premise: returns sparser than the matcher's σ
+    # a lone segment across a depth jump (not in line with its neighbours) stays open
+    jump = np.array([[1.0, 0.0], [1.0, 0.1], [1.6, 0.5], [1.6, 0.6]])
+    filled = surface_points(jump)[4:]
+    assert filled.size and np.isin(filled[:, 0], [1.0, 1.6]).all()
+    assert surface_points(points[:2]).shape == (2, 2)
 
 
 @pytest.mark.parametrize("offset", [(0.4, -0.2, 0.15), (-0.5, 0.3, -0.5), (0.05, 0.02, 0.01)])

@@ -57,6 +57,7 @@ __all__ = [
     "PointReference",
     "ScanMatcher",
     "scan_points",
+    "surface_points",
 ]
 
 
@@ -95,6 +96,64 @@ def scan_points(
     mount = np.asarray(mount, dtype=np.float64)
     a = a + mount[2]
     return np.column_stack([mount[0] + r * np.cos(a), mount[1] + r * np.sin(a)])
+
+
+def surface_points(
+    points: ArrayLike,
+    *,
+    step: float = 0.05,
+    max_gap: float = 1.0,
+    short: float = 0.15,
+    max_turn: float = math.radians(10.0),
+) -> np.ndarray:
+    """A scan's returns and points filled in along the surfaces between neighbouring beams.
+
+    Consecutive returns (in beam order) are joined by a segment when it is at most ``max_gap``
+    long and either shorter than ``short`` or in line (within ``max_turn``) with the segment
+    before or after it; each joined segment gets points every ``step``. A wall seen at a
+    grazing angle is sampled more sparsely than the matcher's σ (at 1° per beam, a corridor's
+    side wall 1 m away has returns 0.6 m apart 6 m ahead); as a reference, such a scan scores
+    the next scan best where its own returns fall on the same samples, i.e. where the robot
+    has not moved along the corridor (Intel: identical scans 0.95 m apart matched 0 m apart),
+    while the filled-in wall scores every position along it alike and leaves the decision to
+    what the corridor does show. The depth jump at an occluding edge is a segment that lines up
+    with neither neighbour and is left open.
+
+    Parameters
+    ----------
+    points : array_like, shape (M, 2)
+        The returns in beam order [m] (:func:`scan_points`).
+    step : float
+        Spacing of the added points [m].
+    max_gap : float
+        Longest segment joined [m].
+    short : float
+        Segments up to this long are joined whatever their direction [m].
+    max_turn : float
+        Largest turn between neighbouring segments that counts as in line [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (M + A, 2)
+        The returns, then the ``A`` added points.
+    """
+    points = as_float_array("points", points, 2, min_ndim=2, max_ndim=2)
+    step = positive("step", step, "m")
+    if points.shape[0] < 3:
+        return points
+    d = np.diff(points, axis=0)
+    length = np.hypot(d[:, 0], d[:, 1])
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    in_line = np.abs(wrap_angle(np.diff(heading))) <= max_turn  # segment s with s + 1
+    with_neighbour = np.concatenate([[False], in_line]) | np.concatenate([in_line, [False]])
+    joined = np.flatnonzero((length <= max_gap) & ((length <= short) | with_neighbour))
+    count = (length[joined] // step).astype(np.int64)
+    if count.sum() == 0:
+        return points
+    seg = np.repeat(joined, count)
+    rank = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 1
+    fraction = rank / np.repeat(count + 1, count)
+    return np.vstack([points, points[seg] + fraction[:, None] * d[seg]])
 
 
 def _transform(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
