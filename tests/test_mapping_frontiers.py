@@ -16,14 +16,18 @@ def grid_of(rows: list[str], resolution: float = 0.5) -> OccupancyGrid:
     return OccupancyGrid((chars == "#") | unknown, resolution, (0.0, 0.0), unknown)
 
 
+UNKNOWN_CORNER = [
+    "######",
+    "#...??",
+    "#...??",
+    "#.....",
+    "######",
+]  # fmt: skip
+"""A room whose upper right corner is unknown."""
+
+
 def test_frontier_cells_are_free_cells_with_an_unknown_edge_neighbour():
-    grid = grid_of([
-        "######",
-        "#...??",
-        "#...??",
-        "#.....",
-        "######",
-    ])  # fmt: skip
+    grid = grid_of(UNKNOWN_CORNER)
     expected = np.zeros(grid.shape, bool)
     # row index 0 is the bottom row: the '?' block sits in rows 2-3, columns 4-5
     expected[3, 3] = expected[2, 3] = True  # left of the block
@@ -128,11 +132,5 @@ def test_a_walls_fringe_makes_no_frontier_but_open_unknown_space_does():
 
 def test_the_fringe_is_a_distance_so_coarse_cells_keep_their_frontiers():
     # at 0.5 m cells no unknown cell lies within 0.1 m of a wall's centre: nothing changes
-    grid = grid_of([
-        "######",
-        "#...??",
-        "#...??",
-        "#.....",
-        "######",
-    ])  # fmt: skip
+    grid = grid_of(UNKNOWN_CORNER)
     assert np.array_equal(frontier_mask(grid, fringe=0.1), frontier_mask(grid))
