@@ -25,7 +25,7 @@ The loop (:func:`explore`):
    cannot hit a wall it has not seen; the goal is the frontier's approach cell, facing the
    frontier (other headings tried in quarter turns when that one collides), from the SLAM
    pose, or, where the planning footprint does not fit there (the robot stopped closer to a
-   wall than the margin), from the nearest pose where it does (:func:`_free_start`; the
+   wall than the margin), from the nearest pose where it does (``_free_start``; the
    path-distance field of step 2 starts there too). A frontier Hybrid A* cannot reach is
    blacklisted and the next one tried; so is every frontier once driven to (what is left of
    it after the visit cannot be seen from there: ragged edges where beams graze a wall).

@@ -22,7 +22,7 @@ from wheelbase.control.obstacle_critics import (
 from wheelbase.geometry import wrap_angle
 from wheelbase.integrate import integrate_step
 
-__all__ = ["numpy_costs", "rollout"]
+__all__ = ["contact_steps", "numpy_costs", "rollout"]
 
 
 def rollout(mppi: Any, pose: np.ndarray, controls: np.ndarray) -> np.ndarray:
