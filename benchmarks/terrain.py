@@ -17,11 +17,18 @@ what a user gets.
   floor's peak friction under each wheel): the demo route as it is, the demo at limits ice
   allows (0.3 m/s, 0.3 m/s², 0.5 rad/s: the demo's 0.6 m/s turns need 0.6 m/s² of lateral
   grip, ice gives 0.49), and a straight 4 m at 1 m/s²; target: with it, no wheel slips above
-  0.1 (ice peaks at 0.06). Four ways each: ``without``, ``with`` (the map's friction),
+  0.1 (ice peaks at 0.06), and the demo slowed to the map's friction arrives. Seven ways each
+  (``ICE_VARIANTS``): ``without``, ``with`` (the map's friction, torques clipped),
+  ``with_hold_integrators``, ``with_slow_down`` (the reference's timing planned to the map's
+  friction circles, :mod:`wheelbase.control.friction_timing`),
+  ``with_slow_down_slip_compensation`` (and the odometry's slip compensation),
   ``estimated`` (``friction: estimate``: the robot's own estimate from encoders, torques and
   model — the first spin is how it learns, so ``max_slip_after_first_spin`` is the figure to
   hold against the bound) and ``estimated_slow_down`` (the reference slowed to the estimate).
-  A ``collision`` is reported with its cause: on the demo's turns ice's side grip runs out.
+  Each row: status, largest slip, the true final error, the time to the end against the
+  reference's, the tracking error against the reference as timed, the deviation from the path,
+  and with ``slow_down`` the tracking error against the slowed reference. A ``collision`` is
+  reported with its cause: on the demo's turns ice's side grip runs out.
 - ``ramp``: a 10 % ramp up and down with +100 % payload: tracking error, and the mean wheel
   torque on the climb against the static m·g·sin α·r/2 per wheel; ``plain`` (the controller
   models level ground, plain encoder odometry: the PID's integrator lags by the closed form
@@ -158,6 +165,29 @@ def surfaces(quick: bool) -> dict:
     return out
 
 
+ICE_VARIANTS = {
+    "without": (None, False),
+    "with": ({"friction": "map"}, False),
+    "with_hold_integrators": ({"friction": "map", "hold_integrators": True}, False),
+    "with_slow_down": ({"friction": "map", "slow_down": True}, False),
+    "with_slow_down_slip_compensation": ({"friction": "map", "slow_down": True}, True),
+    "estimated": ({"friction": "estimate"}, False),
+    "estimated_slow_down": ({"friction": "estimate", "slow_down": True}, False),
+}
+"""Traction control's variants on ice: (traction_control, odometry.slip_compensation)."""
+
+
+def _slowed_error(prepared, log) -> float:
+    """Largest distance [m] of the true position from the slowed reference: its clock run
+    again over the log's times on the profile last planned (the run's own with the map's
+    friction; with an estimate, the plan after its last change)."""
+    again = copy.copy(prepared.engine.controller.timing)  # advancing changes clock, last_t
+    again.last_t = None
+    n = int(log.length[0])
+    rows = np.array([again.advance(t) for t in log.t[:n]])
+    return float(np.max(np.hypot(*(log.true_pose[0, :n, :2] - rows[:, :2]).T)))
+
+
 def ice_traction() -> dict:
     demo = {**_scenario("demo"), "terrain": {"surface": "ice"}}
     slow = {
@@ -171,12 +201,11 @@ def ice_traction() -> dict:
     for route, base in (("demo", demo), ("demo_at_ice_limits", slow),
                         ("straight_1_m_s2", straight)):  # fmt: skip
         out[route] = {}
-        for label, traction in (("without", None), ("with", {"friction": "map"}),
-                                ("estimated", {"friction": "estimate"}),
-                                ("estimated_slow_down", {"friction": "estimate",
-                                                         "slow_down": True})):  # fmt: skip
+        for label, (traction, compensate) in ICE_VARIANTS.items():
             data = copy.deepcopy(base)
             data["controller"]["traction_control"] = traction
+            if compensate:
+                data["odometry"]["slip_compensation"] = True
             prepared, log, metrics = _run(data)
             row = {
                 "status": metrics["status"],
@@ -184,7 +213,13 @@ def ice_traction() -> dict:
                 "final_position_error_true_m": metrics.get("final_position_error_true_m"),
                 "odometry_drift_per_m": metrics["odometry_drift_per_m"],
                 "duration_s": metrics["duration_s"],
+                "trajectory_duration_s": metrics["trajectory_duration_s"],
+                "tracking_max_position_error_m": metrics["tracking_max_position_error_m"],
+                "path_deviation_max_m": metrics["path_deviation_max_m"],
             }
+            timing = getattr(prepared.engine.controller, "timing", None)
+            if timing is not None:  # against the slowed reference the robot was given
+                row["slowed_tracking_max_position_error_m"] = _slowed_error(prepared, log)
             estimator = getattr(prepared.engine.controller, "estimator", None)
             if estimator is not None:  # the first spin is how it learns the ice
                 spins = estimator.spins
@@ -469,6 +504,9 @@ def main(argv: list[str] | None = None) -> dict:
         "estimates_within_5pct": payload["converged"],
         "ice_traction_slip_le_bound": max(held) <= ice["slip_bound"],
         "ice_traction_arrives_straight": ice["straight_1_m_s2"]["with"]["status"] == "arrived",
+        "ice_demo_slowed_arrives_slip_le_bound": ice["demo"]["with_slow_down"]["status"]
+        == "arrived"
+        and ice["demo"]["with_slow_down"]["max_slip"] <= ice["slip_bound"],
         "energy_balance_le_1e-6": report["energy_balance_max_relative"] <= 1e-6,
         "stuck_on_dry_sand_not_on_sandy_loam": soft["dry_sand"]["status"] == "stuck"
         and soft["sandy_loam"]["status"] != "stuck",

@@ -263,7 +263,7 @@ BASES: list[dict[str, Any]] = [
         "controller": {
             "law": "adaptive_computed_torque",
             "model_payload": False,
-            "traction_control": {"friction": "map"},
+            "traction_control": {"friction": "map", "slow_down": True},
         },
         "terrain": {
             "surface": "dry_concrete",

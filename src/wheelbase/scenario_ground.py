@@ -398,7 +398,7 @@ def wrap_controller(
                 wheel_inertia=contacts.wheel_inertia,
                 terrain=terrain if spec.friction == "map" else None,
                 initial_friction=spec.initial_friction, slow_down=spec.slow_down,
-                hold_integrators=spec.hold_integrators,
+                hold_integrators=spec.hold_integrators, reference_share=spec.reference_share,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None

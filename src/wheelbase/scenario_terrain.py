@@ -251,8 +251,14 @@ class TractionSpec(_Strict):
         "before any wheel has spun."
     )  # fmt: skip
     slow_down: bool = Field(
-        False, description="Drive the reference slower where the friction is low: its speed "
-        "scaled so that turns and accelerations stay within margin times the friction."
+        False, description="Drive the reference slower where the friction is low: the same "
+        "path on a clock slowed along the whole reference, so that the wheel forces of its "
+        "turns and accelerations stay within reference_share x margin of each wheel's friction "
+        "circle (braking in time for a turn or a cusp ahead)."
+    )  # fmt: skip
+    reference_share: float = Field(
+        0.8, gt=0, le=1, description="With slow_down: share of margin x the friction circle "
+        "the slowed reference's own wheel forces may use; the rest is left to the feedback."
     )  # fmt: skip
 
     hold_integrators: bool = Field(

@@ -32,17 +32,22 @@ Up to the peak slip the friction curve rises with the slip, so a wheel whose for
 margin·μ_p·N settles below its peak slip and never spins.
 
 **Slowing down** (``slow_down=True``): the lateral grip a turn needs, m·|u·r|/2 per drive
-wheel, cannot be limited by torque alone: the reference goes round the turn at its speed. With
-``slow_down`` the wrapper runs the reference on a clock of its own that advances at the rate
-κ = min(1, √(margin·μ̂·s·g / |u_ref·r_ref|), √(margin·μ̂·s·g / |u̇_ref|)) (μ̂ the lower estimate
-of the two wheels), and scales the reference's speeds by κ and its accelerations by κ²: the same
-path, driven at the speed the friction allows (a wrapped law that samples a timed reference,
-:class:`~wheelbase.control.torque.ComputedTorquePID` and the adaptive law).
+wheel, and the force of the reference's own accelerations cannot be limited by torque alone: the
+reference goes round the turn at its speed, and a clipped torque only lets the tracking error
+grow (on ice the demo skidded wide of its turns and could not brake for its cusp). With
+``slow_down`` the wrapper runs the reference on a clock of its own, slowed along the whole
+reference to the friction (:class:`~wheelbase.control.friction_timing.FrictionTiming`): the same
+path, timed so that every wheel's force of the reference — longitudinal, from its accelerations,
+and lateral, from its turns — stays within ``reference_share``·``margin`` of the friction circle
+μ̂·N̂, braking in time for a turn or a cusp ahead; the rest of the circle is the feedback's. μ̂ is
+the map's under each wheel along the reference (``"map"``), or the present estimate or given
+coefficient, planned again when the estimate changes. The wrapped law must sample a timed
+reference (:class:`~wheelbase.control.torque.ComputedTorquePID` and the adaptive law, through the
+scenario's tracking wrapper).
 """
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
 import numpy as np
@@ -53,10 +58,10 @@ from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
-__all__ = ["SLOW_DOWN_RATE", "TractionControl"]
+__all__ = ["REPLAN_CHANGE", "TractionControl"]
 
-SLOW_DOWN_RATE = 0.5
-"""Fastest change of the reference clock's rate κ with ``slow_down`` [1/s]."""
+REPLAN_CHANGE = 0.02
+"""Relative change of the friction estimate [-] after which ``slow_down`` plans its clock again."""
 
 
 class TractionControl(WrappedLaw):
@@ -85,6 +90,9 @@ class TractionControl(WrappedLaw):
         Share of the transmitted force a spinning wheel's torque is cut to, in (0, 1].
     slow_down : bool
         Drive the reference slower where the friction is low (module docstring).
+    reference_share : float
+        With ``slow_down``: share of ``margin`` times the friction circle that the slowed
+        reference's own wheel forces may use, in (0, 1]; the rest is left to the feedback.
     hold_integrators : bool
         Give the wrapped law (the innermost one with a ``max_torque``) the smallest friction
         limit as its torque saturation during the call, so that its anti-windup stops its
@@ -107,6 +115,7 @@ class TractionControl(WrappedLaw):
         regrip: float = 0.5,
         slow_down: bool = False,
         hold_integrators: bool = False,
+        reference_share: float = 0.8,
     ) -> None:
         if not callable(law) or tuple(getattr(law, "command_names", ())) != self.command_names:
             raise ConfigError("traction control wraps a controller that gives wheel torques")
@@ -120,6 +129,7 @@ class TractionControl(WrappedLaw):
             if not isinstance(terrain, TerrainMap):
                 raise ConfigError("friction 'map' needs the terrain map (a TerrainMap)")
             self._peaks = np.array([surface.peak_friction for surface in terrain.surfaces])
+            self._rolling = np.array([surface.rolling_resistance for surface in terrain.surfaces])
         elif friction == "estimate":
             terrain = None  # the estimate never reads the floor
         else:
@@ -139,6 +149,7 @@ class TractionControl(WrappedLaw):
         if not isinstance(hold_integrators, bool):
             raise ConfigError(f"hold_integrators must be true or false (got {hold_integrators!r})")
         self.hold_integrators = hold_integrators
+        self.reference_share = _share("reference_share", reference_share)
         self.estimator = None
         if friction == "estimate":
             from wheelbase.control.friction_estimate import FrictionEstimator
@@ -148,13 +159,13 @@ class TractionControl(WrappedLaw):
                 initial=initial_friction,
             )  # fmt: skip
         self._last: np.ndarray | None = None
-        self._clock: tuple[float, float, float] | None = None  # (t, reference time, rate)
+        self._timing: tuple[object, object] | None = None  # (reference, FrictionTiming)
 
     # ------------------------------------------------------------------ passed through
     def reset(self) -> None:
         """Reset the wrapped law and the friction estimate."""
         self._last = None
-        self._clock = None
+        self._timing = None
         if self.estimator is not None:
             self.estimator.reset()
         super().reset()
@@ -242,38 +253,58 @@ class TractionControl(WrappedLaw):
         return law if hasattr(law, "max_torque") else None
 
     # ------------------------------------------------------------------ slowing down
+    @property
+    def timing(self) -> object | None:
+        """The :class:`~wheelbase.control.friction_timing.FrictionTiming` of the present
+        reference with ``slow_down`` (None before the first call)."""
+        return None if self._timing is None else self._timing[1]
+
     def _slowed(self, t: float, flat: np.ndarray, reference: object) -> object:
         """The reference's row on the wrapper's own clock (module docstring)."""
+        from wheelbase.control.friction_timing import FrictionTiming
         from wheelbase.control.torque import TimedRows
         from wheelbase.models.path import PoseTrajectory
 
         if not isinstance(reference, TimedRows | PoseTrajectory):
             return reference  # a path, not a timed reference: nothing to slow
-        sample = getattr(self.law, "row", None)  # the law's own rows (its bounded feed-forward)
-
-        def row_at(time: float) -> np.ndarray:
-            if sample is not None:
-                return np.asarray(sample(time, reference), dtype=np.float64)
+        if self._timing is None or self._timing[0] is not reference:
             if isinstance(reference, TimedRows):
-                return reference.at(time)
-            return reference.at([time]).reference()[0]
+                times, rows = reference.times, reference.rows
+            else:
+                times = np.asarray(reference.t, dtype=np.float64)
+                sampler = self._row_sampler()
+                rows = (
+                    reference.reference()
+                    if sampler is None
+                    else np.array([sampler(time, reference) for time in times])
+                )
+            timing = FrictionTiming(
+                self.model, times, rows, share=self.margin * self.reference_share,
+                drive_load_share=self.drive_load_share,
+            )  # fmt: skip
+            if self.friction == "map":  # the floor under each wheel along the reference
+                where = self.terrain.under_wheels(timing.rows[:, :6], self.model.half_track)
+                # c_rr·N of the wheel (its moment) and of the casters' share: c_rr·m·g/2 a wheel
+                rolling = self._rolling[where] * self.model.body.mass * GRAVITY / 2.0
+                timing.plan(self._peaks[where], resistance=rolling)
+            else:
+                timing.plan(np.min(self.friction_at(flat), axis=0))
+            self._timing = (reference, timing)
+        timing = self._timing[1]
+        if self.friction != "map":  # a new estimate: plan again from here
+            now = np.min(self.friction_at(flat), axis=0)
+            planned = timing.friction[0]
+            if np.any(np.abs(now - planned) > REPLAN_CHANGE * planned):
+                timing.advance(t)
+                timing.plan(now)
+        return timing.advance(t)
 
-        if self._clock is None or t < self._clock[0]:
-            self._clock = (t, t, 1.0)
-        before, clock, rate = self._clock
-        clock += rate * (t - before)
-        row = row_at(clock)
-        grip = self.margin * float(np.min(self.friction_at(flat))) * self.drive_load_share * GRAVITY
-        need = max(abs(row[3] * row[5]), abs(row[6]), 1e-9)
-        wanted = min(1.0, math.sqrt(grip / need))
-        step = SLOW_DOWN_RATE * max(t - before, 0.0)
-        new_rate = min(max(wanted, rate - step), rate + step)
-        self._clock = (t, clock, new_rate)
-        rate_dot = (new_rate - rate) / (t - before) if t > before else 0.0
-        out = row.copy()
-        out[3:6] = new_rate * row[3:6]
-        out[6:9] = new_rate**2 * row[6:9] + rate_dot * row[3:6]
-        return out
+    def _row_sampler(self) -> object | None:
+        """The wrapped law's own row sampler (its bounded feed-forward), None without one."""
+        law = self.law
+        while not hasattr(law, "row") and hasattr(law, "law"):
+            law = law.law
+        return getattr(law, "row", None)
 
 
 def _share(name: str, value: float) -> float:
