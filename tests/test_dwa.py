@@ -152,25 +152,6 @@ def test_no_collision_free_command_stops():
     assert controller.last_plan.collided.all()
 
 
-def test_when_every_arc_collides_with_walkers_it_evades_rather_than_wait_to_be_struck():
-    # a walker closes fast from behind, another stands ahead: every arc of the window meets
-    # one of them, but a stop is struck soonest (the one from behind)
-    view = local_view(np.array([[-0.9, 0.0], [1.3, 0.0]]), np.array([[1.2, 0.0], [0.0, 0.0]]),
-                      np.array([0.3, 0.3]), 0.0)  # fmt: skip
-    controller = dwa()
-    controller._velocity = np.array([0.3, 0.0])
-    command = controller(0.0, (0.0, 0.0, 0.0), LINE, perception=view)
-    plan = controller.last_plan
-    assert plan.collided.all()
-    assert controller.status == "evading" and command[0] > 0.0
-    steps = controller.steps
-    poses = arc_poses(0.0, np.array([command, [0.0, 0.0]]), controller.sim_dt, steps)
-    walker = -0.9 + 1.2 * controller.sim_dt * np.arange(1, steps + 1)
-    behind = np.hypot(poses[..., 0] - walker, poses[..., 1])
-    # the arc driven keeps further from the walker behind than standing still does
-    assert behind[0].min() > behind[1].min()
-
-
 def test_rotate_to_goal_turns_in_place_then_arrives():
     path = PlannedPath.from_points([[0.0, 0.0], [1.0, 0.0]])
     controller = DWA(Unicycle(), goal_tolerance=(0.05, 0.1))

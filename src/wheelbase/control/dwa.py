@@ -55,11 +55,8 @@ barred until the robot has moved ``oscillation_reset_distance`` or turned
 robot first slows down (|v| below the current |v|), then, once it can stop within a period,
 turns in place (v = 0) to the goal heading. When no legal trajectory is free of collision the
 legality rules are dropped; when none is free of collision at all the command is a stop
-(0, 0) and :attr:`DWAPlan.status` is ``"all_collide"``: it never drives on blindly. With a
-``perception=`` view a stop may be struck sooner than some arc would be (a walker that does
-not avoid the robot): that arc is then driven, with the status ``"evading"``, by MPPI's rule
-(:func:`~wheelbase.control.obstacle_critics.evasion_choice`). Within both goal tolerances the
-command is a stop and the status ``"arrived"``.
+(0, 0) and :attr:`DWAPlan.status` is ``"all_collide"``: it never drives on blindly. Within both
+goal tolerances the command is a stop and the status ``"arrived"``.
 
 Backends: ``numba`` (the default, one parallel compiled loop over the samples) and ``numpy``
 (the reference it is held to).
@@ -101,7 +98,6 @@ from wheelbase.control.obstacle_critics import (
     ACCELERATION_NOISE,
     HOLD_TIME,
     PerceptionInputs,
-    evasion_choice,
     path_blocked,
 )
 from wheelbase.errors import ConfigError, InputError
@@ -111,7 +107,7 @@ from wheelbase.limits import MAX_SAMPLE_STEPS
 __all__ = ["DWA", "DWA_BACKENDS", "DWACritics", "DWAPlan"]
 
 DWA_BACKENDS: tuple[str, ...] = ("numba", "numpy")
-STATUSES: tuple[str, ...] = ("ok", "all_collide", "evading", "arrived")
+STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
 
 
 @dataclass(frozen=True)
@@ -216,7 +212,7 @@ class DWAPlan:
     legal : numpy.ndarray of bool, shape (S,)
         Trajectories the choice was made among.
     status : str
-        ``"ok"``, ``"all_collide"``, ``"evading"`` or ``"arrived"``.
+        ``"ok"``, ``"all_collide"`` or ``"arrived"``.
     pose : numpy.ndarray, shape (3,)
         The measured pose the trajectories start from.
     """
@@ -512,9 +508,23 @@ class DWA:
         goal, field, fgeo = self._local_goal(window, info, near_goal, seen)
         c = self.critics
         forward, direction = c.forward_point_distance, float(info[4])
-        context = (window, goal, field, fgeo, forward, info, direction, local_map, relief, seen)
-        scores, first = self._score(pose, samples, context)
-        collided = first < self.steps
+        if self.backend == "numba":
+            scores = np.empty((samples.shape[0], len(SCORES)))
+            collided = np.empty(samples.shape[0], np.bool_)
+            run_kernel(
+                dwa_kernel, samples.shape[0] * self.steps,
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3].copy(), direction, self._field.distance_field, local_map,
+                self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
+                seen.polygon, seen.table, seen.relief, seen.disks, c.dynamic_inflation, scores,
+                collided,
+            )  # fmt: skip
+        else:
+            scores, collided = dwa_scores_numpy(
+                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
+                info[1:3], direction, self._field, local_map, relief, c.inflation, seen,
+                c.dynamic_inflation,
+            )  # fmt: skip
         weights = c.vector()
         if info[5] <= forward:
             weights[2] = weights[3] = 0.0  # align critics off at the section's end
@@ -541,19 +551,8 @@ class DWA:
             legal &= ~self._oscillating(samples)
         free = ~collided
         if not free.any():
-            evade = None
-            if perception is not None:
-                evade = self._evasion(pose, first, costs, samples, context)
-            if evade is None:
-                plan = self._stop(pose, "all_collide")
-                plan = DWAPlan(plan.command, samples, costs, scores, collided, legal,
-                               plan.status, pose.copy())  # fmt: skip
-                self.last_plan = plan
-                return plan
-            command = samples[evade].copy()
-            self._debrief(pose, command)
-            self.status = "evading"
-            plan = DWAPlan(command, samples, costs, scores, collided, legal, "evading",
+            plan = self._stop(pose, "all_collide")
+            plan = DWAPlan(plan.command, samples, costs, scores, collided, legal, plan.status,
                            pose.copy())  # fmt: skip
             self.last_plan = plan
             return plan
@@ -566,42 +565,6 @@ class DWA:
         plan = DWAPlan(command, samples, costs, scores, collided, legal, "ok", pose.copy())
         self.last_plan = plan
         return plan
-
-    def _score(
-        self, pose: np.ndarray, samples: np.ndarray, context: tuple
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Scores ``(S, 8)`` and first colliding steps ``(S,)`` of the arcs of ``samples``;
-        ``context``: the call's window, local goal and its field, forward point, path info,
-        direction, map, relief and perception arrays."""
-        window, goal, field, fgeo, forward, info, direction, local_map, relief, seen = context
-        c = self.critics
-        if self.backend == "numba":
-            scores = np.empty((samples.shape[0], len(SCORES)))
-            first = np.empty(samples.shape[0], np.int64)
-            run_kernel(
-                dwa_kernel, samples.shape[0] * self.steps,
-                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
-                info[1:3].copy(), direction, self._field.distance_field, local_map,
-                self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
-                seen.polygon, seen.table, seen.relief, seen.disks, c.dynamic_inflation, scores,
-                first,
-            )  # fmt: skip
-        else:
-            scores, first = dwa_scores_numpy(
-                pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
-                info[1:3], direction, self._field, local_map, relief, c.inflation, seen,
-                c.dynamic_inflation,
-            )  # fmt: skip
-        return scores, first
-
-    def _evasion(
-        self, pose: np.ndarray, first: np.ndarray, costs: np.ndarray, samples: np.ndarray,
-        context: tuple,
-    ) -> int | None:  # fmt: skip
-        """When every arc collides: the arc to drive, or None for a stop
-        (:func:`~wheelbase.control.obstacle_critics.evasion_choice`, as MPPI's evasion)."""
-        standing = int(self._score(pose, np.zeros((1, 2)), context)[1][0])
-        return evasion_choice(first, standing, costs, self.sim_dt)
 
     def _local_goal(self, window: np.ndarray, info: np.ndarray, near_goal: bool, seen: Any):
         """The local goal (x, y, heading) relative to the robot and its distance field: the

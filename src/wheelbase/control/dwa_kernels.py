@@ -156,7 +156,7 @@ def _nearest_distance(x, y, window):
 def dwa_kernel(
     theta, samples, dt, steps, window, goal, field, fgeo, forward, end, direction, df, mp, circles,
     map_relief, inflation, cost_map, near, cgeo, polygon, tracks, relief, disks,
-    dynamic_inflation, scores, first_contact,
+    dynamic_inflation, scores, collided,
 ):  # fmt: skip
     """Score every sample (see the module docstring); positions relative to the robot.
 
@@ -166,8 +166,7 @@ def dwa_kernel(
     ``direction`` ±1 the travel direction of the path section; ``df, mp, circles, map_relief``
     the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
     ``disks`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
-    Writes ``scores`` (S, 8) and ``first_contact`` (S,): the first step whose pose collides,
-    ``steps`` where none does."""
+    Writes ``scores`` (S, 8) and ``collided`` (S,)."""
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
     inv_res = 1.0 / res
@@ -179,7 +178,6 @@ def dwa_kernel(
         x, y, th = 0.0, 0.0, theta
         soft_cost, soft_map, soft_dyn = 0.0, 0.0, 0.0
         hit = False
-        first = steps
         for j in range(steps):
             tau = (j + 1) * dt
             half = 0.5 * w * tau
@@ -204,14 +202,13 @@ def dwa_kernel(
                 )
                 soft_dyn += soft
                 hit = hit or bad
-            if hit and first == steps:
-                first = j
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(
                     x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
                 )
                 soft_dyn += hold_weight * soft
+                hit = hit or bad
         # the forward point, never past the section's end (it would pull the end short of it)
         ahead = min(forward, math.hypot(x - end[0], y - end[1]))
         fx = x + direction * ahead * math.cos(th)
@@ -228,7 +225,7 @@ def dwa_kernel(
         scores[i, 6] = soft_dyn / steps
         turn = wrap_angle_scalar(th - goal[2])
         scores[i, 7] = abs(turn)
-        first_contact[i] = first
+        collided[i] = hit
 
 
 def arc_poses(theta: float, samples: np.ndarray, dt: float, steps: int) -> np.ndarray:
@@ -321,27 +318,26 @@ def dwa_scores_numpy(
     Returns
     -------
     scores : numpy.ndarray, shape (S, 8)
-    first_contact : numpy.ndarray of int, shape (S,)
-        The first step whose pose collides, ``steps`` where none does.
+    collided : numpy.ndarray of bool, shape (S,)
     """
     poses = arc_poses(theta, samples, dt, steps)
     n = samples.shape[0]
     scores = np.zeros((n, len(SCORES)))
-    collided = np.zeros((n, steps), bool)
+    collided = np.zeros(n, bool)
     if field.enabled:
         clearance, hit = field.clearance(poses, map_relief, mp)
-        collided |= hit
+        collided |= hit.any(axis=1)
         gap = np.where(clearance > 0.0, np.maximum(inflation - clearance, 0.0), 0.0)
         scores[:, 5] = np.mean(gap * gap, axis=1)
     if seen.has_costmap:
         soft, hit = costmap_costs(poses, seen.cost, seen.near, seen.geometry, seen.polygon)
         scores[:, 4] = np.mean(soft, axis=1)
-        collided |= hit
+        collided |= hit.any(axis=1)
     if seen.has_tracks:
         soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation,
                                 HOLD_STEP / dt)  # fmt: skip
         scores[:, 6] = np.sum(soft, axis=1) / steps  # the held checks added, as the kernel
-        collided |= hit[:, :steps]  # the held checks are never lethal
+        collided |= hit.any(axis=1)
     end = poses[:, -1]
     step = np.minimum(forward, np.hypot(end[:, 0] - section_end[0], end[:, 1] - section_end[1]))
     heading = np.stack([np.cos(end[:, 2]), np.sin(end[:, 2])], -1)
@@ -358,8 +354,7 @@ def dwa_scores_numpy(
     fallback = np.where(scores[:, 1] >= 0.0, scores[:, 1] + step, -1.0)
     scores[:, 3] = np.where(to_goal >= 0.0, to_goal, fallback)
     scores[:, 7] = np.abs(wrap_angle(end[:, 2] - goal[2]))
-    first = np.where(collided.any(axis=1), np.argmax(collided, axis=1), steps)
-    return scores, first
+    return scores, collided
 
 
 def _goal_distances(points: np.ndarray, goal: np.ndarray, field: np.ndarray, fgeo: np.ndarray):

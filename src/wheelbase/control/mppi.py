@@ -20,8 +20,7 @@ warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"`` — unles
 ``perception=`` view, standing still collides too, sooner than some sample does: a walker that
 does not avoid the robot strikes a stopped one (measured: every contact of the crowd benchmark
 was a walker striking the robot stopped by ``all_collide``). The command is then the first of
-the sample that stays clear longest (at least
-:data:`~wheelbase.control.obstacle_critics.EVADE_TIME`; the cheapest of those),
+the sample that stays clear longest (at least :data:`EVADE_TIME`; the cheapest of those),
 its sequence the warm start, and the status ``"evading"``. A static obstacle never strikes a
 stopped robot, so among static obstacles the rule is the stop it always was.
 
@@ -105,7 +104,6 @@ from wheelbase.control.mppi_numpy import contact_steps, numpy_costs, rollout
 from wheelbase.control.obstacle_critics import (
     PerceptionArrays,
     PerceptionInputs,
-    evasion_choice,
     path_blocked,
 )
 from wheelbase.errors import ConfigError, InputError
@@ -116,6 +114,10 @@ __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
 STATUSES: tuple[str, ...] = ("ok", "all_collide", "evading", "guarded", "arrived")
+
+EVADE_TIME = 0.1
+"""Least time [s] a sample must stay clear, when every sample collides, to be driven instead of
+a stop (and it must stay clear longer than standing still would)."""
 
 
 @dataclass(frozen=True)
@@ -599,12 +601,16 @@ class MPPI:
         local_map: np.ndarray,
         seen: PerceptionArrays,
     ) -> int | None:
-        """When every sample collides: the sample to drive, or None for a stop
-        (:func:`~wheelbase.control.obstacle_critics.evasion_choice`). ``first``: each sample's
-        first colliding step, from the costs."""
+        """When every sample collides: the sample that stays clear longest (the cheapest of
+        those), if it stays clear for EVADE_TIME and longer than standing still would; else None
+        (a stop). ``first``: each sample's first colliding step, from the costs."""
         stop = np.zeros((1, self.horizon_steps, self.nu))
         standing = int(contact_steps(self, local, stop, info, local_map, seen)[0])
-        return evasion_choice(first, standing, costs, self.dt)
+        latest = int(first.max())
+        if latest <= standing or latest * self.dt < EVADE_TIME - 1e-9:
+            return None
+        candidates = np.flatnonzero(first == latest)
+        return int(candidates[np.argmin(costs[candidates])])
 
     def _costs_numba(
         self,

@@ -99,7 +99,6 @@ from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
     "ACCELERATION_NOISE",
-    "EVADE_TIME",
     "HOLD_STEP",
     "HOLD_TIME",
     "INSCRIBED",
@@ -114,7 +113,6 @@ __all__ = [
     "costmap_cost_at",
     "costmap_costs",
     "disk_reach",
-    "evasion_choice",
     "path_blocked",
     "predict_tracks",
     "read_costmap",
@@ -143,40 +141,6 @@ MAX_TRACK_SPEED = 1000.0
 
 CONTACT_RELIEF = 0.01
 """How much deeper [m] a rollout must get into what it already touches to count as colliding."""
-
-EVADE_TIME = 0.1
-"""Least time [s] a command must stay clear of every track, when every sampled command
-collides, to be driven instead of a stop (MPPI's and DWA's evasion)."""
-
-
-def evasion_choice(first: np.ndarray, standing: int, costs: np.ndarray, dt: float) -> int | None:
-    """The command to drive when every sampled command collides, or None for a stop.
-
-    A walker that does not avoid the robot strikes a stopped one, so a stop is not always the
-    safe choice: the sample that stays clear longest (the cheapest of those) is driven if it
-    stays clear for :data:`EVADE_TIME` and longer than standing still does.
-
-    Parameters
-    ----------
-    first : numpy.ndarray of int, shape (K,)
-        Each sample's first colliding step.
-    standing : int
-        Standing still's first colliding step (the horizon's length where it never collides).
-    costs : numpy.ndarray, shape (K,)
-        The samples' costs.
-    dt : float
-        Step [s].
-
-    Returns
-    -------
-    int or None
-        The index of the sample to drive.
-    """
-    latest = int(first.max())
-    if latest <= standing or latest * dt < EVADE_TIME - 1e-9:
-        return None
-    candidates = np.flatnonzero(first == latest)
-    return int(candidates[np.argmin(costs[candidates])])
 
 
 # --------------------------------------------------------------------------- reading the view
