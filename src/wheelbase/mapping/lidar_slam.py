@@ -131,7 +131,11 @@ class LidarSlam:
         last keyframe sampled sparsely, the next scan matched best on the same samples: Intel
         scans 108–110 and 822–826, ACES 46 and 252 matched 0–0.6 m short of 1 m steps.
     mapper : OccupancyMapper
-        The map's parameters.
+        The map's parameters (the counting model by default: with log odds and hits first, the
+        free cell before a wall's face, where range noise puts half the returns short of the
+        face, came out occupied, and the simulated maze's map from its true poses agreed with
+        the truth on 97.1 % of the cells both know, from the SLAM poses 97.0 %; counted, 100 %
+        and 99.1 %).
     """
 
     matcher: ScanMatcher = field(default_factory=lambda: ScanMatcher(
@@ -163,7 +167,7 @@ class LidarSlam:
     anchor_by_overlap: bool = False
     optimize_every: int = 1
     surfaces: bool = False
-    mapper: OccupancyMapper = field(default_factory=OccupancyMapper)
+    mapper: OccupancyMapper = field(default_factory=lambda: OccupancyMapper(model="counting"))
 
     def __post_init__(self) -> None:
         for name in ("max_range", "keyframe_distance", "keyframe_angle", "loop_radius",
