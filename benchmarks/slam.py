@@ -45,6 +45,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -175,7 +176,7 @@ def simulated_log(world: str, beams: int, quick: bool):
 
 def simulation_slam(world: str, log) -> dict:
     """SLAM with odometry, and without loop closures, against the truth of a simulated log."""
-    from wheelbase.mapping import LidarSlam, OccupancyMapper, map_agreement
+    from wheelbase.mapping import LidarSlam, map_agreement
     from wheelbase.mapping.evaluation import absolute_trajectory_error
     from wheelbase.planning import load_map
 
@@ -186,17 +187,15 @@ def simulation_slam(world: str, log) -> dict:
         "distance_m": float(steps.sum()),
         "odometry_rmse_m": absolute_trajectory_error(log.odometry, log.reference),
     }
+    # the map as LidarSlam renders it, at the truth's resolution
+    mapper = replace(LidarSlam().mapper, resolution=truth.resolution)
     variants = {
-        "slam": LidarSlam(use_odometry=True),
-        "no_loop_closure": LidarSlam(use_odometry=True, loop_every=10**9),
+        "slam": LidarSlam(use_odometry=True, mapper=mapper),
+        "no_loop_closure": LidarSlam(use_odometry=True, loop_every=10**9, mapper=mapper),
     }
     for label, slam in variants.items():
         result = slam.run(log)
-        grid = (
-            OccupancyMapper(resolution=truth.resolution)
-            .build(result.poses, log.ranges, log.angles, sensor_max_range=log.max_range)
-            .to_grid()
-        )
+        grid = slam.render(log, result.poses).to_grid()
         agreement, cells = map_agreement(grid, truth)
         error = result.poses[:, :2] - log.reference[:, :2]
         row[label] = {

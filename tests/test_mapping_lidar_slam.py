@@ -10,7 +10,7 @@ from wheelbase.datasets.carmen import read_carmen
 from wheelbase.datasets.scans import ScanLog
 from wheelbase.errors import DataError
 from wheelbase.mapping.evaluation import relation_pairs, relative_errors
-from wheelbase.mapping.lidar_slam import LidarSlam
+from wheelbase.mapping.lidar_slam import LidarSlam, _fuse
 
 INTEL = DATA / "carmen" / "intel-corrected.log.gz"
 needs_intel = pytest.mark.skipif(not INTEL.is_file(), reason=absent(INTEL))
@@ -164,3 +164,17 @@ def test_the_front_end_holds_its_steps_where_aces_waits_in_a_corridor():
     err = relative_pose(relative_pose(ref[:-1], ref[1:]), relative_pose(est[:-1], est[1:]))
     steps = np.hypot(err[:, 0], err[:, 1])
     assert steps.max() < 0.2 and steps.mean() < 0.045
+
+
+def test_fusing_a_match_with_the_prediction_is_the_product_of_the_gaussians():
+    cov = np.diag([0.02, 0.01, 0.001]) ** 2
+    # equal covariances: the midpoint (across the ±π seam too), half the covariance
+    pose, fused = _fuse(np.array([1.0, 2.0, 3.1]), cov, np.array([1.2, 2.0, -3.1]), cov)
+    np.testing.assert_allclose(pose[:2], [1.1, 2.0])
+    assert abs(abs(pose[2]) - math.pi) < 1e-9
+    np.testing.assert_allclose(fused, cov / 2)
+    # a match unsure along x (a corridor) takes x from the prediction, y from itself
+    along = np.diag([1.0, 1e-4, 1e-6])
+    pose, fused = _fuse(np.zeros(3), along, np.array([0.3, 0.05, 0.0]), np.diag([1e-4] * 3))
+    assert pose[0] == pytest.approx(0.3, abs=1e-3) and pose[1] == pytest.approx(0.025)
+    assert np.all(np.linalg.eigvalsh(np.linalg.inv(fused) - np.linalg.inv(along)) > 0)

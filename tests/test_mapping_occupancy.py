@@ -1,4 +1,5 @@
-"""Log-odds occupancy mapping with known poses: the update rule, the traversal, the grid."""
+"""Occupancy mapping with known poses: the update rules (log odds, counting), the traversal,
+the grid."""
 
 import math
 
@@ -94,7 +95,60 @@ def test_the_map_server_files_round_trip(tmp_path):
     assert back.origin == pytest.approx(grid.origin) and back.resolution == grid.resolution
 
 
+def test_counting_model_counts_every_beam():
+    mapper = OccupancyMapper(resolution=0.1, max_range=10.0, model="counting")
+    grid = mapper.empty_map((0.0, 2.0, 0.0, 1.0))
+    # the beam of test_one_beam_marks_its_cells_exactly, three times in one scan
+    mapper.integrate(grid, [0.25, 0.55, 0.0], [1.0, 1.0, 1.0], [0.0, 0.0, 0.0])
+    hits, misses = grid.counts[:, 5]
+    assert np.all(misses[2:12] == 3) and not hits[2:12].any()
+    assert hits[12] == 3 and misses[12] == 0 and not hits[13:].any() and not misses[13:].any()
+    # the Beta(1, 1) posterior mean: (h + 1) / (h + m + 2)
+    np.testing.assert_allclose(grid.probability[5, 2:13], [1 / 5] * 10 + [4 / 5], rtol=1e-6)
+    # a diagonal beam crosses the same |Δi| + |Δj| + 1 cells as with log odds
+    diag = mapper.empty_map((0.0, 2.0, 0.0, 2.0))
+    mapper.integrate(diag, [0.05, 0.07, 0.0], [math.hypot(1.0, 0.9)], [math.atan2(0.9, 1.0)])
+    assert (diag.stamp >= 0).sum() == 10 + 9 + 1 and diag.counts[0].sum() == 1
+
+
+def test_counting_model_leaves_a_cell_as_often_crossed_as_hit_unknown():
+    # a wall face on the boundary x = 1.0: returns 5 mm short of it and 5 mm beyond, in turn
+    for model, expected in (("log_odds", True), ("counting", False)):
+        mapper = OccupancyMapper(resolution=0.1, max_range=10.0, model=model)
+        grid = mapper.empty_map((0.0, 2.0, 0.0, 1.0))
+        for _ in range(20):
+            mapper.integrate(grid, [0.25, 0.55, 0.0], [0.745, 0.755], [0.0, 0.0])
+        built = grid.to_grid()
+        assert built.occupied[5, 10]  # the wall's cell, hit by half the beams, crossed by none
+        assert bool(built.occupied[5, 9] & ~built.unknown[5, 9]) is expected  # before the face
+        if model == "counting":
+            assert built.unknown[5, 9] and not built.occupied[5, 8] | built.unknown[5, 8]
+
+
+def test_counting_model_reproduces_a_map_seen_with_range_noise():
+    truth = load_map("warehouse")
+    lidar = Lidar(beams=360, max_range=8.0, range_std=0.01)
+    rng = np.random.default_rng(1)
+    free = np.argwhere(~truth.inflate(0.3).occupied)
+    poses = np.column_stack([truth.cell_to_world(free[rng.choice(len(free), 60)]),
+                             rng.uniform(-math.pi, math.pi, 60)])  # fmt: skip
+    scans = lidar.scan(truth, poses, rng=rng)
+    got = {}
+    for model in ("log_odds", "counting"):
+        mapper = OccupancyMapper(resolution=truth.resolution, max_range=8.0, model=model)
+        grid = mapper.build(poses, scans, lidar.beam_angles, sensor_max_range=8.0).to_grid()
+        got[model] = map_agreement(grid, truth)
+    # hits first marks the free cells before the faces that noisy returns fall short into
+    assert got["counting"][0] >= 0.999 > got["log_odds"][0]
+    assert got["counting"][1] >= 0.9 * got["log_odds"][1]
+
+
 def test_limits_and_parameters():
+    with pytest.raises(ConfigError, match="model"):
+        OccupancyMapper(model="beams")
+    with pytest.raises(ConfigError, match="counting mapper"):
+        OccupancyMapper(model="counting").integrate(OccupancyMapper().empty_map((0, 1, 0, 1)),
+                                                    [0.5, 0.5, 0.0], [0.3], [0.0])  # fmt: skip
     with pytest.raises(MapError, match="max_cells"):
         OccupancyMapper(resolution=0.01).empty_map((0, 1e4, 0, 1e4))
     with pytest.raises(ConfigError, match="p_hit"):

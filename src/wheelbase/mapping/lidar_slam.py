@@ -9,23 +9,23 @@ For each scan, in time order:
    search around the prediction over ``linear_window`` × ``angular_window``, refined by
    point-to-line ICP) against the points of the last ``submap_keyframes`` keyframes at their
    current estimates. A match whose mean likelihood is below ``min_score`` keeps the
-   prediction (counted in ``failed_matches``).
+   prediction (counted in ``failed_matches``). With odometry, the match is fused with the
+   prediction, each weighed by its covariance (``odometry_std``).
 3. **Keyframes.** A scan becomes a keyframe when the robot has moved ``keyframe_distance`` or
    turned ``keyframe_angle`` since the last one; it is a vertex of the pose graph, joined to
    the previous keyframe by an edge: the relative pose of the two matched poses, with the
-   match's covariance expressed in the new keyframe's frame (the frame of the residual) and
-   floored at ``min_std``.
+   match's covariance (with odometry: the fused one) expressed in the new keyframe's frame
+   (the frame of the residual) and floored at ``min_std``.
 4. **Loop closure.** Every ``loop_every`` keyframes, the keyframes at least
    ``loop_min_separation`` keyframes older whose estimate lies within ``loop_radius`` of the
    current one are candidates (the nearest ``loop_candidates``, one per stretch of the path).
    Each candidate's submap (its neighbours along the path) is searched by branch and bound
    over the wide window ``loop_linear_window`` × ``loop_angular_window`` around the current
    estimate, pruned below ``loop_min_score``; a found pose is refined by ICP and gated: at least
-   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance, an RMS
-   point-to-line distance at most ``loop_max_rms``, and a correction of the current estimate
-   within ``loop_max_correction`` of the path driven since the candidate. An accepted
-   closure is an edge between the candidate and the current keyframe, and the graph is
-   optimised
+   ``loop_min_inliers`` of the scan's points within the ICP's pairing distance and an RMS
+   point-to-line distance at most ``loop_max_rms`` (the window bounds the correction; the
+   robust kernel, not a gate, weighs a closure against the path). An accepted closure is an
+   edge between the candidate and the current keyframe, and the graph is optimised
    (:func:`optimize_pose_graph`, dynamic covariance scaling on the loop edges against false
    closures). The scans after the last keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
@@ -107,10 +107,6 @@ class LidarSlam:
         Keyframes on each side of a candidate in its submap.
     loop_std : tuple of float
         Standard deviations of a loop edge (x [m], y [m], θ [rad]).
-    loop_max_correction : tuple of float
-        A closure may move the current keyframe by at most a + b·(path length between the
-        candidate and it) [m, m/m]: drift grows with the distance driven, and a repetitive
-        building (a maze's corridors) offers twins farther than that.
     robust_scale : float
         Φ of dynamic covariance scaling on the loop edges.
     two_stage : bool
@@ -130,8 +126,21 @@ class LidarSlam:
         (:meth:`without_odometry`: on). Without odometry, along a corridor whose walls the
         last keyframe sampled sparsely, the next scan matched best on the same samples: Intel
         scans 108–110 and 822–826, ACES 46 and 252 matched 0–0.6 m short of 1 m steps.
+    odometry_std : tuple of float or None
+        With odometry, a match is fused with the odometry's prediction (the product of the two
+        Gaussians, the match's covariance against the prediction's): the prediction's standard
+        deviations are ``a``·d + 1 mm in x and y and ``b``·(|Δθ| + d / 1 m) + 10⁻⁴ rad in θ
+        for a step of d [m] and Δθ [rad] since the previous scan (``(a, b)``, [m/m] and
+        [rad/rad]); None keeps the match alone. The match alone slid along the simulated
+        warehouse's aisles with a 60-beam lidar (steps 9 times the odometry's error, 4 cm off
+        where the aisle's two walls were all it saw): ATE 0.090 m, fused 0.030 m (0.034 m with
+        ``a = b = 0.01``, 0.038 m with 0.05).
     mapper : OccupancyMapper
-        The map's parameters.
+        The map's parameters (the counting model by default: with log odds and hits first, the
+        free cell before a wall's face, where range noise puts half the returns short of the
+        face, came out occupied, and the simulated maze's map from its true poses agreed with
+        the truth on 97.1 % of the cells both know, from the SLAM poses 97.0 %; counted, 100 %
+        and 99.1 %).
     """
 
     matcher: ScanMatcher = field(default_factory=lambda: ScanMatcher(
@@ -157,13 +166,13 @@ class LidarSlam:
     loop_max_rms: float = 0.05
     loop_submap: int = 6
     loop_std: tuple[float, float, float] = (0.05, 0.05, math.radians(1.0))
-    loop_max_correction: tuple[float, float] = (0.5, 0.1)
     robust_scale: float = 1.0
     two_stage: bool = False
     anchor_by_overlap: bool = False
     optimize_every: int = 1
     surfaces: bool = False
-    mapper: OccupancyMapper = field(default_factory=OccupancyMapper)
+    odometry_std: tuple[float, float] | None = (0.02, 0.02)
+    mapper: OccupancyMapper = field(default_factory=lambda: OccupancyMapper(model="counting"))
 
     def __post_init__(self) -> None:
         for name in ("max_range", "keyframe_distance", "keyframe_angle", "loop_radius",
@@ -482,6 +491,16 @@ class SlamSession:
             self.info.append(self.slam._edge_information(cov, p[2]))
             self.loop_edge.append(False)
 
+    def _odometry_cov(self, k: int) -> np.ndarray:
+        """World-frame covariance of the odometry's prediction of scan ``k`` from scan k − 1
+        (``LidarSlam.odometry_std``)."""
+        step = relative_pose(self.odometry[k - 1], self.odometry[k])
+        a, b = self.slam.odometry_std
+        moved = math.hypot(step[0], step[1])
+        s_xy = a * moved + 1e-3
+        s_th = b * (abs(step[2]) + moved) + 1e-4
+        return np.diag([s_xy * s_xy, s_xy * s_xy, s_th * s_th])
+
     def _step(self, k: int) -> None:
         """Scan ``k`` through steps 1–4 of the module docstring."""
         slam, stats, odometry = self.slam, self.stats, self.odometry
@@ -526,6 +545,8 @@ class SlamSession:
                 pose, cov = guess, np.diag([0.1, 0.1, 0.05]) ** 2
             else:
                 pose, cov = result.pose, result.covariance
+                if odometry is not None and slam.odometry_std is not None:
+                    pose, cov = _fuse(pose, cov, guess, self._odometry_cov(k))
         self.velocity = relative_pose(self.previous, pose) if odometry is None else np.zeros(3)
         self.previous = pose.copy()
         last = self.kf_pose[-1]
@@ -616,6 +637,19 @@ class SlamSession:
             anchors=np.array(self.anchor, np.int64),
             offsets=offsets,
         )
+
+
+def _fuse(pose, cov, guess, guess_cov):
+    """The product of two Gaussians on SE(2) poses (the match and the prediction), linearised
+    at the match: mean and covariance."""
+    d = np.asarray(guess, np.float64) - pose
+    d[2] = math.remainder(d[2], 2 * math.pi)
+    info_a = np.linalg.inv(cov)
+    info_b = np.linalg.inv(guess_cov)
+    fused_cov = np.linalg.inv(info_a + info_b)
+    out = pose + fused_cov @ (info_b @ d)
+    out[2] = math.remainder(out[2], 2 * math.pi)
+    return out, fused_cov
 
 
 def _most_overlapped(kf_pose, kf_scan, points, keys, pose, scan, reach) -> int:

@@ -16,6 +16,21 @@ Within one scan a cell is updated at most once, hits first: the returns of a sca
 then the misses skip the cells marked (by this scan's stamp): grazing beams beside a wall's
 return would otherwise erode it (Hess et al., ICRA 2016, §IV, do the same).
 
+**The counting model** (``model="counting"``; the reflection maps of W. Burgard, D. Fox, H. Jans,
+C. Matenar and S. Thrun, "Sonar-based mapping of large-scale mobile robot environments using
+EM", ICML 1999, which GMapping's grid keeps): per cell the beams that ended in it (hits h) and
+those that crossed it (misses m), every beam counted on its own, and the probability of a
+reflection is the mean of its Beta(1, 1) posterior, p = (h + 1) / (h + m + 2); ``log_odds``
+holds its logit ln((h + 1) / (m + 1)). One hit makes a cell occupied (p 0.67) and four misses
+free (0.17), as in the log-odds model, but a cell that as many beams cross as end in stays
+between the thresholds: unknown. That is the free cell before a wall's face when the face lies
+on a cell boundary and the range noise puts half the returns short of it. Hits-first log odds
+call that cell occupied as soon as one return of a scan falls in it (with a 360-beam, 1 cm-noise
+lidar on the bundled maze, from the true poses: 502 of the 17,465 cells both maps know, 2.9 %,
+all of them free cells beside a wall's face; counting: none), so the walls come out a cell
+thicker on the side they were seen from. Grazing beams do erode a wall whose estimate is off by
+centimetres more than they do with hits first; the counts hold the rest of the wall's cells.
+
 The grid has the geometry of :class:`wheelbase.planning.OccupancyGrid` (row 0 at the lowest y,
 column 0 at the lowest x, ``origin`` the world position of cell (0, 0)'s lower-left corner):
 :meth:`LogOddsMap.to_grid` gives one, occupied where p > ``occupied_thresh`` (0.65, as
@@ -32,13 +47,16 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
-from wheelbase._validate import as_float_array, finite, integer, positive
+from wheelbase._validate import as_float_array, check_choice, finite, integer, positive
 from wheelbase.errors import ConfigError, MapError
 from wheelbase.geometry import compose
 from wheelbase.limits import MAX_MAP_CELLS
 from wheelbase.planning import OccupancyGrid
 
-__all__ = ["LogOddsMap", "OccupancyMapper", "logit"]
+__all__ = ["MAP_MODELS", "LogOddsMap", "OccupancyMapper", "logit"]
+
+MAP_MODELS: tuple[str, ...] = ("log_odds", "counting")
+"""Names of the occupancy models of :class:`OccupancyMapper` (module docstring)."""
 
 
 def logit(p: float) -> float:
@@ -65,6 +83,9 @@ class OccupancyMapper:
     occupied_thresh, free_thresh : float
         Probabilities above / below which :meth:`LogOddsMap.to_grid` calls a cell occupied
         / free (map_server's defaults).
+    model : {"log_odds", "counting"}
+        The log-odds updates with hits first (``p_hit``, ``p_miss``, ``l_min``, ``l_max``), or
+        the counting model (module docstring), which ignores those four.
     """
 
     resolution: float = 0.05
@@ -75,8 +96,10 @@ class OccupancyMapper:
     max_range: float = 30.0
     occupied_thresh: float = 0.65
     free_thresh: float = 0.196
+    model: str = "log_odds"
 
     def __post_init__(self) -> None:
+        check_choice("model", self.model, MAP_MODELS)
         positive("resolution", self.resolution, "m")
         positive("max_range", self.max_range, "m")
         for name, low, high in (
@@ -125,8 +148,9 @@ class OccupancyMapper:
                 f"{r:g} m: more than max_cells = {max_cells} (limits.MAX_MAP_CELLS); use a "
                 "coarser resolution or a smaller max_range"
             )
+        counts = np.zeros((2, rows, cols), np.float32) if self.model == "counting" else None
         return LogOddsMap(np.zeros((rows, cols), np.float32), np.full((rows, cols), -1, np.int32),
-                          r, (c0 * r, r0 * r), 0)  # fmt: skip
+                          r, (c0 * r, r0 * r), 0, counts=counts)  # fmt: skip
 
     def integrate(
         self,
@@ -162,6 +186,14 @@ class OccupancyMapper:
         if ranges.shape != angles.shape or ranges.ndim != 1:
             raise ConfigError(f"ranges {ranges.shape} and angles {angles.shape} must match")
         grid.scans += 1
+        if self.model == "counting":
+            if grid.counts is None:
+                raise ConfigError("a counting mapper needs a map made by a counting mapper")
+            return int(_count_scan(
+                grid.log_odds, grid.counts, grid.stamp, grid.scans, grid.resolution,
+                grid.origin[0], grid.origin[1], pose[0], pose[1], pose[2], ranges, angles,
+                min(self.max_range, float(sensor_max_range)),
+            ))  # fmt: skip
         return int(_integrate_scan(
             grid.log_odds, grid.stamp, grid.scans, grid.resolution, grid.origin[0],
             grid.origin[1], pose[0], pose[1], pose[2], ranges, angles,
@@ -241,6 +273,8 @@ class LogOddsMap:
         Scans added.
     skipped_beams : int
         NaN readings skipped by :meth:`OccupancyMapper.build`.
+    counts : numpy.ndarray or None, shape (2, rows, cols)
+        The counting model's float32 hits and misses per cell (None for log odds).
     """
 
     log_odds: np.ndarray
@@ -249,6 +283,7 @@ class LogOddsMap:
     origin: tuple[float, float]
     scans: int = 0
     skipped_beams: int = 0
+    counts: np.ndarray | None = None
 
     @property
     def observed(self) -> np.ndarray:
@@ -387,4 +422,62 @@ def _integrate_scan(lo, stamp, scan_id, res, x0, y0, sx, sy, st, ranges, angles,
                 else:
                     i += si
                     ty += dty
+    return skipped
+
+
+@numba.njit(cache=True)
+def _count_scan(lo, counts, stamp, scan_id, res, x0, y0, sx, sy, st, ranges, angles,
+                max_range):  # fmt: skip
+    """The counting model's update of one scan (module docstring): each beam adds a hit to
+    the cell holding its return and a miss to every cell it crosses before (Amanatides-Woo;
+    a no-return beam crosses up to ``max_range``, its end cell included); returns NaN beams."""
+    rows, cols = lo.shape
+    inv = 1.0 / res
+    px = (sx - x0) * inv
+    py = (sy - y0) * inv
+    skipped = 0
+    for b in range(ranges.shape[0]):
+        z = ranges[b]
+        if z != z:
+            skipped += 1
+            continue
+        hit = z < max_range
+        reach = z * inv + _BEHIND if hit else max_range * inv
+        a = st + angles[b]
+        ux = math.cos(a)
+        uy = math.sin(a)
+        j = math.floor(px)
+        i = math.floor(py)
+        if ux > 0.0:
+            sj, tx, dtx = 1, (j + 1 - px) / ux, 1.0 / ux
+        elif ux < 0.0:
+            sj, tx, dtx = -1, (j - px) / ux, -1.0 / ux
+        else:
+            sj, tx, dtx = 0, math.inf, math.inf
+        if uy > 0.0:
+            si, ty, dty = 1, (i + 1 - py) / uy, 1.0 / uy
+        elif uy < 0.0:
+            si, ty, dty = -1, (i - py) / uy, -1.0 / uy
+        else:
+            si, ty, dty = 0, math.inf, math.inf
+        while True:
+            end = (tx if tx < ty else ty) >= reach
+            if end and hit:
+                break
+            if 0 <= i < rows and 0 <= j < cols:
+                counts[1, i, j] += 1.0
+                lo[i, j] = math.log((counts[0, i, j] + 1.0) / (counts[1, i, j] + 1.0))
+                stamp[i, j] = scan_id
+            if end:
+                break
+            if tx < ty:
+                j += sj
+                tx += dtx
+            else:
+                i += si
+                ty += dty
+        if hit and 0 <= i < rows and 0 <= j < cols:
+            counts[0, i, j] += 1.0
+            lo[i, j] = math.log((counts[0, i, j] + 1.0) / (counts[1, i, j] + 1.0))
+            stamp[i, j] = scan_id
     return skipped
