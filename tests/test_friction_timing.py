@@ -183,3 +183,23 @@ def test_the_demo_on_ice_arrives_with_traction_control_slowing_down():
     assert _energy_residual(prepared, log) <= 1e-6
     timing = prepared.engine.controller.timing
     assert timing.clock == pytest.approx(timing.times[-1])
+
+
+def test_the_demo_on_grass_drives_its_route_with_traction_control_slowing_down():
+    # grass grips with μ_p 0.24 and resists with c_rr 0.10: when traction control counted the
+    # wheels' rolling moment against the grip the RM100 moved 9 mm and ended stuck; the moment
+    # is the torque's, so it drives the whole route, below grass's peak slip, energy balanced
+    grass = SURFACES["grass"]
+    data = load_scenario("demo").model_dump(mode="json")
+    data["terrain"] = {"surface": "grass"}
+    data["controller"]["traction_control"] = {"friction": "map", "slow_down": True}
+    prepared = prepare(copy.deepcopy(data))
+    log = prepared.engine.run(prepared.start, seeds=[prepared.scenario.seed])
+    metrics = run_metrics(prepared, log, 0)
+    assert metrics["status"] != "collision"
+    assert metrics["distance_travelled_m"] >= 0.95 * metrics["path_length_m"]
+    assert metrics["max_slip"] <= 0.5 * grass.friction.peak_slip
+    assert metrics["final_position_error_estimated_m"] <= 0.1  # grass's odometry drift: the rest
+    assert _energy_residual(prepared, log) <= 1e-6
+    timing = prepared.engine.controller.timing
+    assert timing.clock == pytest.approx(timing.times[-1])  # its slowed clock ran to the end

@@ -117,6 +117,12 @@ class TractionControl(WrappedLaw):
         ``"estimate"`` it must be 0: the estimated friction holds the rolling moment): the
         wheels' rolling moment widens the torque window and the casters' share loads the
         slowed reference's circles (module docstring). 0 by default.
+    casters : array_like, shape (C, 2)
+        Caster positions (x [m], y [m]) in the body frame, sharing (1 − s) of the weight
+        equally; with ``slow_down`` their rolling resistance along each caster's own velocity
+        (a force and, in a turn, a yaw moment) is what the drive wheels' ground forces must
+        overcome besides the inertia. Empty (the default): c_rr·(1 − s)·m̂·g/2 a wheel along the
+        travel.
     hold_integrators : bool
         Give the wrapped law (the innermost one with a ``max_torque``) the smallest friction
         limit as its torque saturation during the call, so that its anti-windup stops its
@@ -141,6 +147,7 @@ class TractionControl(WrappedLaw):
         hold_integrators: bool = False,
         reference_share: float = 0.8,
         rolling_resistance: float = 0.0,
+        casters: ArrayLike = (),
     ) -> None:
         if not callable(law) or tuple(getattr(law, "command_names", ())) != self.command_names:
             raise ConfigError("traction control wraps a controller that gives wheel torques")
@@ -185,6 +192,12 @@ class TractionControl(WrappedLaw):
                 "(its ground force is the torque's)"
             )
         self.rolling_resistance = c_rr
+        where = np.asarray(casters, dtype=np.float64)
+        if where.size == 0:
+            where = np.zeros((0, 2))
+        if where.ndim != 2 or where.shape[1] != 2 or not np.all(np.isfinite(where)):
+            raise ConfigError(f"casters must be finite (x, y) pairs in m (got shape {where.shape})")
+        self.casters = where
         self.estimator = None
         if friction == "estimate":
             from wheelbase.control.friction_estimate import FrictionEstimator
@@ -369,10 +382,10 @@ class TractionControl(WrappedLaw):
             )  # fmt: skip
             if self.friction == "map":  # the floor under each wheel along the reference
                 where = self.terrain.under_wheels(timing.rows[:, :6], self.model.half_track)
-                timing.plan(self._peaks[where], resistance=self._caster_share(self._rolling[where]))
+                timing.plan(self._peaks[where], forces=self._caster_forces(timing.rows))
             else:
                 timing.plan(np.min(self.friction_at(flat), axis=0),
-                            resistance=self._caster_share(self.rolling_resistance))  # fmt: skip
+                            forces=self._caster_forces(timing.rows))  # fmt: skip
             self._timing = (reference, timing)
         timing = self._timing[1]
         if self.friction != "map":  # a new estimate: plan again from here
@@ -383,12 +396,41 @@ class TractionControl(WrappedLaw):
                 timing.plan(now)
         return timing.advance(t)
 
-    def _caster_share(self, rolling: ArrayLike) -> np.ndarray:
-        """The ground force [N] each drive wheel gives against the casters' rolling resistance,
-        c_rr·(1 − s)·m̂·g/2: the wheel's own rolling moment is the torque's, not the grip's
-        (module docstring), so the slowed reference's circles leave it out."""
-        weight = self.model.body.mass * GRAVITY
-        return np.asarray(rolling, dtype=np.float64) * (1.0 - self.drive_load_share) * weight / 2
+    def _caster_forces(self, rows: np.ndarray) -> np.ndarray:
+        """The ground forces ``(T, 2)`` [N] the (left, right) drive wheels give against the
+        casters' rolling resistance along the reference rows ``(T, 9)``: the wheel's own
+        rolling moment is the torque's, not the grip's (module docstring), so the slowed
+        reference's circles leave it out.
+
+        Each caster of load (1 − s)·m̂·g/C resists with c_rr·N_c along its own velocity
+        (u − y·r, v + x·r), smoothed as the plant's; the drive wheels take the wrench's F_x and
+        M_z (the lateral part is left to the ground, as the model's F_y). Without casters given,
+        c_rr·(1 − s)·m̂·g/2 a wheel along the travel. c_rr is the map's under each caster (under
+        each wheel without casters), or ``rolling_resistance``.
+        """
+        weight = (1.0 - self.drive_load_share) * self.model.body.mass * GRAVITY
+        d = self.model.half_track
+        pose, twist = rows[:, :3], rows[:, 3:6]
+        if self.casters.shape[0] == 0:
+            if self.friction == "map":
+                c_rr = self._rolling[self.terrain.under_wheels(pose, d)]
+            else:
+                c_rr = np.full((rows.shape[0], 2), self.rolling_resistance)
+            return c_rr * weight / 2.0 * np.tanh(twist[:, 0:1] / ROLLING_SPEED)
+        x, y = self.casters[:, 0], self.casters[:, 1]
+        if self.friction == "map":
+            c, sn = np.cos(pose[:, 2:3]), np.sin(pose[:, 2:3])
+            world = np.stack([pose[:, 0:1] + c * x - sn * y, pose[:, 1:2] + sn * x + c * y], -1)
+            c_rr = self._rolling[self.terrain.index(world)]  # (T, C)
+        else:
+            c_rr = np.full((rows.shape[0], x.size), self.rolling_resistance)
+        vx = twist[:, 0:1] - y * twist[:, 2:3]
+        vy = twist[:, 1:2] + x * twist[:, 2:3]
+        speed = np.hypot(vx, vy)
+        scale = c_rr * weight / x.size * np.tanh(speed / ROLLING_SPEED) / np.maximum(speed, 1e-15)
+        fx, fy = -scale * vx, -scale * vy  # on the body, against each caster's velocity
+        wrench = np.column_stack([fx.sum(1), fy.sum(1), (x * fy - y * fx).sum(1)])
+        return -self.model.wheel_torques(wrench) / self.model.wheel_radius
 
     def _row_sampler(self) -> object | None:
         """The wrapped law's own row sampler (its bounded feed-forward), None without one."""
