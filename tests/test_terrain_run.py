@@ -376,18 +376,25 @@ def test_estimated_friction_raises_no_alarm_on_concrete_with_an_unknown_payload(
     assert np.array_equal(log.torques, free.log.torques)
 
 
-def test_traction_control_holding_the_integrators_stops_the_demo_on_ice_without_collision():
-    # the clipped torques wound the PID's integrators up: the robot overshot its reference,
-    # skidded in the turn and hit a wall; with the law's saturation at the friction limit its
-    # anti-windup holds, the wheels stay below ice's peak slip and the run ends without a
-    # collision (it creeps to within 0.25 m of the goal and ends stuck, not arrived)
+def test_traction_control_holding_the_integrators_overshoots_less_on_ice():
+    # the clipped torques wind the PID's integrators up: the robot overshoots its reference's
+    # 0.6 m/s (when the clip also counted the rolling moment against the grip it reached
+    # 1.4 m/s, skidded in a turn and hit a wall); with the law's saturation at the window's
+    # edge its anti-windup holds and the peak speed is lower. Neither collides, the wheels stay
+    # below ice's peak slip; both creep to a stop short of the goal (a lateral error that a
+    # differential drive cannot close at rest), within half a metre
     data = load_scenario("demo").model_dump(mode="json")
     data["terrain"] = {"surface": "ice"}
     data["controller"]["traction_control"] = {"friction": "map"}
-    before = run(copy.deepcopy(data)).metrics
+    before = run(copy.deepcopy(data))
     data["controller"]["traction_control"]["hold_integrators"] = True
-    after = run(data).metrics
-    assert before["status"] == "collision"
-    assert after["status"] != "collision"
-    assert after["max_slip"] < 0.1
-    assert after["final_position_error_true_m"] < 0.3
+    after = run(data)
+
+    def peak_speed(result):
+        return np.abs(result.log.twist[0, : int(result.log.length[0]), 0]).max()
+
+    assert peak_speed(after) < peak_speed(before)
+    for result in (before, after):
+        assert result.metrics["status"] != "collision"
+        assert result.metrics["max_slip"] < 0.1
+        assert result.metrics["final_position_error_true_m"] < 0.5
