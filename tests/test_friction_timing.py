@@ -183,3 +183,55 @@ def test_the_demo_on_ice_arrives_with_traction_control_slowing_down():
     assert _energy_residual(prepared, log) <= 1e-6
     timing = prepared.engine.controller.timing
     assert timing.clock == pytest.approx(timing.times[-1])
+
+
+def test_the_demo_on_grass_drives_its_route_with_traction_control_slowing_down():
+    # grass grips with μ_p 0.24 and resists with c_rr 0.10: when traction control counted the
+    # wheels' rolling moment against the grip the RM100 moved 9 mm and ended stuck; the moment
+    # is the torque's, so it drives the whole route, below grass's peak slip, energy balanced
+    grass = SURFACES["grass"]
+    data = load_scenario("demo").model_dump(mode="json")
+    data["terrain"] = {"surface": "grass"}
+    data["controller"]["traction_control"] = {"friction": "map", "slow_down": True}
+    prepared = prepare(copy.deepcopy(data))
+    log = prepared.engine.run(prepared.start, seeds=[prepared.scenario.seed])
+    metrics = run_metrics(prepared, log, 0)
+    assert metrics["status"] != "collision"
+    assert metrics["distance_travelled_m"] >= 0.95 * metrics["path_length_m"]
+    assert metrics["max_slip"] <= 0.5 * grass.friction.peak_slip
+    assert metrics["final_position_error_estimated_m"] <= 0.1  # grass's odometry drift: the rest
+    assert _energy_residual(prepared, log) <= 1e-6
+    timing = prepared.engine.controller.timing
+    assert timing.clock == pytest.approx(timing.times[-1])  # its slowed clock ran to the end
+
+
+def test_the_casters_resist_along_their_own_velocity_a_turn_on_the_spot_by_hand():
+    # casters of load N_c = (1 − s)·m·g/C resist with c_rr·N_c along their velocity: straight
+    # ahead the two drive wheels each push c_rr·(1 − s)·m·g/2; on the spot at r > 0 each caster
+    # at distance ρ from B resists with the moment c_rr·N_c·ρ, which the wheels overcome with
+    # ∓ c_rr·N_c·Σρ/(2d) (left backward, right forward) and no net push
+    from wheelbase.control.traction import TractionControl
+    from wheelbase.dynamics import RM100
+    from wheelbase.terrain import RM100_CONTACTS
+
+    class Law:
+        command_names = ("tau_left", "tau_right")
+
+        def __call__(self, t, state, reference):
+            return np.zeros((np.shape(state)[0], 2))
+
+    casters = np.array(RM100_CONTACTS.casters)
+    control = TractionControl(
+        Law(), RM100, friction=0.2, rolling_resistance=0.1, casters=casters, slow_down=True
+    )
+    weight = 0.5 * RM100.body.mass * GRAVITY
+    rows = np.zeros((2, 9))
+    rows[0, 3] = 0.5  # straight ahead
+    rows[1, 5] = 1.0  # on the spot, counter-clockwise
+    forces = control._caster_forces(rows)
+    assert forces[0] == pytest.approx([0.1 * weight / 2] * 2)
+    rho = np.hypot(casters[:, 0], casters[:, 1]).sum()
+    turn = 0.1 * weight / len(casters) * rho / (2 * RM100.half_track)
+    assert forces[1] == pytest.approx([-turn, turn])
+    bare = TractionControl(Law(), RM100, friction=0.2, rolling_resistance=0.1)
+    assert bare._caster_forces(rows)[0] == pytest.approx(forces[0])  # without casters: the push

@@ -260,6 +260,11 @@ class TractionSpec(_Strict):
         0.8, gt=0, le=1, description="With slow_down: share of margin x the friction circle "
         "the slowed reference's own wheel forces may use; the rest is left to the feedback."
     )  # fmt: skip
+    rolling_resistance: float = Field(
+        0.0, ge=0, lt=1, description="With a friction coefficient: the ground's rolling "
+        "resistance c_rr, whose moment on each drive wheel the torques may add to the grip "
+        "(with 'map' the map's is used; with 'estimate' it must be 0)."
+    )  # fmt: skip
 
     hold_integrators: bool = Field(
         False, description="Lower the wrapped law's torque saturation to the friction limit, "

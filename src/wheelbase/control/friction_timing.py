@@ -255,7 +255,11 @@ class FrictionTiming:
         self.last_t: float | None = None
 
     def plan(
-        self, friction: ArrayLike, start: float | None = None, resistance: ArrayLike = 0.0
+        self,
+        friction: ArrayLike,
+        start: float | None = None,
+        resistance: ArrayLike = 0.0,
+        forces: ArrayLike = 0.0,
     ) -> None:
         """Build the profile from the present clock on, for the friction μ under each wheel.
 
@@ -269,13 +273,20 @@ class FrictionTiming:
             A resistance the ground adds that the model lacks, as a force each drive wheel
             must give against the travel [N], ≥ 0 (the floor's rolling resistance); at the
             reference's speed, like the model's own (γ).
+        forces : array_like, shape (T, 2) or (2,)
+            Forces each drive wheel must give the ground besides the model's, signed along the
+            wheel's travel [N], finite (the casters' rolling resistance, which also turns with
+            a turn): added to γ as they are.
         """
         mu = np.broadcast_to(np.asarray(friction, dtype=np.float64), (self.times.size, 2))
         extra = np.broadcast_to(np.asarray(resistance, dtype=np.float64), (self.times.size, 2))
         if np.any(extra < 0) or not np.all(np.isfinite(extra)):
             raise InputError("resistance must be finite and >= 0 N")
+        signed = np.broadcast_to(np.asarray(forces, dtype=np.float64), (self.times.size, 2))
+        if not np.all(np.isfinite(signed)):
+            raise InputError("forces must be finite (N)")
         terms = self.terms.copy()
-        terms[:, 4:6] += extra * np.tanh(self.rows[:, 3] / 1e-3)[:, None]
+        terms[:, 4:6] += extra * np.tanh(self.rows[:, 3] / 1e-3)[:, None] + signed
         if start is None:
             start = 1.0 if self.z is None else self._z_at(self.clock)
         k = max(int(np.searchsorted(self.times, self.clock, side="right")) - 1, 0)

@@ -2,15 +2,29 @@
 
 A wheel transmits at most μ·N to the ground, along and across together (the friction circle);
 a torque beyond what is left of it only spins the wheel up, and a spinning wheel both loses
-traction (past the peak of the friction curve) and drives the odometry off.
-:class:`TractionControl` wraps any torque controller and clips each wheel's torque to
+traction (past the peak of the friction curve) and drives the odometry off. The wheel's own
+rolling resistance is a moment M_rr = c_rr·N·a on the wheel, against its spin, not a force
+of the ground's: J_w·ω̇ = τ − a·F_x − M_rr, so the torque that makes the ground force F_x is
+τ = a·F_x + M_rr, and grip limits F_x, not τ. :class:`TractionControl` wraps any torque
+controller and clips each wheel's torque to the window
 
-    |τ_i| ≤ margin · a · √((μ̂_i·N̂_i)² − F_y²),   N̂_i = s·m̂·g/2,   F_y = m̂·|u·r|/2,
+    −margin·a·G_i − M̂_i·h(−v_i) ≤ τ_i ≤ margin·a·G_i + M̂_i·h(v_i)   (widened to hold τ_i = 0),
+    G_i = √((μ̂_i·N̂_i)² − F_y²),   N̂_i = s·m̂·g/2,   F_y = m̂·|u·r|/2,
+    M̂_i = c_rr,i·N̂_i·a,   h(v) = min(1, 1 + 2·tanh(v / 1 mm/s)),   v_i = u ∓ d·r,
 
 N̂ the static load of a drive wheel (share s of the weight m̂·g of the controller's model:
 an unknown payload only adds grip), F_y its share of the centripetal force of a turn (the
-casters take none), at least a fifth of the circle left for braking, and μ̂ the friction it
-believes in:
+casters take none), at least a fifth of the circle left for braking, M̂ the rolling moment
+(c_rr the map's under the wheel with ``friction="map"``, else ``rolling_resistance``), and μ̂
+the friction it believes in. A wheel rolling forward (v_i ≫ 1 mm/s, the plant's smoothing of
+the moment) may be driven up to (margin·μ̂ + c_rr)·N̂·a and braked down to
+−(margin·μ̂ − c_rr)·N̂·a, since the moment helps it brake; backward the same, mirrored; at rest
+either way up to (margin·μ̂ + c_rr)·N̂·a, since a wheel that starts to turn meets its moment
+whichever way it turns (without that a robot whose ground force at rest does not overcome its
+casters would never roll far enough to widen its window). The window always holds 0 (where c_rr
+exceeds margin·μ̂: traction control never adds a torque the law did not ask for). On grass
+(μ_p 0.24, c_rr 0.10) a clip of margin·μ̂·N̂·a alone left the RM100 0.092·N̂ of ground force
+per wheel against its casters' 0.10·N̂: it did not move. μ̂:
 
 - ``friction="estimate"``: its own online estimate, per wheel, from the wheel rates its
   encoders give, the torques it commanded and its model — never the terrain
@@ -58,7 +72,11 @@ from wheelbase.control.base import WrappedLaw
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
-__all__ = ["REPLAN_CHANGE", "TractionControl"]
+__all__ = ["REPLAN_CHANGE", "ROLLING_SPEED", "TractionControl"]
+
+ROLLING_SPEED = 1e-3
+"""Contact speed [m/s] over which the torque window's rolling moment turns with the wheel's
+direction, tanh(v / 1 mm/s), the plant's smoothing (:mod:`wheelbase.terrain.dynamics`)."""
 
 REPLAN_CHANGE = 0.02
 """Relative change of the friction estimate [-] after which ``slow_down`` plans its clock again."""
@@ -93,6 +111,18 @@ class TractionControl(WrappedLaw):
     reference_share : float
         With ``slow_down``: share of ``margin`` times the friction circle that the slowed
         reference's own wheel forces may use, in (0, 1]; the rest is left to the feedback.
+    rolling_resistance : float
+        The ground's rolling-resistance coefficient c_rr [-], in [0, 1), with a friction
+        coefficient (with ``"map"`` the map's c_rr under each wheel is used; with
+        ``"estimate"`` it must be 0: the estimated friction holds the rolling moment): the
+        wheels' rolling moment widens the torque window and the casters' share loads the
+        slowed reference's circles (module docstring). 0 by default.
+    casters : array_like, shape (C, 2)
+        Caster positions (x [m], y [m]) in the body frame, sharing (1 − s) of the weight
+        equally; with ``slow_down`` their rolling resistance along each caster's own velocity
+        (a force and, in a turn, a yaw moment) is what the drive wheels' ground forces must
+        overcome besides the inertia. Empty (the default): c_rr·(1 − s)·m̂·g/2 a wheel along the
+        travel.
     hold_integrators : bool
         Give the wrapped law (the innermost one with a ``max_torque``) the smallest friction
         limit as its torque saturation during the call, so that its anti-windup stops its
@@ -116,6 +146,8 @@ class TractionControl(WrappedLaw):
         slow_down: bool = False,
         hold_integrators: bool = False,
         reference_share: float = 0.8,
+        rolling_resistance: float = 0.0,
+        casters: ArrayLike = (),
     ) -> None:
         if not callable(law) or tuple(getattr(law, "command_names", ())) != self.command_names:
             raise ConfigError("traction control wraps a controller that gives wheel torques")
@@ -150,6 +182,22 @@ class TractionControl(WrappedLaw):
             raise ConfigError(f"hold_integrators must be true or false (got {hold_integrators!r})")
         self.hold_integrators = hold_integrators
         self.reference_share = _share("reference_share", reference_share)
+        c_rr = finite("rolling_resistance", rolling_resistance)
+        if not 0.0 <= c_rr < 1.0:
+            raise ConfigError(f"rolling_resistance must be in [0, 1) (got {c_rr:g})")
+        if c_rr > 0.0 and friction in ("map", "estimate"):
+            raise ConfigError(
+                "rolling_resistance goes with a friction coefficient: with 'map' the map's is "
+                "used, and the estimate learns the wheels' rolling moment with the friction "
+                "(its ground force is the torque's)"
+            )
+        self.rolling_resistance = c_rr
+        where = np.asarray(casters, dtype=np.float64)
+        if where.size == 0:
+            where = np.zeros((0, 2))
+        if where.ndim != 2 or where.shape[1] != 2 or not np.all(np.isfinite(where)):
+            raise ConfigError(f"casters must be finite (x, y) pairs in m (got shape {where.shape})")
+        self.casters = where
         self.estimator = None
         if friction == "estimate":
             from wheelbase.control.friction_estimate import FrictionEstimator
@@ -189,8 +237,57 @@ class TractionControl(WrappedLaw):
             return np.full((s.shape[0], 2), float(self.friction))
         return self._peaks[self.terrain.under_wheels(s, self.model.half_track)]
 
+    def rolling_at(self, state: ArrayLike) -> np.ndarray:
+        """c_rr ``(N, 2)`` under each wheel of the estimated states ``(N, 6)``: the map's with
+        ``friction="map"``, else ``rolling_resistance``.
+
+        Parameters
+        ----------
+        state : array_like, shape (N, 6)
+            Estimated (x, y, θ, u, v, r).
+        """
+        s = np.asarray(state, dtype=np.float64).reshape(-1, 6)
+        if self.friction != "map":
+            return np.full((s.shape[0], 2), self.rolling_resistance)
+        return self._rolling[self.terrain.under_wheels(s, self.model.half_track)]
+
+    def rolling_moments(self, state: ArrayLike) -> np.ndarray:
+        """M̂ ``(N, 2)`` [N·m]: the rolling moment c_rr·N̂·a on each drive wheel, against its
+        spin (module docstring).
+
+        Parameters
+        ----------
+        state : array_like, shape (N, 6)
+            Estimated (x, y, θ, u, v, r).
+        """
+        s = np.asarray(state, dtype=np.float64).reshape(-1, 6)
+        load = self.drive_load_share * self.model.body.mass * GRAVITY / 2.0
+        return self.rolling_at(s) * load * self.model.wheel_radius
+
+    def bounds(self, state: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """The torque window (low, high), each ``(N, 2)`` [N·m], at the estimated states:
+        :meth:`limits` widened by the rolling moment on the side it opposes (both at rest),
+        and to hold 0 (module docstring).
+
+        Parameters
+        ----------
+        state : array_like, shape (N, 6)
+            Estimated states (position: the floor; u and r: the turn's lateral force and the
+            wheels' rolling direction).
+        """
+        s = np.asarray(state, dtype=np.float64).reshape(-1, 6)
+        grip = self.limits(s)
+        moment = self.rolling_moments(s)
+        d = self.model.half_track
+        ahead = np.tanh(np.column_stack([s[:, 3] - d * s[:, 5], s[:, 3] + d * s[:, 5]])
+                        / ROLLING_SPEED)  # fmt: skip
+        high = grip + moment * np.minimum(1.0, 1.0 + 2.0 * ahead)
+        low = -grip - moment * np.minimum(1.0, 1.0 - 2.0 * ahead)
+        return np.minimum(low, 0.0), np.maximum(high, 0.0)
+
     def limits(self, state: ArrayLike) -> np.ndarray:
-        """The torque limits ``(N, 2)`` [N·m] at the estimated states (module docstring).
+        """The share of the friction circle as a torque, margin·a·G ``(N, 2)`` [N·m], at the
+        estimated states: the half-width of the window :meth:`bounds` (module docstring).
 
         Parameters
         ----------
@@ -232,16 +329,17 @@ class TractionControl(WrappedLaw):
             reference = self._slowed(t, flat, reference)
         inner = self._saturated_law() if self.hold_integrators else None
         nominal = None if inner is None else inner.max_torque
-        if inner is not None:
-            inner.max_torque = min(nominal, float(np.min(self.limits(flat))))
+        if inner is not None:  # a symmetric saturation: the window's wider side
+            low, high = self.bounds(flat)
+            inner.max_torque = min(nominal, float(np.min(np.maximum(high, -low))))
         try:
             raw = np.asarray(self.law(t, s.copy(), reference), dtype=np.float64)
         finally:
             if inner is not None:
                 inner.max_torque = nominal
         raw = raw.reshape(flat.shape[0], 2)
-        limit = self.limits(flat)
-        out = np.clip(raw, -limit, limit)
+        low, high = self.bounds(flat)
+        out = np.clip(raw, low, high)
         self._last = out.copy()
         return out.reshape((*s.shape[:-1], 2))
 
@@ -284,11 +382,10 @@ class TractionControl(WrappedLaw):
             )  # fmt: skip
             if self.friction == "map":  # the floor under each wheel along the reference
                 where = self.terrain.under_wheels(timing.rows[:, :6], self.model.half_track)
-                # c_rr·N of the wheel (its moment) and of the casters' share: c_rr·m·g/2 a wheel
-                rolling = self._rolling[where] * self.model.body.mass * GRAVITY / 2.0
-                timing.plan(self._peaks[where], resistance=rolling)
+                timing.plan(self._peaks[where], forces=self._caster_forces(timing.rows))
             else:
-                timing.plan(np.min(self.friction_at(flat), axis=0))
+                timing.plan(np.min(self.friction_at(flat), axis=0),
+                            forces=self._caster_forces(timing.rows))  # fmt: skip
             self._timing = (reference, timing)
         timing = self._timing[1]
         if self.friction != "map":  # a new estimate: plan again from here
@@ -298,6 +395,42 @@ class TractionControl(WrappedLaw):
                 timing.advance(t)
                 timing.plan(now)
         return timing.advance(t)
+
+    def _caster_forces(self, rows: np.ndarray) -> np.ndarray:
+        """The ground forces ``(T, 2)`` [N] the (left, right) drive wheels give against the
+        casters' rolling resistance along the reference rows ``(T, 9)``: the wheel's own
+        rolling moment is the torque's, not the grip's (module docstring), so the slowed
+        reference's circles leave it out.
+
+        Each caster of load (1 − s)·m̂·g/C resists with c_rr·N_c along its own velocity
+        (u − y·r, v + x·r), smoothed as the plant's; the drive wheels take the wrench's F_x and
+        M_z (the lateral part is left to the ground, as the model's F_y). Without casters given,
+        c_rr·(1 − s)·m̂·g/2 a wheel along the travel. c_rr is the map's under each caster (under
+        each wheel without casters), or ``rolling_resistance``.
+        """
+        weight = (1.0 - self.drive_load_share) * self.model.body.mass * GRAVITY
+        d = self.model.half_track
+        pose, twist = rows[:, :3], rows[:, 3:6]
+        if self.casters.shape[0] == 0:
+            if self.friction == "map":
+                c_rr = self._rolling[self.terrain.under_wheels(pose, d)]
+            else:
+                c_rr = np.full((rows.shape[0], 2), self.rolling_resistance)
+            return c_rr * weight / 2.0 * np.tanh(twist[:, 0:1] / ROLLING_SPEED)
+        x, y = self.casters[:, 0], self.casters[:, 1]
+        if self.friction == "map":
+            c, sn = np.cos(pose[:, 2:3]), np.sin(pose[:, 2:3])
+            world = np.stack([pose[:, 0:1] + c * x - sn * y, pose[:, 1:2] + sn * x + c * y], -1)
+            c_rr = self._rolling[self.terrain.index(world)]  # (T, C)
+        else:
+            c_rr = np.full((rows.shape[0], x.size), self.rolling_resistance)
+        vx = twist[:, 0:1] - y * twist[:, 2:3]
+        vy = twist[:, 1:2] + x * twist[:, 2:3]
+        speed = np.hypot(vx, vy)
+        scale = c_rr * weight / x.size * np.tanh(speed / ROLLING_SPEED) / np.maximum(speed, 1e-15)
+        fx, fy = -scale * vx, -scale * vy  # on the body, against each caster's velocity
+        wrench = np.column_stack([fx.sum(1), fy.sum(1), (x * fy - y * fx).sum(1)])
+        return -self.model.wheel_torques(wrench) / self.model.wheel_radius
 
     def _row_sampler(self) -> object | None:
         """The wrapped law's own row sampler (its bounded feed-forward), None without one."""
