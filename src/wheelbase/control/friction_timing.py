@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike
 from wheelbase._validate import as_float_array
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError, InputError
+from wheelbase.geometry import wrap_angle
 
 __all__ = ["MIN_RATE", "FrictionTiming", "force_terms", "friction_profile"]
 
@@ -338,7 +339,7 @@ class FrictionTiming:
         if self.clock >= self.times[-1]:
             z, w = 1.0, 0.0  # the reference has ended: its own final row
         out = ref.copy()
-        out[2] = math.atan2(math.sin(ref[2]), math.cos(ref[2]))
+        out[2] = float(wrap_angle(ref[2]))
         out[3:6] = math.sqrt(z) * ref[3:6]
         out[6:9] = z * ref[6:9] + w * ref[3:6]
         return out
