@@ -147,6 +147,7 @@ def test_a_start_too_near_a_wall_for_the_margin_moves_to_the_nearest_with_room()
         ({"exploration": {"min_frontier_size": -1}}, "exploration: min_frontier_size"),
         ({"exploration": {"bogus": 1}}, "exploration: bogus"),
         ({"exploration": {"replan_distance": -1}}, "exploration: replan_distance"),
+        ({"exploration": {"replan_distance": 6e-280}}, "replan_distance.*at least 0.5 m"),
         ({"exploration": 3}, "exploration: a mapping"),
         ({"controller": {"law": "mppi"}}, "controller.law"),
         ({"start": [1.0, float("nan"), 0.0]}, "start"),

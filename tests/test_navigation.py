@@ -161,6 +161,24 @@ def test_no_recovery_starts_while_a_walker_passes_close():
     assert nav.status == "recovering"
 
 
+def test_a_replan_clears_the_planners_footprint_around_the_robot():
+    # Hybrid A* plans with the footprint grown by its margin and refuses a start inside an
+    # obstacle: what is marked within that reach of the robot is cleared before a replan
+    from wheelbase.navigation import _cleared
+
+    grid = OccupancyGrid(np.ones((40, 40), bool), RES)
+    pose = np.array([2.0, 2.0, 0.0])
+    for margin in (0.0, 0.3):
+        free = ~_cleared(grid, pose, FOOTPRINT, margin).occupied
+        rows, cols = np.nonzero(free)
+        centres = np.stack([(cols + 0.5) * RES, (rows + 0.5) * RES], -1)
+        reach = np.hypot(*(centres - pose[:2]).T)
+        assert reach.max() <= FOOTPRINT.max_radius + margin + RES
+        assert reach.max() > FOOTPRINT.max_radius + margin  # the whole disc, not less
+    with pytest.raises(ConfigError, match="plan_margin"):
+        Navigator(Straight(), planner, FOOTPRINT, plan_margin=-0.1)
+
+
 def test_periodic_replans_are_skipped_while_nothing_changes():
     nav, _, first = navigator(rate_hz=2.0)
     free = View(Costmap(room()))

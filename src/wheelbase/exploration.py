@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from wheelbase._validate import read_text
 from wheelbase.errors import PlanningError, ScenarioError
@@ -78,6 +78,10 @@ __all__ = [
     "explore",
     "load_exploration",
 ]
+
+
+MIN_REPLAN_DISTANCE = 0.5
+"""Shortest cut [m] of a leg's plan (``replan_distance``), other than 0 (whole plans)."""
 
 
 class ExplorationSpec(BaseModel):
@@ -107,13 +111,24 @@ class ExplorationSpec(BaseModel):
     max_legs: int = Field(100, ge=1, le=10_000, description="Most frontiers driven to.")
     replan_distance: float = Field(
         3.0, ge=0, le=1e4, description="A leg drives at most this far along its plan before "
-        "the robot re-maps and re-plans [m] (0: whole plans)."
+        "the robot re-maps and re-plans [m] (0: whole plans; else at least "
+        f"{MIN_REPLAN_DISTANCE} m)."
     )  # fmt: skip
     leg_slack: float = Field(
         20.0, gt=0, le=3600, description="Time a leg may take beyond its reference [s]."
     )
     slam: bool = Field(True, description="Map from SLAM poses (false: odometry poses).")
     resolution: float = Field(0.05, gt=0, le=1, description="Cell side of the map [m].")
+
+    @field_validator("replan_distance")
+    @classmethod
+    def _cut_that_moves(cls, value: float) -> float:
+        # cut legs do not count towards max_legs: a cut of almost nothing would re-map and
+        # re-plan without end (the fuzzer's 6e-280 m hung)
+        if 0.0 < value < MIN_REPLAN_DISTANCE:
+            raise ValueError(f"must be 0 (whole plans) or at least {MIN_REPLAN_DISTANCE} m")
+        return value
+
     initial_scans: int = Field(
         5, ge=1, le=100, description="Scans taken at rest at the start, one lidar period apart "
         "(a cell needs four misses of the default sensor model to be called free)."

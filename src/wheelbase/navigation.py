@@ -278,6 +278,12 @@ class Navigator:
         A car-like robot cannot spin on the spot.
     goal_reach : float
         Distance [m] at which a goal other than the last counts as passed.
+    plan_margin : float
+        The global planner's margin [m] around the footprint. What the lidar marked within the
+        planner's footprint of the robot is cleared before a replan: the robot stands there
+        already, and Hybrid A* refuses a start inside an obstacle (``unexpected_boxes`` seed 5:
+        the robot stopped 0.48 m from a box's disc, inside the margin, and every replan
+        failed until it ended ``blocked`` with the way round the box open).
     """
 
     per_robot = True
@@ -292,6 +298,7 @@ class Navigator:
         *,
         kind: str = "diff",
         goal_reach: float = 0.5,
+        plan_margin: float = 0.0,
     ) -> None:
         if not callable(local):
             raise ConfigError(f"local must be a control law (got {type(local).__name__})")
@@ -301,6 +308,7 @@ class Navigator:
         self.options = NavigatorOptions() if options is None else options
         self.kind = kind
         self.goal_reach = positive("goal_reach", goal_reach, "m")
+        self.plan_margin = nonnegative("plan_margin", plan_margin, "m")
         self.command_names = tuple(getattr(local, "command_names", ("v", "omega")))
         self._samples: dict[float, np.ndarray] = {}  # the footprint sampled, per resolution
         self.reset()
@@ -481,7 +489,9 @@ class Navigator:
         # what the lidar marked where the robot stands is the robot's own neighbourhood (an
         # agent brushing past, a mark of noise): the plan may start there
         path = self.plan_route(
-            _cleared(grid, pose, self.footprint), pose, self.goals[self.next_goal :]
+            _cleared(grid, pose, self.footprint, self.plan_margin),
+            pose,
+            self.goals[self.next_goal :],
         )
         self.last_belief = _belief(grid)
         self.last_replan = t
@@ -497,7 +507,7 @@ class Navigator:
         """Go aside for a robot of higher priority: True when a refuge and a way there exist."""
         if self.priority <= 0 or self.options.yield_time <= 0:
             return False
-        cleared = _cleared(grid, pose, self.footprint)
+        cleared = _cleared(grid, pose, self.footprint, self.plan_margin)
         # the nearest refuges first, each facing as the robot does or the other way: a refuge
         # whose only way in the planner cannot find (a turn into a tight bay) is not the end
         for refuge in self._refuges(pose, grid):
@@ -528,7 +538,9 @@ class Navigator:
         if waiting.reached and t - waiting.last_try >= 1.0:
             waiting.last_try = t
             goals = self.goals[self.next_goal :]
-            path = self.plan_route(_cleared(grid, pose, self.footprint), pose, goals)
+            path = self.plan_route(
+                _cleared(grid, pose, self.footprint, self.plan_margin), pose, goals
+            )
             if path is not None and self._way_clear(pose, grid, path, perception):
                 self.yielding = None
                 self.plan = path
@@ -652,12 +664,13 @@ class Navigator:
         return self._start_recovery(t, pose, grid)
 
 
-def _cleared(grid: Any, pose: np.ndarray, footprint: Any) -> Any:
-    """The grid with the cells within the footprint's reach (+ one cell) of ``pose`` free."""
+def _cleared(grid: Any, pose: np.ndarray, footprint: Any, margin: float = 0.0) -> Any:
+    """The grid with the cells within the footprint's reach + ``margin`` [m] (+ one cell) of
+    ``pose`` free."""
     from wheelbase.planning import OccupancyGrid
 
     res = grid.resolution
-    reach = footprint.max_radius + res
+    reach = footprint.max_radius + margin + res
     x0, y0 = grid.origin
     rows, cols = grid.shape
     c0, c1 = (

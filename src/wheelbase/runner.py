@@ -895,8 +895,9 @@ def _navigator(scenario, robot: Robot, law, grid, footprint, dynamic: bool):
         return legs[0] if len(legs) == 1 else _concatenate(legs, PlannedPath)
 
     navigator = Navigator(
-        inner, plan_route, footprint, navigator_options(scenario, _reach(inner)), kind=robot.kind
-    )
+        inner, plan_route, footprint, navigator_options(scenario, _reach(inner)), kind=robot.kind,
+        plan_margin=margin,
+    )  # fmt: skip
     if isinstance(law, TwistTorqueLoop):
         return TwistTorqueLoop(
             navigator, law.model, bandwidth=law.bandwidth, max_torque=law.max_torque
