@@ -147,20 +147,6 @@ def test_a_tentative_track_does_not_block_the_route_until_it_is_confirmed():
     assert nav.replans == 1
 
 
-def test_no_recovery_starts_while_a_walker_passes_close():
-    # the room cut in two: no plan exists. With a walker moving 1.5 m away the robot is not
-    # stopped for a recovery (it would stand blind to the walker): the local law goes on
-    nav, _local, first = navigator(rate_hz=0.0)
-    cut = Costmap(box(room(), 4.0, 4.6, 0.0, 4.0))
-    walker = Tracks(np.array([[2.5, 2.0]]), np.array([[0.0, 0.5]]), np.array([0.3]))
-    command = nav(0.0, START, first, perception=View(cut, walker))
-    assert nav.status != "recovering" and nav.recoveries == 0
-    np.testing.assert_array_equal(command, [0.3, 0.0])  # the local law's command
-    far = Tracks(np.array([[8.5, 3.0]]), np.array([[0.0, 0.5]]), np.array([0.3]))
-    nav(0.1, START, first, perception=View(cut, far))  # nothing passing near: recover
-    assert nav.status == "recovering"
-
-
 def test_a_replan_clears_the_planners_footprint_around_the_robot():
     # Hybrid A* plans with the footprint grown by its margin and refuses a start inside an
     # obstacle: what is marked within that reach of the robot is cleared before a replan

@@ -18,12 +18,7 @@ its costmap and its tracks of moving obstacles), never the world's truth, and:
    ``yield_time`` in all, then the recoveries);
 4. *recovers* when the plan is blocked and no new one exists: the recoveries (``wait``,
    ``back_up``, ``spin``) run in turn, each followed by a replan, at most ``max_retries``
-   times; then the robot stops and its status is ``blocked`` (the engine ends it so). Not
-   while a moving or tentative track is within ``lookahead`` of the robot: what blocks the
-   plan then is likely passing (walkers close together whose marks the tracks' discs do not
-   wholly clear), and a recovery stops the robot blind to them: the local controller goes on
-   along the old plan, and may evade (in ``crowd_crossing`` with 50 walkers every contact of
-   seeds 8-15 but one was a walker striking a robot stopped for a recovery).
+   times; then the robot stops and its status is ``blocked`` (the engine ends it so).
 
 What the global plan believes: the lethal cells of the costmap (the map's obstacles and the
 lidar's marks), less the cells within a track's radius (+ one cell) of every track moving
@@ -405,8 +400,7 @@ class Navigator:
                     if blocked and self._blocked(pose, grid):
                         if self._start_yield(t, pose, grid):
                             return self._yield(t, measured, pose, grid, perception)
-                        if not self._passing_near(pose, perception):
-                            return self._start_recovery(t, pose, grid)
+                        return self._start_recovery(t, pose, grid)
                 self.last_replan = t
         self._mode = "following"
         return self._follow(t, measured, pose, self.plan, perception)
@@ -468,22 +462,6 @@ class Navigator:
         if key not in self._samples:
             self._samples[key] = _footprint_samples(self.footprint, key)
         return _footprint_hits(grid, self._samples[key], poses)
-
-    def _passing_near(self, pose: np.ndarray, perception: Any) -> bool:
-        """Whether a track the plan does not treat as an obstacle (moving, or tentative) is
-        within ``lookahead`` of the robot."""
-        tracks = getattr(perception, "tracks", None)
-        if tracks is None or not len(tracks.position):
-            return False
-        position = np.asarray(tracks.position, np.float64)
-        velocity = np.asarray(tracks.velocity, np.float64)
-        confirmed = np.asarray(getattr(tracks, "confirmed", np.ones(len(position), bool)), bool)
-        passing = (np.hypot(velocity[:, 0], velocity[:, 1]) > self.options.moving_speed) | (
-            ~confirmed
-        )
-        near = np.hypot(position[:, 0] - pose[0], position[:, 1] - pose[1])
-        near = near <= self.options.lookahead + np.asarray(tracks.radius, np.float64)
-        return bool(np.any(passing & near))
 
     def _replan(self, t: float, pose: np.ndarray, grid: Any) -> bool:
         # what the lidar marked where the robot stands is the robot's own neighbourhood (an
