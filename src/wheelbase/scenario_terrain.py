@@ -243,8 +243,9 @@ class SlopeFeedForwardSpec(_Strict):
     rolling_resistance: bool = Field(
         False, description="Also feed forward the rolling resistance the terrain gives under "
         "each wheel and caster (c_rr·N on hard ground, Bekker's compaction resistance on soil), "
-        "in each contact's direction of rolling; at rest only the breakaway the reference's "
-        "motion needs."
+        "in each contact's direction of rolling; at rest only the breakaway to move the way the "
+        "reference asks (its twist while it moves, the controller's feedback once it has "
+        "stopped)."
     )  # fmt: skip
 
 
