@@ -34,6 +34,13 @@ what a user gets.
   travelled against the path's length). When the torque clip counted the drive wheels' own
   rolling moment against the grip the RM100 moved 9 mm and ended ``stuck``; target: with
   ``slow_down`` it drives at least 95 % of the path, no wheel slipping above ``slip_bound``.
+- ``rolling_feedforward``: the demo with the rolling resistance fed forward
+  (``controller.slope_feedforward: {rolling_resistance: true}``) ``off`` and ``on``, on the
+  surfaces and traction variants of ``ROLLING_CASES`` (grass: the computed torque's model
+  has no rolling resistance, and near the goal its torque stays below the 0.84 N·m a wheel
+  grass needs to roll): status, the true final error, the largest slip, the time to the end
+  and the closed-loop energy balance. Target: on grass with ``slow_down`` and slip
+  compensation it arrives (``--quick``: that case alone).
 - ``ramp``: a 10 % ramp up and down with +100 % payload: tracking error, and the mean wheel
   torque on the climb against the static m·g·sin α·r/2 per wheel; ``plain`` (the controller
   models level ground, plain encoder odometry: the PID's integrator lags by the closed form
@@ -224,6 +231,45 @@ def grass_traction() -> dict:
     for label in GRASS_VARIANTS:
         traction, compensate = ICE_VARIANTS[label]
         out["demo"][label] = _traction_row(demo, traction, compensate)
+    return out
+
+
+ROLLING_CASES = (
+    ("grass", "without"),
+    ("grass", "with"),
+    ("grass", "with_slow_down"),
+    ("grass", "with_slow_down_slip_compensation"),
+    ("dry_concrete", "without"),
+    ("wet_concrete", "without"),
+    ("ice", "with_slow_down"),
+    ("ice", "with_slow_down_slip_compensation"),
+)
+"""(surface, variant of ``ICE_VARIANTS``) on which the demo runs with and without the rolling
+resistance fed forward."""
+
+
+def rolling_feedforward(quick: bool) -> dict:
+    """The demo with the terrain's rolling resistance fed forward, off and on."""
+    cases = (("grass", "with_slow_down_slip_compensation"),) if quick else ROLLING_CASES
+    out: dict = {}
+    for surface, variant in cases:
+        traction, compensate = ICE_VARIANTS[variant]
+        row = {}
+        for label, feedforward in (("off", False), ("on", {"rolling_resistance": True})):
+            data = {**_scenario("demo"), "terrain": {"surface": surface}}
+            data["controller"]["traction_control"] = traction
+            data["controller"]["slope_feedforward"] = feedforward
+            data["odometry"]["slip_compensation"] = compensate
+            prepared, log, metrics = _run(data)
+            row[label] = {
+                "status": metrics["status"],
+                "final_position_error_true_m": metrics.get("final_position_error_true_m"),
+                "max_slip": metrics["max_slip"],
+                "duration_s": metrics["duration_s"],
+                "trajectory_duration_s": metrics["trajectory_duration_s"],
+                "energy_residual_relative": _energy_residual(prepared, log),
+            }
+        out.setdefault(surface, {})[variant] = row
     return out
 
 
@@ -513,6 +559,7 @@ def main(argv: list[str] | None = None) -> dict:
         "surfaces": surfaces(args.quick),
         "ice_traction": ice_traction(),
         "grass_traction": grass_traction(),
+        "rolling_feedforward": rolling_feedforward(args.quick),
         "ramp": ramp(),
         "drawbar_pull": drawbar_pull(),
         "soft_soil": soft_soil(),
@@ -523,6 +570,12 @@ def main(argv: list[str] | None = None) -> dict:
         for row in report["surfaces"].values()
         for key, value in row.items()
         if key.startswith("energy_residual")
+    ]
+    residuals += [
+        abs(run["energy_residual_relative"])
+        for surface in report["rolling_feedforward"].values()
+        for row in surface.values()
+        for run in row.values()
     ]
     report["energy_balance_max_relative"] = max(residuals)
     ice = report["ice_traction"]
@@ -541,6 +594,10 @@ def main(argv: list[str] | None = None) -> dict:
         ]["distance_travelled_m"]
         >= 0.95 * report["grass_traction"]["demo"]["with_slow_down"]["path_length_m"]
         and report["grass_traction"]["demo"]["with_slow_down"]["max_slip"] <= ice["slip_bound"],
+        "grass_demo_rolling_feedforward_arrives": report["rolling_feedforward"]["grass"][
+            "with_slow_down_slip_compensation"
+        ]["on"]["status"]
+        == "arrived",
         "energy_balance_le_1e-6": report["energy_balance_max_relative"] <= 1e-6,
         "stuck_on_dry_sand_not_on_sandy_loam": soft["dry_sand"]["status"] == "stuck"
         and soft["sandy_loam"]["status"] != "stuck",

@@ -23,6 +23,7 @@ from wheelbase.limits import MAX_COORDINATE, MAX_MAP_CELLS, MAX_STEPS
 from wheelbase.scenario_terrain import (
     ContactsSpec,
     PayloadSpec,
+    SlopeFeedForwardSpec,
     TerrainSpec,
     TractionSpec,
 )
@@ -200,11 +201,12 @@ class ControllerSpec(_Strict):
     traction_control: TractionSpec | None = Field(
         None, description="Limit the wheel torques by the estimated friction (a dynamic plant)."
     )
-    slope_feedforward: bool = Field(
+    slope_feedforward: bool | SlopeFeedForwardSpec = Field(
         False,
         description="Add the wheel torques that hold the controller's model against the slope "
         "of the terrain under its estimated pose (the robot knows its floor's grades; a dynamic "
-        "plant with terrain).",
+        "plant with terrain). A mapping {rolling_resistance: true} also feeds forward the "
+        "rolling resistance the terrain gives under each contact; true is {} (the slope alone).",
     )
 
 
@@ -584,7 +586,7 @@ class Scenario(_Strict):
             ("robot.payload", self.robot.payload is not None),
             ("goal_payloads", self.goal_payloads is not None),
             ("controller.traction_control", self.controller.traction_control is not None),
-            ("controller.slope_feedforward", self.controller.slope_feedforward),
+            ("controller.slope_feedforward", self.controller.slope_feedforward is not False),
             ("odometry.slip_compensation", self.odometry.slip_compensation),
         ):
             if given and not dynamic:

@@ -380,13 +380,18 @@ def wrap_controller(
     ):
         changes = [(time, _dynamics_with(robot, payload)) for time, payload in timeline[1:]]
         controller = ModelSchedule(controller, changes)
-    if scenario.controller.slope_feedforward:
+    feedforward = scenario.controller.slope_feedforward
+    if feedforward is not False:
         from wheelbase.control.slope import SlopeFeedForward
 
         if terrain is None:
             raise ScenarioError("controller.slope_feedforward needs a terrain section")
         model = getattr(controller, "model", None) or controller_model(scenario, robot)
-        controller = SlopeFeedForward(controller, model, terrain)
+        rolling = feedforward is not True and feedforward.rolling_resistance
+        controller = SlopeFeedForward(
+            controller, model, terrain, rolling_resistance=rolling,
+            contacts=build_contacts(scenario),
+        )  # fmt: skip
     spec = scenario.controller.traction_control
     if spec is not None:
         contacts = build_contacts(scenario)

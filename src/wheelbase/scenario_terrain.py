@@ -32,6 +32,7 @@ __all__ = [
     "PayloadSpec",
     "RasterSpec",
     "RegionSpec",
+    "SlopeFeedForwardSpec",
     "SoilSpec",
     "SurfaceSpec",
     "TerrainSpec",
@@ -232,6 +233,20 @@ class TerrainSpec(_Strict):
     stuck_time: float = Field(
         5.0, gt=0, description="Seconds commanded to move without moving before 'stuck'."
     )
+
+
+class SlopeFeedForwardSpec(_Strict):
+    """The ground's forces on the controller's model fed forward
+    (:class:`wheelbase.control.slope.SlopeFeedForward`): ``controller.slope_feedforward: true`` is
+    this with its defaults (the slope alone); the mapping adds the rolling resistance."""
+
+    rolling_resistance: bool = Field(
+        False, description="Also feed forward the rolling resistance the terrain gives under "
+        "each wheel and caster (c_rr·N on hard ground, Bekker's compaction resistance on soil), "
+        "in each contact's direction of rolling; at rest only the breakaway to move the way the "
+        "reference asks (its twist while it moves, the controller's feedback once it has "
+        "stopped)."
+    )  # fmt: skip
 
 
 class TractionSpec(_Strict):
