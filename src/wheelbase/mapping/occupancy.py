@@ -322,6 +322,19 @@ towards −x or −y) would otherwise put the return on the free cell before it,
 range rounded short by 1e-5 m (a float32 ray cast at 8 m)."""
 
 
+@numba.njit(cache=True, inline="always")
+def _axis_walk(p, u):
+    """Amanatides-Woo along one grid axis from the coordinate ``p`` [cells] in the direction
+    ``u``: the start cell, its step (±1, or 0 along the other axis), the ray parameter of the
+    first cell boundary and the one between boundaries [cells of travel]."""
+    k = math.floor(p)
+    if u > 0.0:
+        return k, 1, (k + 1 - p) / u, 1.0 / u
+    if u < 0.0:
+        return k, -1, (k - p) / u, -1.0 / u
+    return k, 0, math.inf, math.inf
+
+
 @numba.njit(cache=True)
 def _integrate_scan(lo, stamp, scan_id, res, x0, y0, sx, sy, st, ranges, angles, max_range,
                     l_hit, l_miss, l_min, l_max):  # fmt: skip
@@ -358,26 +371,10 @@ def _integrate_scan(lo, stamp, scan_id, res, x0, y0, sx, sy, st, ranges, angles,
         a = st + angles[b]
         ux = math.cos(a)
         uy = math.sin(a)
-        j = math.floor(px)
-        i = math.floor(py)
-        if ux > 0.0:
-            sj, tx, dtx = 1, (j + 1 - px) / ux, 1.0 / ux
-            exit_x = (cols - px) / ux
-        elif ux < 0.0:
-            sj, tx, dtx = -1, (j - px) / ux, -1.0 / ux
-            exit_x = -px / ux
-        else:
-            sj, tx, dtx = 0, math.inf, math.inf
-            exit_x = math.inf
-        if uy > 0.0:
-            si, ty, dty = 1, (i + 1 - py) / uy, 1.0 / uy
-            exit_y = (rows - py) / uy
-        elif uy < 0.0:
-            si, ty, dty = -1, (i - py) / uy, -1.0 / uy
-            exit_y = -py / uy
-        else:
-            si, ty, dty = 0, math.inf, math.inf
-            exit_y = math.inf
+        j, sj, tx, dtx = _axis_walk(px, ux)
+        i, si, ty, dty = _axis_walk(py, uy)
+        exit_x = (cols - px) / ux if ux > 0.0 else (-px / ux if ux < 0.0 else math.inf)
+        exit_y = (rows - py) / uy if uy > 0.0 else (-py / uy if uy < 0.0 else math.inf)
         last = True  # the cell holding the end point of a no-return beam is crossed too
         if inside:
             # the walk leaves the map at min(exit_x, exit_y): stop before, no bounds checks
@@ -446,20 +443,8 @@ def _count_scan(lo, counts, stamp, scan_id, res, x0, y0, sx, sy, st, ranges, ang
         a = st + angles[b]
         ux = math.cos(a)
         uy = math.sin(a)
-        j = math.floor(px)
-        i = math.floor(py)
-        if ux > 0.0:
-            sj, tx, dtx = 1, (j + 1 - px) / ux, 1.0 / ux
-        elif ux < 0.0:
-            sj, tx, dtx = -1, (j - px) / ux, -1.0 / ux
-        else:
-            sj, tx, dtx = 0, math.inf, math.inf
-        if uy > 0.0:
-            si, ty, dty = 1, (i + 1 - py) / uy, 1.0 / uy
-        elif uy < 0.0:
-            si, ty, dty = -1, (i - py) / uy, -1.0 / uy
-        else:
-            si, ty, dty = 0, math.inf, math.inf
+        j, sj, tx, dtx = _axis_walk(px, ux)
+        i, si, ty, dty = _axis_walk(py, uy)
         while True:
             end = (tx if tx < ty else ty) >= reach
             if end and hit:
