@@ -101,11 +101,7 @@ from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
 from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, mppi_work, run_kernel
 from wheelbase.control.mppi_numpy import contact_steps, numpy_costs, rollout
-from wheelbase.control.obstacle_critics import (
-    PerceptionArrays,
-    PerceptionInputs,
-    path_blocked,
-)
+from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
@@ -587,8 +583,8 @@ class MPPI:
                 evasion = self._evasion(local, first, costs, info, local_map, seen)
 
             def collides(sequence: np.ndarray) -> bool:
-                first = contact_steps(self, local, sequence[None], info, local_map, seen)
-                return bool(first[0] < self.horizon_steps)
+                contact = contact_steps(self, local, sequence[None], info, local_map, seen)
+                return bool(contact[0] < self.horizon_steps)
 
         return self._update(pose, costs, controls, lo, hi, evasion, collides)
 
