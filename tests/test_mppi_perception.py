@@ -272,6 +272,11 @@ def test_the_kernels_first_contacts_are_those_of_its_rollouts():
     noise = controls - controller._mean[None]
     _costs, _controls, numpy_first = numpy_costs(controller, *args, noise, local_map, seen)
     np.testing.assert_array_equal(numpy_first, expected)
+    # the guard's and the evasion's check of given sequences: the kernel fed them as the
+    # perturbations of a zero mean finds the same steps
+    np.testing.assert_array_equal(
+        controller._first_contacts(args, controls, local_map, seen), expected
+    )
 
 
 def test_held_samples_keep_their_first_perturbation():
