@@ -6,6 +6,7 @@ the same noise, the safe stop, bad views."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -397,3 +398,38 @@ def test_bad_perception_critics_and_the_jax_backend():
     controller = MPPI(Unicycle(), 10, 0.05, 16, 0.2, 0.1, None, LIMITS, backend="jax")
     with pytest.raises(ConfigError, match="perception is not supported on the jax backend"):
         controller(0.0, (0, 0, 0), LINE, perception=local_view(None, None, None, 0.0))
+
+
+def test_tracks_out_of_a_rollouts_reach_are_not_tested_and_change_nothing():
+    # a walker 3 m ahead cannot be reached in the first steps (v̄·t_k plus the disks, its
+    # radius, κσ and r_dyn): the kernel skips it there, and its costs are those of testing
+    # every track at every step, to the bit
+    from wheelbase.control.obstacle_critics import reachable_tracks
+
+    view = local_view(np.array([[3.0, 0.0], [0.6, 0.3]]), np.array([[-0.5, 0.0], [0.0, 0.0]]),
+                      np.array([0.3, 0.3]), 0.0)  # fmt: skip
+    controller = MPPI(Unicycle(), 24, 0.05, 256, (0.4, 0.8), 0.05, None, LIMITS,
+                      footprint=ROBOT)  # fmt: skip
+    local = np.zeros(3)
+    seen = controller._perception.arrays(view, local, 0.0, controller._step_times, 0.5)
+    assert seen.counts[0] == 1 and seen.order[0, 0] == 1  # only the near walker at first
+    assert seen.counts[-1] == 2  # both by the held final pose's checks
+    everything = np.full_like(seen.counts, seen.table.shape[1])
+    order = np.tile(np.arange(seen.table.shape[1]), (seen.table.shape[0], 1))
+    assert not np.array_equal(seen.counts, everything)
+    window, info = controller._path.window(local, controller._path.tables(LINE))
+    args = (local, controller._mean, controller._lo, controller._hi, controller._hi, window,
+            info, controller._last, controller.critics.vector())  # fmt: skip
+    geometry = controller._field.geometry
+    culled = controller._costs_numba(args, None, geometry, seen, 256)
+    full = replace(seen, order=order, counts=everything)
+    tested = controller._costs_numba(args, None, geometry, full, 256)
+    for a, b in zip(culled, tested, strict=True):
+        np.testing.assert_array_equal(a, b)
+    # the bound itself: a track just outside v̄·t + reach + radius + κσ + r_dyn is left out
+    table = np.zeros((3, 1, 4))
+    table[:, 0, 0], table[:, 0, 2] = 1.0, 0.2
+    times = np.array([0.1, 0.2])
+    disks = np.array([[0.0, 0.0, 0.2]])
+    _order, counts = reachable_tracks(table, times, 1.0, disks, 0.45)
+    np.testing.assert_array_equal(counts, [0, 1, 1])  # 1 − 0.1 ≥ 0.85, 1 − 0.2 < 0.85

@@ -516,8 +516,8 @@ class DWA:
                 pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
                 info[1:3].copy(), direction, self._field.distance_field, local_map,
                 self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
-                seen.polygon, seen.table, seen.relief, seen.disks, c.dynamic_inflation, scores,
-                collided,
+                seen.polygon, seen.table, seen.relief, seen.disks, seen.order, seen.counts,
+                c.dynamic_inflation, scores, collided,
             )  # fmt: skip
         else:
             scores, collided = dwa_scores_numpy(

@@ -155,7 +155,7 @@ def _nearest_distance(x, y, window):
 @numba.njit(cache=True, parallel=True)
 def dwa_kernel(
     theta, samples, dt, steps, window, goal, field, fgeo, forward, end, direction, df, mp, circles,
-    map_relief, inflation, cost_map, near, cgeo, polygon, tracks, relief, disks,
+    map_relief, inflation, cost_map, near, cgeo, polygon, tracks, relief, disks, order, counts,
     dynamic_inflation, scores, collided,
 ):  # fmt: skip
     """Score every sample (see the module docstring); positions relative to the robot.
@@ -165,7 +165,7 @@ def dwa_kernel(
     distance [m] (cut to the distance to the section's end ``end`` = (x, y)),
     ``direction`` ±1 the travel direction of the path section; ``df, mp, circles, map_relief``
     the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
-    ``disks`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
+    ``counts`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
     Writes ``scores`` (S, 8) and ``collided`` (S,)."""
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
@@ -198,14 +198,38 @@ def dwa_kernel(
                 hit = hit or bad
             if has_tracks:
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
+                    x,
+                    y,
+                    c,
+                    s,
+                    j,
+                    tracks,
+                    relief,
+                    disks,
+                    dynamic_inflation,
+                    steps,
+                    reach,
+                    order,
+                    counts,
                 )
                 soft_dyn += soft
                 hit = hit or bad
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(
-                    x, y, c, s, j, tracks, relief, disks, dynamic_inflation, steps, reach
+                    x,
+                    y,
+                    c,
+                    s,
+                    j,
+                    tracks,
+                    relief,
+                    disks,
+                    dynamic_inflation,
+                    steps,
+                    reach,
+                    order,
+                    counts,
                 )
                 soft_dyn += hold_weight * soft
                 hit = hit or bad

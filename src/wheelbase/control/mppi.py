@@ -650,7 +650,8 @@ class MPPI:
             np.uint64(self.seed), np.uint64(self._calls), self._kind, self._wheel_base, self.dt,
             weights, self._field.distance_field, local_map, self._field.circles,
             int(self.critics.path_stride), NORMAL_TABLE, seen.cost, seen.near, seen.geometry,
-            seen.polygon, seen.table, seen.relief, seen.disks, costs, controls, first,
+            seen.polygon, seen.table, seen.relief, seen.disks, seen.order, seen.counts, costs,
+            controls, first,
         )  # fmt: skip
         return costs, controls, first
 

@@ -141,14 +141,14 @@ def mppi_kernel(
     pose, mean, lo, hi, scale, window, info, last, noise, has_noise, held_from, sigma, seed, call,
     kind,
     wheel_base, dt, w, df, mp, circles, stride, table, cost_map, near, cgeo, polygon, tracks,
-    relief, disks, costs, controls, first_contact,
+    relief, disks, order, counts, costs, controls, first_contact,
 ):  # fmt: skip
     """Draw, roll out and score every sample in one pass (the numba backend).
 
     Samples ``held_from`` and after hold their first perturbation over the whole horizon.
     The same costs as :func:`wheelbase.control.mppi_numpy.numpy_costs` (to rounding:
     ``fastmath`` lets the compiler reorder the sums), one sample per iteration of the parallel
-    loop. ``cost_map`` … ``disks`` are the fields of
+    loop. ``cost_map`` … ``counts`` are the fields of
     :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`. ``first_contact`` receives
     each sample's first colliding step (T where it never collides), as
     :func:`~wheelbase.control.mppi_numpy.contact_steps` counts them."""
@@ -248,7 +248,19 @@ def mppi_kernel(
                 collided = collided or hit
             if has_tracks:
                 soft, hit = track_cost_at(
-                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
+                    x,
+                    y,
+                    c,
+                    s,
+                    t,
+                    tracks,
+                    relief,
+                    disks,
+                    dynamic_inflation,
+                    steps,
+                    reach,
+                    order,
+                    counts,
                 )
                 cost += w_dynamic * soft
                 collided = collided or hit
@@ -267,7 +279,19 @@ def mppi_kernel(
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for t in range(steps, tracks.shape[0]):
                 soft, hit = track_cost_at(
-                    x, y, c, s, t, tracks, relief, disks, dynamic_inflation, steps, reach
+                    x,
+                    y,
+                    c,
+                    s,
+                    t,
+                    tracks,
+                    relief,
+                    disks,
+                    dynamic_inflation,
+                    steps,
+                    reach,
+                    order,
+                    counts,
                 )
                 cost += w_dynamic * hold_weight * soft
                 collided = collided or hit

@@ -333,6 +333,14 @@ class PerceptionArrays:
         Contact threshold [m] of each track (0, or deeper than now for one already touched).
     disks : numpy.ndarray, shape (D, 3)
         The footprint's covering disks (x, y, radius) [m] for the tracks.
+    order : numpy.ndarray of int64, shape (T + H, J)
+        Per row of ``table``, the tracks a rollout pose of that row can reach first (in
+        increasing index), then the others.
+    counts : numpy.ndarray of int64, shape (T + H,)
+        How many of each row of ``order`` are reachable: a pose after k steps lies within
+        v̄·t_k of the robot, so a track farther than that plus the disks' reach, its radius,
+        κσ and r_dyn can neither touch nor cost (:func:`track_cost_at` skips it anyway), and
+        the kernels do not even test it.
     """
 
     cost: np.ndarray
@@ -342,6 +350,8 @@ class PerceptionArrays:
     table: np.ndarray
     relief: np.ndarray
     disks: np.ndarray
+    order: np.ndarray
+    counts: np.ndarray
 
     @property
     def has_costmap(self) -> bool:
@@ -402,8 +412,8 @@ class PerceptionInputs:
         """The arrays of a call without perception (both critics off)."""
         zeros = np.zeros((1, 1), np.uint8)
         return PerceptionArrays(zeros, zeros, np.array([0.0, 0.0, 1.0, 0.0, 0.0]),
-                                self.polygon, np.zeros((1, 0, 4)), np.zeros(0),
-                                self.disks)  # fmt: skip
+                                self.polygon, np.zeros((1, 0, 4)), np.zeros(0), self.disks,
+                                np.zeros((1, 0), np.int64), np.zeros(1, np.int64))  # fmt: skip
 
     def arrays(
         self, perception: Any, pose: np.ndarray, t: float | None, times: np.ndarray, speed: float
@@ -445,10 +455,12 @@ class PerceptionInputs:
                 _soft, hit = costmap_check(here, cost, near, geometry, self.polygon)
                 if hit[0]:
                     geometry[4] = 1.0  # truly overlapping: every rollout collides, a safe stop
-        table, relief = empty.table, empty.relief
+        table, relief, order, counts = empty.table, empty.relief, empty.order, empty.counts
         if tracks is not None:
             table, relief = self._tracks(perception, tracks, pose, t, times, speed)
-        return PerceptionArrays(cost, near, geometry, self.polygon, table, relief, self.disks)
+            order, counts = reachable_tracks(table, times, speed, self.disks, self.inflation)
+        return PerceptionArrays(cost, near, geometry, self.polygon, table, relief, self.disks,
+                                order, counts)  # fmt: skip
 
     def _near(self, cost: np.ndarray, res: float) -> np.ndarray:
         if self._gate is not None and self._gate[1] == res and np.array_equal(self._gate[0], cost):
@@ -504,6 +516,44 @@ class PerceptionInputs:
         distance = _track_distances(here, now, self.disks)[0, 0]  # (J,)
         relief = np.where(distance <= 0.0, distance - CONTACT_RELIEF, 0.0)
         return np.ascontiguousarray(table), relief
+
+
+REACH_SLACK = 1.0e-6
+"""Slack [m] on the reachable-track bound, against the rounding of the compiled rollouts."""
+
+
+def reachable_tracks(
+    table: np.ndarray, times: np.ndarray, speed: float, disks: np.ndarray, inflation: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The tracks each row of a prediction table can reach (:class:`PerceptionArrays`'
+    ``order`` and ``counts``).
+
+    Parameters
+    ----------
+    table : numpy.ndarray, shape (T + H, J, 4)
+        Predicted tracks relative to the robot (x, y, radius, κσ) [m].
+    times : numpy.ndarray, shape (T,)
+        Times [s] of the rollout steps after now; the H held rows are at the final pose.
+    speed : float
+        v̄ [m/s], the fastest a rollout moves: after t_k a pose lies within v̄·t_k.
+    disks : numpy.ndarray, shape (D, 3)
+        The footprint's covering disks (x, y, radius) [m].
+    inflation : float
+        r_dyn [m].
+
+    Returns
+    -------
+    order, counts : numpy.ndarray of int64
+    """
+    rows = table.shape[0]
+    steps = times.shape[0]
+    moved = speed * np.concatenate([times, np.full(rows - steps, times[-1])])
+    far = disk_reach(disks) + table[..., 2] + table[..., 3] + inflation
+    gap = np.hypot(table[..., 0], table[..., 1]) - moved[:, None]
+    reachable = gap < far + REACH_SLACK
+    # stable: the reachable tracks keep their index order, so the sums do not change
+    order = np.argsort(~reachable, axis=1, kind="stable").astype(np.int64)
+    return np.ascontiguousarray(order), reachable.sum(axis=1).astype(np.int64)
 
 
 MAX_PATH_OCCUPANCY = 0.07
@@ -604,14 +654,17 @@ def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
 
 
 @numba.njit(cache=True, inline="always")
-def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach):
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach, order, counts):
     """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
     predicted tracks (module docstring); a step past the rollout's is a check of the held final
     pose. ``reach`` [m] bounds the disks' extent from the pose (:func:`disk_reach`): a track
-    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped."""
+    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped;
+    only the ``counts[step]`` first tracks of ``order[step]`` are tested at all
+    (:func:`reachable_tracks`)."""
     total = 0.0
     hit = False
-    for j in range(table.shape[1]):
+    for slot in range(counts[step]):
+        j = order[step, slot]
         mx, my = table[step, j, 0], table[step, j, 1]
         far = reach + table[step, j, 2] + table[step, j, 3] + inflation
         if (x - mx) * (x - mx) + (y - my) * (y - my) >= far * far:
@@ -620,7 +673,8 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach
         for k in range(disks.shape[0]):
             px = x + c * disks[k, 0] - s * disks[k, 1]
             py = y + s * disks[k, 0] + c * disks[k, 1]
-            d = math.hypot(px - mx, py - my) - disks[k, 2] - table[step, j, 2]
+            dx, dy = px - mx, py - my  # sqrt, not hypot: no overflow within the map
+            d = math.sqrt(dx * dx + dy * dy) - disks[k, 2] - table[step, j, 2]
             least = min(least, d)
         if least <= relief[j] and step < held:
             hit = True
