@@ -54,7 +54,9 @@ def _crowd(walkers: int, law: str) -> dict:
     data["world"]["agents"][0]["count"] = walkers
     data["name"] = f"crowd_crossing_{walkers}_{law}"
     if law == "dwa":
-        data["controller"] = {"law": "dwa"}
+        # Nav2's default DWB set-up: the standard generator (ramped targets over sim_time);
+        # from a stop Fox et al.'s one-period window only holds arcs near zero speed
+        data["controller"] = {"law": "dwa", "gains": {"trajectory_generator": "standard"}}
     return {k: v for k, v in data.items() if v is not None}
 
 

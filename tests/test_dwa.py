@@ -13,7 +13,12 @@ import pytest
 
 from crowd_cases import encounter, inflated_costmap, local_view
 from wheelbase.control import DWA, DWACritics
-from wheelbase.control.dwa_kernels import arc_poses, goal_distance_field
+from wheelbase.control.dwa_kernels import (
+    arc_poses,
+    goal_distance_field,
+    profile_poses,
+    ramp_profile,
+)
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.models import Bicycle, DiffDrive, Unicycle
 from wheelbase.planning import Footprint, OccupancyGrid, PlannedPath
@@ -119,7 +124,8 @@ def test_critic_scores_equal_hand_values():
     assert plan.costs[straight[0]] == pytest.approx(scores @ weights)
 
 
-def test_numba_kernel_equals_its_numpy_twin():
+@pytest.mark.parametrize("generator", ["limited_accel", "standard"])
+def test_numba_kernel_equals_its_numpy_twin(generator):
     grid = OccupancyGrid(np.zeros((80, 120), bool), 0.1, (-2.0, -4.0))
     occupied = grid.occupied.copy()
     occupied[50:55, 40:45] = True  # a block 1-1.5 m left of the line
@@ -129,7 +135,8 @@ def test_numba_kernel_equals_its_numpy_twin():
                       np.array([0.3, 0.25]), 0.0, costmap=costmap)  # fmt: skip
     plans = {}
     for backend in ("numba", "numpy"):
-        controller = DWA(DiffDrive(0.05, 0.2), footprint=ROBOT, grid=grid, backend=backend)
+        controller = DWA(DiffDrive(0.05, 0.2), footprint=ROBOT, grid=grid, backend=backend,
+                         trajectory_generator=generator)  # fmt: skip
         controller._velocity = np.array([0.3, 0.2])
         plans[backend] = controller.plan((1.9, -0.1, 0.3), LINE, perception=view, t=0.2)
     np.testing.assert_allclose(plans["numba"].scores, plans["numpy"].scores, rtol=1e-9,
@@ -211,3 +218,64 @@ def test_from_gains_and_the_defaults():
     assert controller.sim_time == 2.0
     assert controller.critics == DWACritics(costmap=10.0, goal_dist=1.0)
     assert DWA.uses_perception and DWA.per_robot
+
+
+# --------------------------------------------------------------------------- standard generator
+def test_ramps_reach_their_targets_at_the_acceleration_limits():
+    # DWB's computeNewVelocity: from (0.2, 0.5) towards (1.0, -1.0) at a_up 2.5, α 3.2
+    profile = ramp_profile(np.array([0.2, 0.5]), np.array([[1.0, -1.0]]),
+                           np.array([2.5, 1.0, 3.2]), 0.1, 10)  # fmt: skip
+    tau = 0.1 * np.arange(1, 11)
+    np.testing.assert_allclose(profile[0, :, 0], np.minimum(0.2 + 2.5 * tau, 1.0), atol=1e-15)
+    np.testing.assert_allclose(profile[0, :, 1], np.maximum(0.5 - 3.2 * tau, -1.0), atol=1e-15)
+    # slowing down uses a_down
+    slow = ramp_profile(np.array([1.0, 0.0]), np.array([[0.0, 0.0]]), np.array([2.5, 1.0, 3.2]),
+                        0.1, 12)  # fmt: skip
+    np.testing.assert_allclose(slow[0, :, 0], np.maximum(1.0 - 0.1 * np.arange(1, 13), 0.0),
+                               atol=1e-15)  # fmt: skip
+
+
+def test_a_held_profile_is_the_closed_form_arc():
+    samples = np.array([[0.5, 0.0], [0.8, 1.2], [-0.3, -0.7]])
+    held = np.repeat(samples[:, None, :], 20, axis=1)
+    np.testing.assert_allclose(profile_poses(0.4, held, 0.05), arc_poses(0.4, samples, 0.05, 20),
+                               atol=1e-12)  # fmt: skip
+
+
+def test_the_standard_window_spans_the_whole_trajectory_and_the_command_keeps_the_limits():
+    # from a stop, Fox et al.'s window holds only what one period reaches (0.125 m/s at
+    # 2.5 m/s² over 0.05 s); DWB's standard generator samples targets up to top speed, and the
+    # robot is sent the ramp's first step towards the chosen one
+    limited = DWA(Unicycle(), max_speed=1.0, footprint=ROBOT)
+    standard = DWA(Unicycle(), max_speed=1.0, footprint=ROBOT, trajectory_generator="standard")
+    assert limited.window_samples()[:, 0].max() == pytest.approx(0.125)
+    assert standard.window_samples()[:, 0].max() == pytest.approx(1.0)
+    plan = standard.plan((0.0, 0.0, 0.0), LINE, t=0.0)
+    assert plan.status == "ok"
+    assert 0.0 < plan.command[0] <= 2.5 * 0.05 + 1e-12
+    # the fan it draws starts from the velocity the plan started at and ramps
+    poses = standard.predict(plan, plan.samples[:3])
+    assert poses.shape == (3, standard.steps + 1, 3)
+    target = plan.samples[np.argmax(plan.samples[:, 0])]
+    ramp = standard.predict(plan, target)
+    step = np.hypot(*np.diff(ramp[:, :2], axis=0).T)
+    assert step[0] == pytest.approx(2.5 * 0.05 * 0.05, rel=1e-4)  # the chord of v_1·dt
+    assert np.all(np.diff(step[:7]) > 0.0)  # speeding up at 2.5 m/s² for 0.4 s
+    assert np.all(step <= target[0] * 0.05 + 1e-12)  # never faster than the target
+
+
+def test_a_standard_dwa_arrives_through_the_engine():
+    path = PlannedPath.from_points([[0.0, 0.0], [2.0, 0.0], [3.0, 1.0]])
+    controller = DWA(Unicycle(), max_speed=0.5, trajectory_generator="standard")
+    log = closed_loop(controller, Unicycle(), (0.0, 0.0, 0.0), path, 20.0, 0.05)
+    end = log.true_pose[0, -1]
+    assert controller.status == "arrived"
+    assert math.hypot(end[0] - 3.0, end[1] - 1.0) <= 0.05
+    # the ramped commands keep the acceleration limits between calls
+    speed = log.command[0, :, 0]
+    assert np.max(np.abs(np.diff(speed))) <= 2.5 * 0.05 + 1e-9
+
+
+def test_an_unknown_trajectory_generator_is_refused():
+    with pytest.raises(ConfigError, match="trajectory_generator"):
+        DWA(Unicycle(), trajectory_generator="fast")

@@ -12,9 +12,19 @@ command, which a kinematic plant follows; Δ the time since the last call, or
 where V_d does) are each held for ``sim_time`` (a circular arc,
 :mod:`wheelbase.control.dwa_kernels`) and scored by critics, as Nav2's DWB splits the method
 into a trajectory generator and critics (nav2_dwb_controller; weights from Nav2's
-``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres):
+``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres).
+
+That is ``trajectory_generator="limited_accel"`` (DWB's LimitedAccelGenerator, Fox et al.'s
+method, the default). ``"standard"`` is DWB's StandardTrajectoryGenerator, Nav2's default: the
+window spans what the robot can reach over the whole ``sim_time``,
+[v_c − a_dec·T, v_c + a_acc·T] × [ω_c − α·T, ω_c + α·T], and each sample is a target the
+trajectory ramps to at the acceleration limits (:func:`~wheelbase.control.dwa_kernels.
+ramp_profile`): from a stop it sees where it could be at full speed, not only the crawl a
+single period allows. DWB sends the target and leaves the ramp to the base; here the command
+is the ramp's velocity after Δ, so the robot keeps the limits the trajectory was scored with.
 
 ====================  ============================================================  ========
+
 critic (weight)       score of one trajectory                                       default
 ====================  ============================================================  ========
 ``path_dist``         distance [m] from its end to the path window (DWB PathDist,   640 /m
@@ -67,6 +77,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass, fields
+from dataclasses import field as dataclass_field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -88,6 +99,8 @@ from wheelbase.control.dwa_kernels import (
     dwa_kernel,
     dwa_scores_numpy,
     goal_distance_field,
+    profile_poses,
+    ramp_profile,
 )
 from wheelbase.control.footprint_field import FootprintField, footprint_disks
 from wheelbase.control.local_path import PathWindow
@@ -107,6 +120,7 @@ from wheelbase.limits import MAX_SAMPLE_STEPS
 __all__ = ["DWA", "DWA_BACKENDS", "DWACritics", "DWAPlan"]
 
 DWA_BACKENDS: tuple[str, ...] = ("numba", "numpy")
+TRAJECTORY_GENERATORS: tuple[str, ...] = ("limited_accel", "standard")
 STATUSES: tuple[str, ...] = ("ok", "all_collide", "arrived")
 
 
@@ -215,6 +229,10 @@ class DWAPlan:
         ``"ok"``, ``"all_collide"`` or ``"arrived"``.
     pose : numpy.ndarray, shape (3,)
         The measured pose the trajectories start from.
+    start_velocity : numpy.ndarray, shape (2,)
+        The current velocity (v_c, ω_c) the trajectories started from.
+    rates : numpy.ndarray, shape (3,)
+        (a_up, a_down, α) the standard generator's ramps used.
     """
 
     command: np.ndarray
@@ -225,6 +243,8 @@ class DWAPlan:
     legal: np.ndarray
     status: str
     pose: np.ndarray
+    start_velocity: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(2))
+    rates: np.ndarray = dataclass_field(default_factory=lambda: np.zeros(3))
 
 
 class DWA:
@@ -274,6 +294,9 @@ class DWA:
         Distance [m] after which an oscillation flag is reset (DWB: 0.05 m), > 0.
     oscillation_reset_angle : float
         Turn [rad] after which an oscillation flag is reset (DWB: 0.2 rad), > 0.
+    trajectory_generator : str
+        ``"limited_accel"`` (velocities of one period's window, held) or ``"standard"``
+        (targets of the whole ``sim_time``'s window, ramped to): see the module docstring.
     backend : str
         One of :data:`DWA_BACKENDS`.
 
@@ -313,6 +336,7 @@ class DWA:
         cusp_tolerance: float = 0.05,
         oscillation_reset_distance: float = 0.05,
         oscillation_reset_angle: float = 0.2,
+        trajectory_generator: str = "limited_accel",
         backend: str = "numba",
     ) -> None:
         kind, _ = model_kind(model)
@@ -364,6 +388,9 @@ class DWA:
         )
         self.oscillation_reset_angle = positive(
             "oscillation_reset_angle", oscillation_reset_angle, "rad"
+        )
+        self.trajectory_generator = check_choice(
+            "trajectory_generator", trajectory_generator, TRAJECTORY_GENERATORS
         )
         self.backend = check_choice("backend", backend, DWA_BACKENDS)
         self.grid, self.footprint = grid, footprint
@@ -508,22 +535,25 @@ class DWA:
         goal, field, fgeo = self._local_goal(window, info, near_goal, seen)
         c = self.critics
         forward, direction = c.forward_point_distance, float(info[4])
+        profile = self._profile(samples)
         if self.backend == "numba":
             scores = np.empty((samples.shape[0], len(SCORES)))
             collided = np.empty(samples.shape[0], np.bool_)
+            ramped = profile is not None
+            steps = profile if ramped else np.zeros((1, 1, 2))
             run_kernel(
                 dwa_kernel, samples.shape[0] * self.steps,
                 pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
                 info[1:3].copy(), direction, self._field.distance_field, local_map,
                 self._field.circles, relief, c.inflation, seen.cost, seen.near, seen.geometry,
                 seen.polygon, seen.table, seen.relief, seen.disks, seen.order, seen.counts,
-                c.dynamic_inflation, scores, collided,
+                c.dynamic_inflation, ramped, steps, scores, collided,
             )  # fmt: skip
         else:
             scores, collided = dwa_scores_numpy(
                 pose[2], samples, self.sim_dt, self.steps, window, goal, field, fgeo, forward,
                 info[1:3], direction, self._field, local_map, relief, c.inflation, seen,
-                c.dynamic_inflation,
+                c.dynamic_inflation, profile,
             )  # fmt: skip
         weights = c.vector()
         if info[5] <= forward:
@@ -550,19 +580,23 @@ class DWA:
         if c.oscillation:
             legal &= ~self._oscillating(samples)
         free = ~collided
+        start, rates = self._velocity.copy(), self._rates()
         if not free.any():
             plan = self._stop(pose, "all_collide")
             plan = DWAPlan(plan.command, samples, costs, scores, collided, legal, plan.status,
-                           pose.copy())  # fmt: skip
+                           pose.copy(), start, rates)  # fmt: skip
             self.last_plan = plan
             return plan
         if not legal.any():  # the legality rules give way to a collision-free command
             legal = free
         best = int(np.argmin(np.where(legal, costs, np.inf)))
         command = samples[best].copy()
+        if profile is not None:  # the ramp's velocity after this period, not its target
+            command = ramp_profile(start, command[None], rates, period, 1)[0, 0]
         self._debrief(pose, command)
         self.status = "ok"
-        plan = DWAPlan(command, samples, costs, scores, collided, legal, "ok", pose.copy())
+        plan = DWAPlan(command, samples, costs, scores, collided, legal, "ok", pose.copy(),
+                       start, rates)  # fmt: skip
         self.last_plan = plan
         return plan
 
@@ -605,15 +639,30 @@ class DWA:
         numpy.ndarray
         """
         delta = self.control_period if period is None else positive("period", period, "s")
+        if self.trajectory_generator == "standard":
+            delta = self.sim_time  # the targets the ramps reach within the trajectory
         v, w = self._velocity
-        up, down = (self.max_acceleration, self.max_deceleration) if v >= 0.0 else (
-            self.max_deceleration, self.max_acceleration)  # fmt: skip
+        up, down, _alpha = self._rates()
         speeds = _axis(v - down * delta, v + up * delta, self.min_speed, self.max_speed,
                        self.v_samples)  # fmt: skip
         turn = self.max_yaw_acceleration * delta
         rates = _axis(w - turn, w + turn, -self.max_yaw_rate, self.max_yaw_rate, self.w_samples)
         grid_v, grid_w = np.meshgrid(speeds, rates, indexing="ij")
         return np.ascontiguousarray(np.stack([grid_v.ravel(), grid_w.ravel()], -1))
+
+    def _rates(self) -> np.ndarray:
+        """(a_up, a_down [m/s²], α [rad/s²]) from the current velocity: growing |v| is
+        accelerating, whichever its sign."""
+        v = self._velocity[0]
+        up, down = (self.max_acceleration, self.max_deceleration) if v >= 0.0 else (
+            self.max_deceleration, self.max_acceleration)  # fmt: skip
+        return np.array([up, down, self.max_yaw_acceleration])
+
+    def _profile(self, samples: np.ndarray) -> np.ndarray | None:
+        """The ramped velocities of the standard generator (``None``: held samples)."""
+        if self.trajectory_generator != "standard":
+            return None
+        return ramp_profile(self._velocity, samples, self._rates(), self.sim_dt, self.steps)
 
     def _oscillating(self, samples: np.ndarray) -> np.ndarray:
         only = self._only
@@ -667,7 +716,13 @@ class DWA:
         velocities = seq if many else seq[None]
         poses = np.empty((velocities.shape[0], self.steps + 1, 3))
         poses[:, 0] = plan.pose
-        arcs = arc_poses(float(plan.pose[2]), velocities, self.sim_dt, self.steps)
+        if self.trajectory_generator == "standard":
+            # from the velocity the plan started at (the command sent since is the ramp's)
+            start = plan.start_velocity
+            profile = ramp_profile(start, velocities, plan.rates, self.sim_dt, self.steps)
+            arcs = profile_poses(float(plan.pose[2]), profile, self.sim_dt)
+        else:
+            arcs = arc_poses(float(plan.pose[2]), velocities, self.sim_dt, self.steps)
         poses[:, 1:, :2] = arcs[..., :2] + plan.pose[:2]
         poses[:, 1:, 2] = wrap_angle(arcs[..., 2])
         return poses if many else poses[0]

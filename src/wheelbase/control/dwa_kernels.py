@@ -8,7 +8,9 @@ circular arc) and the pose after step j (τ_j = (j + 1)·dt) is the exact arc
     x_j = x_0 + v·τ_j·sinc(ω·τ_j/2)·cos(θ_0 + ω·τ_j/2),
     y_j = y_0 + v·τ_j·sinc(ω·τ_j/2)·sin(θ_0 + ω·τ_j/2),    θ_j = θ_0 + ω·τ_j,
 
-sinc(u) = sin u / u (the chord of the arc, exact for any ω, no branch at ω = 0). The kernel
+sinc(u) = sin u / u (the chord of the arc, exact for any ω, no branch at ω = 0). With DWB's
+standard generator a sample is a target the velocity ramps to at the acceleration limits
+(:func:`ramp_profile`), and each step is the exact arc of that step's velocity. The kernel
 returns the raw critic values per sample, in the order of :data:`SCORES`, and whether the
 trajectory collides; :class:`~wheelbase.control.DWA` weighs them.
 """
@@ -34,7 +36,15 @@ from wheelbase.control.obstacle_critics import (
 from wheelbase.geometry import wrap_angle
 from wheelbase.geometry_numba import wrap_angle_scalar
 
-__all__ = ["SCORES", "arc_poses", "dwa_kernel", "dwa_scores_numpy", "goal_distance_field"]
+__all__ = [
+    "SCORES",
+    "arc_poses",
+    "dwa_kernel",
+    "dwa_scores_numpy",
+    "goal_distance_field",
+    "profile_poses",
+    "ramp_profile",
+]
 
 SCORES = (
     "path_dist",
@@ -156,7 +166,7 @@ def _nearest_distance(x, y, window):
 def dwa_kernel(
     theta, samples, dt, steps, window, goal, field, fgeo, forward, end, direction, df, mp, circles,
     map_relief, inflation, cost_map, near, cgeo, polygon, tracks, relief, disks, order, counts,
-    dynamic_inflation, scores, collided,
+    dynamic_inflation, ramped, profile, scores, collided,
 ):  # fmt: skip
     """Score every sample (see the module docstring); positions relative to the robot.
 
@@ -179,12 +189,20 @@ def dwa_kernel(
         soft_cost, soft_map, soft_dyn = 0.0, 0.0, 0.0
         hit = False
         for j in range(steps):
-            tau = (j + 1) * dt
-            half = 0.5 * w * tau
-            chord = v * tau * _sinc(half)
-            x = chord * math.cos(theta + half)
-            y = chord * math.sin(theta + half)
-            th = theta + w * tau
+            if ramped:  # this step's velocity of the ramp, an exact arc over the step
+                v, w = profile[i, j, 0], profile[i, j, 1]
+                half = 0.5 * w * dt
+                chord = v * dt * _sinc(half)
+                x += chord * math.cos(th + half)
+                y += chord * math.sin(th + half)
+                th += w * dt
+            else:  # the arc of the held velocity, in closed form
+                tau = (j + 1) * dt
+                half = 0.5 * w * tau
+                chord = v * tau * _sinc(half)
+                x = chord * math.cos(theta + half)
+                y = chord * math.sin(theta + half)
+                th = theta + w * tau
             c, s = math.cos(th), math.sin(th)
             if has_map:
                 clearance, bad = clearance_at(x, y, c, s, df, x0, y0, inv_res, circles, margin)
@@ -252,6 +270,74 @@ def dwa_kernel(
         collided[i] = hit
 
 
+def ramp_profile(
+    start: np.ndarray, samples: np.ndarray, rates: np.ndarray, dt: float, steps: int
+) -> np.ndarray:
+    """Velocities ``(S, steps, 2)`` at steps 1..steps of trajectories that ramp from the
+    current velocity towards each sample at the acceleration limits (DWB's
+    StandardTrajectoryGenerator, ``computeNewVelocity``): v_k = v_c + clip(v* − v_c,
+    −a_down·t_k, a_up·t_k), and ω_k alike with ±α·t_k.
+
+    Parameters
+    ----------
+    start : numpy.ndarray, shape (2,)
+        (v_c [m/s], ω_c [rad/s]), the current velocity.
+    samples : numpy.ndarray, shape (S, 2)
+        The target velocities (v*, ω*).
+    rates : numpy.ndarray, shape (3,)
+        (a_up, a_down [m/s²], α [rad/s²]): how fast v may grow and fall, and ω change.
+    dt : float
+        Step [s].
+    steps : int
+        Number of steps.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    tau = dt * np.arange(1, steps + 1)
+    change = samples[:, None, :] - start
+    v = start[0] + np.clip(change[..., 0], -rates[1] * tau, rates[0] * tau)
+    w = start[1] + np.clip(change[..., 1], -rates[2] * tau, rates[2] * tau)
+    return np.ascontiguousarray(np.stack([v, w], -1))
+
+
+def profile_poses(theta: float, profile: np.ndarray, dt: float) -> np.ndarray:
+    """Poses ``(S, steps, 3)`` after steps 1..steps from (0, 0, θ) of velocity profiles
+    ``(S, steps, 2)`` (:func:`ramp_profile`), each step an exact arc of its velocity (heading
+    not wrapped).
+
+    Parameters
+    ----------
+    theta : float
+        Start heading [rad].
+    profile : numpy.ndarray, shape (S, steps, 2)
+        (v [m/s], ω [rad/s]) over each step.
+    dt : float
+        Step [s].
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    n, steps = profile.shape[:2]
+    poses = np.empty((n, steps, 3))
+    x, y, th = np.zeros(n), np.zeros(n), np.full(n, float(theta))
+    for k in range(steps):
+        v, w = profile[:, k, 0], profile[:, k, 1]
+        half = 0.5 * w * dt
+        small = np.abs(half) < 1.0e-4
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sinc = np.where(small, 1.0 - half * half / 6.0,
+                            np.sin(half) / np.where(small, 1.0, half))  # fmt: skip
+        chord = v * dt * sinc
+        x = x + chord * np.cos(th + half)
+        y = y + chord * np.sin(th + half)
+        th = th + w * dt
+        poses[:, k, 0], poses[:, k, 1], poses[:, k, 2] = x, y, th
+    return poses
+
+
 def arc_poses(theta: float, samples: np.ndarray, dt: float, steps: int) -> np.ndarray:
     """Poses ``(S, steps, 3)`` after steps 1..steps of the arcs of ``samples`` (v [m/s],
     ω [rad/s]) from (0, 0, θ) (module docstring; heading not wrapped).
@@ -301,6 +387,7 @@ def dwa_scores_numpy(
     inflation: float,
     seen: PerceptionArrays,
     dynamic_inflation: float,
+    profile: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The NumPy twin of :func:`dwa_kernel`.
 
@@ -338,13 +425,18 @@ def dwa_scores_numpy(
         Costmap and tracks.
     dynamic_inflation : float
         r_dyn [m].
+    profile : numpy.ndarray, shape (S, steps, 2), optional
+        Ramped velocities (:func:`ramp_profile`) in place of the held samples.
 
     Returns
     -------
     scores : numpy.ndarray, shape (S, 8)
     collided : numpy.ndarray of bool, shape (S,)
     """
-    poses = arc_poses(theta, samples, dt, steps)
+    if profile is None:
+        poses = arc_poses(theta, samples, dt, steps)
+    else:
+        poses = profile_poses(theta, profile, dt)
     n = samples.shape[0]
     scores = np.zeros((n, len(SCORES)))
     collided = np.zeros(n, bool)
