@@ -279,3 +279,31 @@ def test_a_standard_dwa_arrives_through_the_engine():
 def test_an_unknown_trajectory_generator_is_refused():
     with pytest.raises(ConfigError, match="trajectory_generator"):
         DWA(Unicycle(), trajectory_generator="fast")
+
+
+def test_when_every_trajectory_collides_with_walkers_it_evades_rather_than_wait_to_be_struck():
+    # two walkers converge on the robot from ahead-left, each 0.6 m/s: every trajectory touches
+    # one, standing still at step 12; the standard generator's ramp to a right turn at speed
+    # stays clear one step longer and is driven (MPPI's rule, obstacle_critics.evasion_choice);
+    # the one-period window of limited_accel holds nothing that does (7 steps at best), so it
+    # stops
+    view = local_view(np.array([[0.9, 0.3], [0.3, 0.9]]), np.array([[-0.6, 0.0], [0.0, -0.6]]),
+                      np.array([0.3, 0.3]), 0.0)  # fmt: skip
+    statuses = {}
+    for generator in ("standard", "limited_accel"):
+        controller = dwa(trajectory_generator=generator, max_speed=1.0)
+        controller._velocity = np.array([0.5, 0.0])
+        plan = controller.plan((0.0, 0.0, 0.0), LINE, perception=view, t=0.0)
+        assert plan.collided.all()
+        statuses[generator] = plan.status, plan.command
+    assert statuses["standard"][0] == "evading"
+    assert statuses["standard"][1][0] > 0.0 and statuses["standard"][1][1] < 0.0  # on, right
+    assert statuses["limited_accel"][0] == "all_collide"
+    # a static obstacle never strikes a stopped robot: inside a lethal region it stops
+    inside = np.full((40, 40), 254, np.uint8)
+    costmap = SimpleNamespace(cost=inside, resolution=0.05, origin=(-1, -1))
+    walled = SimpleNamespace(costmap=costmap, tracks=None, time=0.0)
+    plan = dwa(trajectory_generator="standard").plan((0.0, 0.0, 0.0), LINE, perception=walled,
+                                                     t=0.0)  # fmt: skip
+    assert plan.status == "all_collide"
+    np.testing.assert_array_equal(plan.command, [0.0, 0.0])

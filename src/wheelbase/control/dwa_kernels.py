@@ -166,7 +166,7 @@ def _nearest_distance(x, y, window):
 def dwa_kernel(
     theta, samples, dt, steps, window, goal, field, fgeo, forward, end, direction, df, mp, circles,
     map_relief, inflation, cost_map, near, cgeo, polygon, tracks, relief, disks, order, counts,
-    dynamic_inflation, ramped, profile, scores, collided,
+    dynamic_inflation, ramped, profile, scores, first_contact,
 ):  # fmt: skip
     """Score every sample (see the module docstring); positions relative to the robot.
 
@@ -176,7 +176,8 @@ def dwa_kernel(
     ``direction`` ±1 the travel direction of the path section; ``df, mp, circles, map_relief``
     the static map (:class:`~wheelbase.control.footprint_field.FootprintField`); ``cost_map`` …
     ``counts`` the fields of :class:`~wheelbase.control.obstacle_critics.PerceptionArrays`.
-    Writes ``scores`` (S, 8) and ``collided`` (S,)."""
+    Writes ``scores`` (S, 8) and ``first_contact`` (S,): the first step whose pose collides,
+    ``steps`` where none does."""
     x0, y0, res, has_map = mp[0], mp[1], mp[2], mp[3] > 0.5
     margin = math.sqrt(2.0) * res + map_relief
     inv_res = 1.0 / res
@@ -188,6 +189,7 @@ def dwa_kernel(
         x, y, th = 0.0, 0.0, theta
         soft_cost, soft_map, soft_dyn = 0.0, 0.0, 0.0
         hit = False
+        first = steps
         for j in range(steps):
             if ramped:  # this step's velocity of the ramp, an exact arc over the step
                 v, w = profile[i, j, 0], profile[i, j, 1]
@@ -232,6 +234,8 @@ def dwa_kernel(
                 )
                 soft_dyn += soft
                 hit = hit or bad
+            if hit and first == steps:
+                first = j
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(
@@ -267,7 +271,7 @@ def dwa_kernel(
         scores[i, 6] = soft_dyn / steps
         turn = wrap_angle_scalar(th - goal[2])
         scores[i, 7] = abs(turn)
-        collided[i] = hit
+        first_contact[i] = first  # the held checks are never lethal
 
 
 def ramp_profile(
@@ -431,7 +435,8 @@ def dwa_scores_numpy(
     Returns
     -------
     scores : numpy.ndarray, shape (S, 8)
-    collided : numpy.ndarray of bool, shape (S,)
+    first_contact : numpy.ndarray of int, shape (S,)
+        The first step whose pose collides, ``steps`` where none does.
     """
     if profile is None:
         poses = arc_poses(theta, samples, dt, steps)
@@ -439,21 +444,21 @@ def dwa_scores_numpy(
         poses = profile_poses(theta, profile, dt)
     n = samples.shape[0]
     scores = np.zeros((n, len(SCORES)))
-    collided = np.zeros(n, bool)
+    collided = np.zeros((n, steps), bool)
     if field.enabled:
         clearance, hit = field.clearance(poses, map_relief, mp)
-        collided |= hit.any(axis=1)
+        collided |= hit
         gap = np.where(clearance > 0.0, np.maximum(inflation - clearance, 0.0), 0.0)
         scores[:, 5] = np.mean(gap * gap, axis=1)
     if seen.has_costmap:
         soft, hit = costmap_costs(poses, seen.cost, seen.near, seen.geometry, seen.polygon)
         scores[:, 4] = np.mean(soft, axis=1)
-        collided |= hit.any(axis=1)
+        collided |= hit
     if seen.has_tracks:
         soft, hit = track_costs(poses, seen.table, seen.relief, seen.disks, dynamic_inflation,
                                 HOLD_STEP / dt)  # fmt: skip
         scores[:, 6] = np.sum(soft, axis=1) / steps  # the held checks added, as the kernel
-        collided |= hit.any(axis=1)
+        collided |= hit[:, :steps]  # the held checks are never lethal
     end = poses[:, -1]
     step = np.minimum(forward, np.hypot(end[:, 0] - section_end[0], end[:, 1] - section_end[1]))
     heading = np.stack([np.cos(end[:, 2]), np.sin(end[:, 2])], -1)
@@ -470,7 +475,8 @@ def dwa_scores_numpy(
     fallback = np.where(scores[:, 1] >= 0.0, scores[:, 1] + step, -1.0)
     scores[:, 3] = np.where(to_goal >= 0.0, to_goal, fallback)
     scores[:, 7] = np.abs(wrap_angle(end[:, 2] - goal[2]))
-    return scores, collided
+    first = np.where(collided.any(axis=1), np.argmax(collided, axis=1), steps)
+    return scores, first
 
 
 def _goal_distances(points: np.ndarray, goal: np.ndarray, field: np.ndarray, fgeo: np.ndarray):

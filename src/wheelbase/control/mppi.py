@@ -20,8 +20,9 @@ warm start is cleared and :attr:`MPPIPlan.status` is ``"all_collide"`` — unles
 ``perception=`` view, standing still collides too, sooner than some sample does: a walker that
 does not avoid the robot strikes a stopped one (measured: every contact of the crowd benchmark
 was a walker striking the robot stopped by ``all_collide``). The command is then the first of
-the sample that stays clear longest (at least :data:`EVADE_TIME`; the cheapest of those),
-its sequence the warm start, and the status ``"evading"``. A static obstacle never strikes a
+the sample that stays clear longest (at least
+:data:`~wheelbase.control.obstacle_critics.EVADE_TIME`; the cheapest of those), its sequence
+the warm start, and the status ``"evading"``. A static obstacle never strikes a
 stopped robot, so among static obstacles the rule is the stop it always was.
 
 With a view, the optimal sequence of step 6 is itself rolled out and checked: a weighted mean of
@@ -101,7 +102,12 @@ from wheelbase.control.mppi_critics import MPPICritics, split_critic_gains
 from wheelbase.control.mppi_jax import host_samples, jax_costs, weighted_mean
 from wheelbase.control.mppi_numba import NORMAL_TABLE, mppi_kernel, mppi_work, run_kernel
 from wheelbase.control.mppi_numpy import contact_steps, numpy_costs, rollout
-from wheelbase.control.obstacle_critics import PerceptionArrays, PerceptionInputs, path_blocked
+from wheelbase.control.obstacle_critics import (
+    PerceptionArrays,
+    PerceptionInputs,
+    evasion_choice,
+    path_blocked,
+)
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_COORDINATE, MAX_SAMPLE_STEPS
@@ -110,10 +116,6 @@ __all__ = ["MPPI", "MPPI_BACKENDS", "MPPICritics", "MPPIPlan"]
 
 MPPI_BACKENDS: tuple[str, ...] = ("numpy", "numba", "jax")
 STATUSES: tuple[str, ...] = ("ok", "all_collide", "evading", "guarded", "arrived")
-
-EVADE_TIME = 0.1
-"""Least time [s] a sample must stay clear, when every sample collides, to be driven instead of
-a stop (and it must stay clear longer than standing still would)."""
 
 
 @dataclass(frozen=True)
@@ -598,16 +600,11 @@ class MPPI:
         contacts: Callable[[np.ndarray], np.ndarray],
     ) -> int | None:
         """When every sample collides: the sample that stays clear longest (the cheapest of
-        those), if it stays clear for EVADE_TIME and longer than standing still would; else None
+        those), by :func:`~wheelbase.control.obstacle_critics.evasion_choice`; else None
         (a stop). ``first``: each sample's first colliding step, from the costs; ``contacts``:
         the first colliding steps of command sequences ``(N, T, m)``."""
         stop = np.zeros((1, self.horizon_steps, self.nu))
-        standing = int(contacts(stop)[0])
-        latest = int(first.max())
-        if latest <= standing or latest * self.dt < EVADE_TIME - 1e-9:
-            return None
-        candidates = np.flatnonzero(first == latest)
-        return int(candidates[np.argmin(costs[candidates])])
+        return evasion_choice(first, int(contacts(stop)[0]), costs, self.dt)
 
     def _first_contacts(
         self,

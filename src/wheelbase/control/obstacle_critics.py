@@ -99,6 +99,7 @@ from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
     "ACCELERATION_NOISE",
+    "EVADE_TIME",
     "HOLD_STEP",
     "HOLD_TIME",
     "INSCRIBED",
@@ -113,6 +114,7 @@ __all__ = [
     "costmap_cost_at",
     "costmap_costs",
     "disk_reach",
+    "evasion_choice",
     "path_blocked",
     "predict_tracks",
     "read_costmap",
@@ -516,6 +518,39 @@ class PerceptionInputs:
         distance = _track_distances(here, now, self.disks)[0, 0]  # (J,)
         relief = np.where(distance <= 0.0, distance - CONTACT_RELIEF, 0.0)
         return np.ascontiguousarray(table), relief
+
+
+EVADE_TIME = 0.1
+"""Least time [s] a command must stay clear, when every command collides, to be driven instead
+of a stop (and it must stay clear longer than standing still would)."""
+
+
+def evasion_choice(first: np.ndarray, standing: int, costs: np.ndarray, dt: float) -> int | None:
+    """When every command collides: the one that stays clear longest (the cheapest of those),
+    if it stays clear for :data:`EVADE_TIME` and longer than standing still would; else None (a
+    stop). A walker that does not avoid the robot strikes a stopped one: where standing still
+    is struck sooner than some command, that command is the way out (MPPI's and DWA's rule).
+
+    Parameters
+    ----------
+    first : numpy.ndarray of int, shape (S,)
+        Each command's first colliding step.
+    standing : int
+        The first colliding step of standing still.
+    costs : numpy.ndarray, shape (S,)
+        The commands' costs.
+    dt : float
+        Step [s].
+
+    Returns
+    -------
+    int or None
+    """
+    latest = int(first.max())
+    if latest <= standing or latest * dt < EVADE_TIME - 1e-9:
+        return None
+    candidates = np.flatnonzero(first == latest)
+    return int(candidates[np.argmin(costs[candidates])])
 
 
 REACH_SLACK = 1.0e-6
