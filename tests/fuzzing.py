@@ -265,6 +265,7 @@ BASES: list[dict[str, Any]] = [
             "model_payload": False,
             "traction_control": {"friction": "map", "slow_down": True},
         },
+        "sensors": {"imu": {}},
         "terrain": {
             "surface": "dry_concrete",
             "regions": [
@@ -394,6 +395,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
     from pydantic import BaseModel
 
     from wheelbase.runner import ADAPTIVE_GAINS
+    from wheelbase.scenario import ImuSpec
     from wheelbase.scenario_terrain import (
         ContactsSpec,
         PayloadSpec,
@@ -420,6 +422,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
         *keys(PayloadSpec, ("robot", "payload")),
         *keys(ContactsSpec, ("robot", "contacts")),
         *keys(TractionSpec, ("controller", "traction_control")),
+        *keys(ImuSpec, ("sensors", "imu")),
         *keys(SlopeFeedForwardSpec, ("controller", "slope_feedforward")),
         ("controller", "model_payload"),
         ("goal_payloads",),
