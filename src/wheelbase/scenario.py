@@ -303,9 +303,10 @@ class LandmarkSpec(_Strict):
 
 
 class ImuSpec(_Strict):
-    """A planar MEMS IMU (:class:`wheelbase.sensors.Imu`): z-gyro and horizontal
-    accelerometers read every step from the true motion (a dynamic plant). Defaults: the
-    MPU-6050's noise densities; the biases are what a start-up calibration at rest leaves."""
+    """A planar MEMS IMU (:class:`wheelbase.sensors.Imu`): the yaw rate and the body's
+    horizontal linear acceleration (gravity removed by its attitude filter), read every step
+    from the true motion (a dynamic plant). Defaults: the MPU-6050's noise densities; the
+    biases are what a start-up calibration at rest leaves."""
 
     gyro_noise_density_deg: float = Field(
         0.005, ge=0, le=10, allow_inf_nan=False,
@@ -321,8 +322,9 @@ class ImuSpec(_Strict):
         "(MPU-6050: 400 µg/√Hz = 0.0039).",
     )  # fmt: skip
     accel_bias_std: float = Field(
-        0.05, ge=0, le=10, allow_inf_nan=False,
-        description="σ of each accelerometer axis' constant bias over a run [m/s²].",
+        0.1, ge=0, le=10, allow_inf_nan=False,
+        description="σ of each accelerometer axis' constant bias over a run [m/s²] (the "
+        "start-up calibration's residual and the attitude filter's tilt error).",
     )  # fmt: skip
     mount: tuple[float, float] = Field(
         (0.0, 0.0), description="Sensor position in the body frame (x [m], y [m]), within ±10 m."

@@ -42,29 +42,36 @@ estimate relaxes back towards the prior ``initial`` (by the distance travelled o
 robot that has left the ice for concrete regains its grip — and on ice it probes the peak again,
 a brief spin every ``memory`` metres.
 
-**With an IMU** (``inertial=True`` and readings (ω_z, f_x, f_y) of
+**With an IMU** (``inertial=True`` and readings (ω_z, a_x, a_y) of
 :class:`~wheelbase.sensors.Imu` passed to :meth:`~FrictionEstimator.update`): the ground speed
 of each contact is measured instead of predicted from the model. A skid the encoders cannot see
-— a wheel that spins while the other grips as the body turns less than the wheels say, or the
-body sliding sideways in a turn — is a disagreement between the wheels and the IMU. Per robot,
+— one wheel spinning as the other grips (the body turns less than the wheels say), or the axle
+sliding sideways in a turn — is a disagreement between the wheels and the IMU. Per robot,
 
-    û̇ = f_x − b̂_x + v̂·r̂ + L₁·(u_enc − û),   b̂̇_x = −L₂·(u_enc − û),
-    v̂̇ = f_y − b̂_y − û·r̂ − L₁·v̂,             b̂̇_y = L₂·v̂,
-    r̂ = ω_z − b̂_r,                           b̂̇_r = L₂/L₁·(ω_z − r_enc − b̂_r),
+    û̇ = a_x − b̂_x + v̂·r̂ + L₁·(u_enc − û),   b̂̇_x = −L₂·(u_enc − û),
+    v̂̇ = a_y − b̂_y − û·r̂ − L₁·v̂,             b̂̇_y = L₂·v̂,       r̂ = ω_z − b̂_r,
 
 the ground speed û at the reference point (the accelerometer integrated, held to the encoders'
-u_enc while every wheel grips), the lateral speed v̂ (held to 0, the no-side-slip constraint of
-a gripping drive axle) and the three biases, learnt only while every wheel grips (the same
-bandwidth ω_o). A wheel's slip speed is its rim speed against its contact's, e_k = a·ω_k −
-(û ∓ d·r̂): the yaw rate the gyro measures, not the one the wheels imply, so one wheel's spin
-shows even as the two rims' mean matches the body. A skid starts where a wheel's e_k exceeds
-the threshold in the direction of its force (as without the IMU), or the lateral speed |v̂|
-exceeds ``lateral_slip_speed`` + ``slip_ratio``·|û| (both wheels: the axle slides). The ground's
-force is then measured too: the lateral force m̂·(f_y − b̂_y) is shared by the two drive wheels
-(the casters swivel: they carry none), so a wheel's utilisation is
-√(F̂_k² + (m̂·(f_y − b̂_y)/2)²)/N̂_k, the friction circle's — during a skid its largest value is
-the estimate, and without one it is the evidence that the peak is at least that. Without
-readings (NaN, before the first step) the model's observer stands in.
+u_enc), the lateral speed v̂ (held to 0, the no-side-slip constraint of a gripping drive axle),
+L₁ = 2·``imu_bandwidth``, corrected only while every wheel grips. The biases come from the
+first reading (the start-up calibration: the start taken as steady motion), and then learn
+what drifts: the accelerometers' at L₂ = (:data:`BIAS_RATE`·``imu_bandwidth``)² while every
+wheel grips, the gyro's only at rest (no tick for :data:`REST_TIME`), where the whole reading
+is bias — in motion a slow skid would be learnt as one. A wheel's slip speed is its rim speed
+against its contact's, e_k = a·ω_k − (û ∓ d·r̂), with the yaw rate the gyro measures, not the
+one the wheels imply: one wheel's spin shows even where the two rims' mean matches the body. A
+skid starts where a wheel's e_k exceeds ``imu_slip_speed`` + ``imu_slip_ratio``·|û| in the
+direction of its force (as without the IMU), or the lateral speed |v̂| exceeds as much (both
+wheels: the axle slides; a lateral deficit Δ of the acceleration the wheels ask holds
+|v̂| ≈ Δ/L₁). The ground's force is then measured too: the lateral force m̂·(a_y − b̂_y) is
+shared by the two drive wheels (the casters swivel: they carry none), so a wheel's utilisation
+is √(F̂_k² + (m̂·(a_y − b̂_y)/2)²)/N̂_k, the friction circle's — during a skid its largest value
+is the estimate, and without one the evidence that the peak is at least that. A skid the IMU
+saw is kept for ``imu_memory`` metres before the estimate relaxes to the prior (without a
+false alarm from the model's errors to forget, longer than ``memory``). A skid that outlasts
+``max_spin_time`` was the observer's drift, not a skid: it ends for both wheels and the
+observer takes up again at the encoders. Rows without a finite reading use the model's
+observer.
 
 Encoder quantisation (one tick of 2048 at 100 Hz is 2 cm/s of rim speed on the RM100) sets the
 threshold: ``slip_speed`` 3 cm/s on the 50 ms-filtered slip speed. A spin lasts at least
@@ -84,7 +91,10 @@ from wheelbase._validate import finite
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
-__all__ = ["MIN_SPIN_TIME", "REST_TIME", "FrictionEstimator"]
+__all__ = ["BIAS_RATE", "MIN_SPIN_TIME", "REST_TIME", "FrictionEstimator"]
+
+BIAS_RATE = 0.1
+"""The IMU's biases learn in motion at this share of the inertial observer's bandwidth."""
 
 REST_TIME = 0.5
 """Time constant [s] of the IMU's biases learnt at rest (no encoder tick): what it reads then."""
@@ -225,7 +235,7 @@ class FrictionEstimator:
         self.friction = np.full((n, 2), self.initial)
         self.spinning = np.zeros((n, 2), bool)
         self.slip_speed_estimate = np.zeros((n, 2))
-        # the inertial observer: ground speed, lateral speed, biases (f_x, f_y, ω_z), lateral
+        # the inertial observer: ground speed, lateral speed, biases (a_x, a_y, ω_z), lateral
         # force [N] (filtered) and lateral slip speed (filtered)
         self._ground = 0.5 * (rim[:, 0] + rim[:, 1])
         self._lateral = np.zeros(n)
@@ -250,7 +260,7 @@ class FrictionEstimator:
         torques : array_like, shape (N, 2)
             Wheel torques [N·m] applied since the last call.
         imu : array_like, shape (N, 3), optional
-            The IMU's last readings (ω_z [rad/s], f_x, f_y [m/s²]); read with ``inertial``
+            The IMU's last readings (ω_z [rad/s], a_x, a_y [m/s²]); read with ``inertial``
             (module docstring), NaN rows: none yet.
         """
         s = np.asarray(state, dtype=np.float64).reshape(-1, 6)
@@ -361,7 +371,7 @@ class FrictionEstimator:
 
     def _calibrate(self, state: np.ndarray, imu: ArrayLike | None) -> None:
         """The IMU's biases from its first reading, the start taken as steady motion (at rest:
-        the reading is all bias, and the slope's pull)."""
+        the reading is all bias)."""
         if not self.inertial or imu is None:
             return
         z = np.asarray(imu, dtype=np.float64).reshape(-1, 3)
@@ -383,7 +393,9 @@ class FrictionEstimator:
         d = self.model.half_track
         u_enc, r_enc = state[:, 3], state[:, 5]
         grip = ~self.spinning.any(axis=1) & ok  # every wheel grips: the biases may learn
-        l1, l2 = 2.0 * self.imu_bandwidth, self.imu_bandwidth**2
+        # the start-up calibration took the biases: in motion they learn only what drifts, ten
+        # times slower than the observer follows the wheels
+        l1, l2 = 2.0 * self.imu_bandwidth, (BIAS_RATE * self.imu_bandwidth) ** 2
         bias = self._imu_bias
         yaw = z[:, 0] - bias[:, 2]
         fx, fy = z[:, 1] - bias[:, 0], z[:, 2] - bias[:, 1]
@@ -392,7 +404,7 @@ class FrictionEstimator:
         lateral = self._lateral + (fy - self._ground * yaw - np.where(grip, l1 * self._lateral,
                                                                        0.0)) * dt  # fmt: skip
         learn = np.where(grip, dt, 0.0)
-        # the accelerometers' biases (and a slope's pull) are learnt while every wheel grips;
+        # the accelerometers' biases are learnt while every wheel grips;
         # the gyro's only at rest, where it must read 0: in motion a slow skid would be learnt
         bias = bias + np.column_stack([-l2 * along * learn, l2 * self._lateral * learn,
                                        np.zeros_like(along)])  # fmt: skip
@@ -400,7 +412,7 @@ class FrictionEstimator:
         self._still = np.where(ok & (u_enc == 0.0) & (r_enc == 0.0), self._still + dt, 0.0)
         rest = self._still >= REST_TIME
         settle = min(1.0, dt / REST_TIME)
-        at_rest = z[:, [1, 2, 0]]  # (f_x, f_y, ω_z): all bias (and the slope's pull) at rest
+        at_rest = z[:, [1, 2, 0]]  # (a_x, a_y, ω_z): all bias at rest
         bias = np.where(rest[:, None], bias + settle * (at_rest - bias), bias)
         self._ground = np.where(ok & ~rest, ground, np.where(rest, 0.0, self._ground))
         self._lateral = np.where(ok & ~rest, lateral, np.where(rest, 0.0, self._lateral))

@@ -1,25 +1,28 @@
-"""A planar MEMS inertial sensor: a z-gyro and the two horizontal accelerometer axes.
+"""A planar MEMS inertial sensor: a z-gyro and the body's horizontal linear acceleration.
 
 A robot on the floor turns about its body z axis and accelerates in its plane, so the IMU that
 matters here reads three channels in the body frame at its mount (x_m, y_m) [m]:
 
     ω_z = r + b_g + n_g,
-    f_x = u̇ − v·r − ṙ·y_m − r²·x_m + g·s_x + b_x + n_x,
-    f_y = v̇ + u·r + ṙ·x_m − r²·y_m + g·s_y + b_y + n_y,
+    a_x = u̇ − v·r − ṙ·y_m − r²·x_m + b_x + n_x,
+    a_y = v̇ + u·r + ṙ·x_m − r²·y_m + b_y + n_y,
 
-(u, v, r) the body twist at the reference point, (s_x, s_y) the slope vector in the body frame
-(an accelerometer feels the specific force, acceleration minus gravity: at rest facing uphill
-it reads +g·sin α), b a constant bias of each channel (drawn once per run from its σ, the
-residual after the start-up calibration a robot does at rest) and n white noise of density N:
-a sample averaged over Δt has σ = N/√Δt (the discrete form of a white-noise density, as in the
-Allan-variance convention of IEEE Std 952).
+(u, v, r) the body twist at the reference point, b a constant bias of each channel (drawn once
+per run from its σ) and n white noise of density N: a sample averaged over Δt has σ = N/√Δt
+(the discrete form of a white-noise density, as in the Allan-variance convention of IEEE Std
+952). The accelerometers feel the specific force, acceleration minus gravity; on a slope that
+is the acceleration plus g·sin α uphill, which a wheel-versus-IMU comparison cannot tell from a
+spin. A 6-axis IMU's attitude filter (its x/y gyros and the vertical accelerometer, which a
+planar plant does not model) removes gravity and reports the linear acceleration, as modelled
+here; its tilt error is part of the accelerometers' bias.
 
 Default noise: the InvenSense MPU-6050 product specification (PS-MPU-6000A-00, rev. 3.4,
 §6.1–6.2): rate noise spectral density 0.005 °/s/√Hz, accelerometer noise power spectral
 density 400 µg/√Hz (3.9e-3 m/s²/√Hz). Its initial zero-rate output tolerance ±20 °/s and
 zero-g offset ±50 mg are factory tolerances that a start-up calibration at rest removes;
-what is left defaults to σ_b = 0.1 °/s for the gyro and 0.05 m/s² (≈ 5 mg) for the
-accelerometer, chosen, not from the datasheet (the datasheet gives no in-run figure).
+what is left defaults to σ_b = 0.1 °/s for the gyro and 0.1 m/s² for the accelerometer (10 mg,
+or 0.6° of the attitude filter's tilt error), chosen, not from the datasheet (the datasheet
+gives no in-run figure).
 """
 
 from __future__ import annotations
@@ -78,7 +81,7 @@ class Imu:
     gyro_noise_density: float = MPU6050_GYRO_NOISE_DENSITY
     gyro_bias_std: float = math.radians(0.1)
     accel_noise_density: float = MPU6050_ACCEL_NOISE_DENSITY
-    accel_bias_std: float = 0.05
+    accel_bias_std: float = 0.1
     mount: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
@@ -135,9 +138,8 @@ class Imu:
         dt: float,
         generators: list[np.random.Generator],
         bias: ArrayLike | None = None,
-        incline: ArrayLike | None = None,
     ) -> np.ndarray:
-        """Readings ``(M, 3)``: (ω_z [rad/s], f_x [m/s²], f_y [m/s²]) averaged over a step.
+        """Readings ``(M, 3)``: (ω_z [rad/s], a_x [m/s²], a_y [m/s²]) averaged over a step.
 
         Parameters
         ----------
@@ -151,19 +153,13 @@ class Imu:
             One per robot: its white noise of this step.
         bias : array_like, shape (M, 3), optional
             The run's biases (:meth:`biases`; default none).
-        incline : array_like, shape (M, 2), optional
-            g·(s_x, s_y): the slope's share of gravity in the body frame [m/s²] (default
-            level).
         """
         twist = as_float_array("twist_mean", twist_mean, 3).reshape(-1, 3)
         rate = as_float_array("twist_rate", twist_rate, 3).reshape(-1, 3)
         dt = finite("dt", dt, "s")
         if dt <= 0:
             raise ConfigError(f"dt must be > 0 s (got {dt:g})")
-        force = specific_force(twist, rate, self.mount)
-        if incline is not None:
-            force = force + np.asarray(incline, dtype=np.float64).reshape(-1, 2)
-        out = np.column_stack([twist[:, 2], force])
+        out = np.column_stack([twist[:, 2], specific_force(twist, rate, self.mount)])
         if bias is not None:
             out = out + np.asarray(bias, dtype=np.float64).reshape(-1, 3)
         std = self.noise_std(dt)
@@ -174,7 +170,7 @@ class Imu:
 
 def specific_force(twist: ArrayLike, rate: ArrayLike, mount: tuple[float, float] = (0.0, 0.0)):
     """The acceleration ``(M, 2)`` [m/s²] in the body frame of the point ``mount`` of a body
-    moving in the plane (module docstring, without gravity, bias or noise).
+    moving in the plane (module docstring, without bias or noise).
 
     Parameters
     ----------

@@ -455,13 +455,8 @@ class Engine:
             still=None if self.stuck is None else np.zeros(n),
             track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
             imu=imu,
-            imu_reading=None if imu is None else imu.calibration(twist, self._incline(start)),
+            imu_reading=None if imu is None else imu.calibration(twist),
         )
-
-    def _incline(self, poses: np.ndarray) -> np.ndarray | None:
-        """The slope's share of gravity ``(M, 2)`` in the body frame (None: a level plant)."""
-        incline = getattr(self.plant, "incline", None)
-        return None if incline is None else incline(poses)
 
     @property
     def _scores_tracks(self) -> bool:
@@ -655,9 +650,8 @@ class Engine:
             if state.imu is not None:
                 imu_reading = imu_reading.copy()
                 imu_reading[moving] = state.imu.read(
-                    state.step, self.dt, state.twist[moving], new_twist, moving,
-                    self._incline(new_pose),
-                )  # fmt: skip
+                    state.step, self.dt, state.twist[moving], new_twist, moving
+                )
             extra = {}
             cast = None
             if self.surroundings is not None:  # the agents move with the robots, from time t

@@ -3,8 +3,7 @@
 The engine reads the :class:`~wheelbase.sensors.Imu` after each plant step, as it reads the
 encoders: the twist went from ``before`` to ``after`` over ``dt``, so the sample is the IMU's
 average over the step, (u, v, r) the mean of the ends and (u̇, v̇, ṙ) their difference over dt
-(the sensor's own low-pass; an IMU read at the control rate). A plant on graded terrain gives
-the slope's share of gravity in the body frame (``plant.incline(poses)``). The reading goes to
+(the sensor's own low-pass; an IMU read at the control rate). The reading goes to
 the controllers that read the IMU (``reads_imu``) at the next step, as the estimate does — a
 proprioceptive sensor of the controller, not of the pose estimator.
 
@@ -71,7 +70,6 @@ class ImuReadings:
         before: np.ndarray,
         after: np.ndarray,
         index: np.ndarray,
-        incline: np.ndarray | None = None,
     ) -> np.ndarray:
         """Readings ``(M, 3)`` (ω_z, f_x, f_y) of the robots ``index`` over step ``step``.
 
@@ -85,16 +83,14 @@ class ImuReadings:
             Body twists of those robots at the step's start and end.
         index : numpy.ndarray of int, shape (M,)
             Which robots.
-        incline : numpy.ndarray, shape (M, 2), optional
-            The slope's share of gravity in the body frame [m/s²].
         """
         generators = [counter_stream(self.seeds[i], IMU_STREAM, step) for i in index]
         return self.imu.read(
             0.5 * (before + after), (after - before) / dt, dt, generators,
-            bias=self.bias[index], incline=incline,
+            bias=self.bias[index],
         )  # fmt: skip
 
-    def calibration(self, twist: np.ndarray, incline: np.ndarray | None = None) -> np.ndarray:
+    def calibration(self, twist: np.ndarray) -> np.ndarray:
         """The start-up readings ``(N, 3)``: the start twists held steady, averaged over
         :data:`CALIBRATION_TIME` (module docstring).
 
@@ -102,11 +98,8 @@ class ImuReadings:
         ----------
         twist : numpy.ndarray, shape (N, 3)
             The start twists (zeros: at rest).
-        incline : numpy.ndarray, shape (N, 2), optional
-            The slope's share of gravity in the body frame [m/s²].
         """
         generators = [counter_stream(seed, IMU_BIAS_STREAM, 1) for seed in self.seeds]
         return self.imu.read(
-            twist, np.zeros_like(twist), CALIBRATION_TIME, generators, bias=self.bias,
-            incline=incline,
-        )  # fmt: skip
+            twist, np.zeros_like(twist), CALIBRATION_TIME, generators, bias=self.bias
+        )

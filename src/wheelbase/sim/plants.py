@@ -450,24 +450,6 @@ class TerrainPlant:
             out[f"energy_{AUX_NAMES[k]}"] = state.aux[:, k].copy()
         return out
 
-    def incline(self, poses: np.ndarray) -> np.ndarray:
-        """g·(s_x, s_y) ``(M, 2)`` [m/s²]: the slope's share of gravity in the body frame under
-        each pose's reference point, what an accelerometer at rest reads (the plant's gravity
-        acts at the CG from the slope under the centroid; the same plane within a cell).
-
-        Parameters
-        ----------
-        poses : numpy.ndarray, shape (M, 3)
-            True poses (every model of a payload change has the same ground).
-        """
-        from wheelbase.dynamics import GRAVITY
-
-        slope = self.model.terrain.slope_at(poses[:, :2])
-        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-        return GRAVITY * np.column_stack(
-            [c * slope[:, 0] + s * slope[:, 1], -s * slope[:, 0] + c * slope[:, 1]]
-        )
-
     def motion(
         self, twist: np.ndarray, command: np.ndarray, names: tuple[str, ...], state: Any = None
     ):
