@@ -24,7 +24,8 @@ what a user gets.
   ``with_slow_down_slip_compensation`` (and the odometry's slip compensation),
   ``estimated`` (``friction: estimate``: the robot's own estimate from encoders, torques and
   model — the first spin is how it learns, so ``max_slip_after_first_spin`` is the figure to
-  hold against the bound) and ``estimated_slow_down`` (the reference slowed to the estimate).
+  hold against the bound), ``estimated_slow_down`` (the reference slowed to the estimate) and
+  ``estimated_imu_slow_down`` (the estimate reading an IMU, ``sensors.imu``).
   Each row: status, largest slip, the true final error, the time to the end against the
   reference's, the tracking error against the reference as timed, the deviation from the path,
   and with ``slow_down`` the tracking error against the slowed reference. A ``collision`` is
@@ -185,8 +186,12 @@ ICE_VARIANTS = {
     "with_slow_down_slip_compensation": ({"friction": "map", "slow_down": True}, True),
     "estimated": ({"friction": "estimate"}, False),
     "estimated_slow_down": ({"friction": "estimate", "slow_down": True}, False),
+    "estimated_imu_slow_down": ({"friction": "estimate", "slow_down": True}, False),
 }
 """Traction control's variants on ice: (traction_control, odometry.slip_compensation)."""
+
+IMU_VARIANTS = frozenset({"estimated_imu_slow_down"})
+"""Variants of ``ICE_VARIANTS`` whose robot has an IMU (``sensors.imu``, the defaults)."""
 
 
 def _slowed_error(prepared, log) -> float:
@@ -214,7 +219,8 @@ def ice_traction() -> dict:
                         ("straight_1_m_s2", straight)):  # fmt: skip
         out[route] = {}
         for label, (traction, compensate) in ICE_VARIANTS.items():
-            out[route][label] = _traction_row(base, traction, compensate)
+            out[route][label] = _traction_row(base, traction, compensate,
+                                              imu=label in IMU_VARIANTS)  # fmt: skip
     return out
 
 
@@ -273,9 +279,12 @@ def rolling_feedforward(quick: bool) -> dict:
     return out
 
 
-def _traction_row(base: dict, traction: dict | None, compensate: bool) -> dict:
-    """One run of ``base`` with ``traction_control`` and the odometry's slip compensation."""
+def _traction_row(base: dict, traction: dict | None, compensate: bool, imu: bool = False) -> dict:
+    """One run of ``base`` with ``traction_control``, the odometry's slip compensation and
+    (``imu``) an IMU the friction estimate reads."""
     data = copy.deepcopy(base)
+    if imu:
+        data["sensors"] = {**data.get("sensors", {}), "imu": {}}
     data["controller"]["traction_control"] = traction
     if compensate:
         data["odometry"]["slip_compensation"] = True

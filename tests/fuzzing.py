@@ -265,6 +265,7 @@ BASES: list[dict[str, Any]] = [
             "model_payload": False,
             "traction_control": {"friction": "map", "slow_down": True},
         },
+        "sensors": {"imu": {}},
         "terrain": {
             "surface": "dry_concrete",
             "regions": [
@@ -394,6 +395,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
     from pydantic import BaseModel
 
     from wheelbase.runner import ADAPTIVE_GAINS
+    from wheelbase.scenario import ImuSpec
     from wheelbase.scenario_terrain import (
         ContactsSpec,
         PayloadSpec,
@@ -420,6 +422,7 @@ def _ground_paths() -> list[tuple[str, ...]]:
         *keys(PayloadSpec, ("robot", "payload")),
         *keys(ContactsSpec, ("robot", "contacts")),
         *keys(TractionSpec, ("controller", "traction_control")),
+        *keys(ImuSpec, ("sensors", "imu")),
         *keys(SlopeFeedForwardSpec, ("controller", "slope_feedforward")),
         ("controller", "model_payload"),
         ("goal_payloads",),
@@ -1059,6 +1062,12 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
 
         return LandmarkSensor(**kw).observe(marks, (1.0, 1.0, 0.3), rng=0)
 
+    def imu_read(**kw):
+        from wheelbase.sensors import Imu
+
+        twist = kw.pop("twist")
+        return Imu(**kw).read(twist, twist, 0.01, [np.random.default_rng(0)])
+
     def landmarks_args(landmarks, poses):
         from wheelbase.sensors import LandmarkSensor
 
@@ -1286,6 +1295,17 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
                 "bearing_std": 0.02,
                 "detection_probability": 0.9,
                 "false_rate": 0.5,
+            },
+        ),
+        "Imu.read": (
+            imu_read,
+            {
+                "gyro_noise_density": 1e-4,
+                "gyro_bias_std": 1e-3,
+                "accel_noise_density": 4e-3,
+                "accel_bias_std": 0.1,
+                "mount": (0.1, 0.0),
+                "twist": [(0.5, 0.0, 0.2)],
             },
         ),
         "LandmarkSensor.observe(args)": (

@@ -704,9 +704,10 @@ def prepare(
         if ground.ground_active(scenario):
             plant = ground.build_plant(scenario, robot, terrain, axle, timeline)
     from wheelbase.scenario_navigation import build_perception
-    from wheelbase.scenario_sensors import build_estimator, build_sensors
+    from wheelbase.scenario_sensors import build_estimator, build_imu, build_sensors
 
     sensors = _field("sensors", lambda: build_sensors(scenario, grid))
+    imu = _field("sensors.imu", lambda: build_imu(scenario))
     estimator = _field("localization", lambda: build_estimator(scenario, robot, grid, sensors))
     if dynamic:
         estimator = ground.compensate_slip(scenario, estimator, robot, terrain)
@@ -760,6 +761,7 @@ def prepare(
         perception=perception,
         references=fleet_references,
         stuck=_stuck(scenario),
+        imu=imu,
     )
     return Prepared(
         scenario, robot, grid, start, goals, plan, reference, planning, engine, footprint,

@@ -39,6 +39,7 @@ __all__ = [
     "EMPTY_MAP_MARGIN",
     "EMPTY_MAP_RESOLUTION",
     "ControllerSpec",
+    "ImuSpec",
     "LandmarkSpec",
     "LidarSpec",
     "LocalizationSpec",
@@ -301,11 +302,52 @@ class LandmarkSpec(_Strict):
         return value
 
 
+class ImuSpec(_Strict):
+    """A planar MEMS IMU (:class:`wheelbase.sensors.Imu`): the yaw rate and the body's
+    horizontal linear acceleration (gravity removed by its attitude filter), read every step
+    from the true motion (a dynamic plant). Defaults: the MPU-6050's noise densities; the
+    biases are what a start-up calibration at rest leaves."""
+
+    gyro_noise_density_deg: float = Field(
+        0.005, ge=0, le=10, allow_inf_nan=False,
+        description="White-noise density of the yaw rate [deg/s/√Hz] (MPU-6050: 0.005).",
+    )  # fmt: skip
+    gyro_bias_std_deg: float = Field(
+        0.1, ge=0, le=100, allow_inf_nan=False,
+        description="σ of the yaw rate's constant bias over a run [deg/s].",
+    )  # fmt: skip
+    accel_noise_density: float = Field(
+        400e-6 * 9.80665, ge=0, le=10, allow_inf_nan=False,
+        description="White-noise density of each horizontal accelerometer axis [m/s²/√Hz] "
+        "(MPU-6050: 400 µg/√Hz = 0.0039).",
+    )  # fmt: skip
+    accel_bias_std: float = Field(
+        0.1, ge=0, le=10, allow_inf_nan=False,
+        description="σ of each accelerometer axis' constant bias over a run [m/s²] (the "
+        "start-up calibration's residual and the attitude filter's tilt error).",
+    )  # fmt: skip
+    mount: tuple[float, float] = Field(
+        (0.0, 0.0), description="Sensor position in the body frame (x [m], y [m]), within ±10 m."
+    )
+
+    @field_validator("mount")
+    @classmethod
+    def _mount(cls, value):
+        if not all(math.isfinite(v) and abs(v) <= 10.0 for v in value):
+            raise ValueError(f"must be finite and within ±10 m (got {list(value)})")
+        return value
+
+
 class SensorsSpec(_Strict):
-    """Exteroceptive sensors read at the true pose (none by default)."""
+    """Sensors: exteroceptive ones read at the true pose, an IMU read from the true motion
+    (none by default)."""
 
     lidar: LidarSpec | None = Field(None, description="A 2-D lidar on the map.")
     landmarks: LandmarkSpec | None = Field(None, description="Range–bearing landmarks.")
+    imu: ImuSpec | None = Field(
+        None, description="A yaw-rate gyro and horizontal accelerometers (a dynamic plant); "
+        "traction control's friction estimate reads it."
+    )  # fmt: skip
 
 
 # Options of each localisation method besides ``method`` and ``initial_std``.
@@ -591,6 +633,10 @@ class Scenario(_Strict):
         ):
             if given and not dynamic:
                 raise ValueError(f"{name} acts on the dynamics: set plant: dynamic")
+        if self.sensors.imu is not None and not dynamic:
+            raise ValueError(
+                "sensors.imu reads the accelerations of the dynamics: set plant: dynamic"
+            )
         if self.goal_payloads is not None and len(self.goal_payloads) != len(self.goals):
             raise ValueError(
                 f"goal_payloads has {len(self.goal_payloads)} entries for {len(self.goals)} goals"

@@ -405,6 +405,7 @@ def wrap_controller(
                 initial_friction=spec.initial_friction, slow_down=spec.slow_down,
                 hold_integrators=spec.hold_integrators, reference_share=spec.reference_share,
                 rolling_resistance=spec.rolling_resistance, casters=contacts.casters,
+                imu=spec.friction == "estimate" and scenario.sensors.imu is not None,
             )  # fmt: skip
         except ConfigError as error:
             raise ScenarioError(f"controller.traction_control: {error}") from None

@@ -29,7 +29,14 @@ import numpy as np
 
 from wheelbase.scenario import Scenario
 
-__all__ = ["AMCL_DEFAULTS", "build_estimator", "build_odometry", "build_sensors", "world_grid"]
+__all__ = [
+    "AMCL_DEFAULTS",
+    "build_estimator",
+    "build_imu",
+    "build_odometry",
+    "build_sensors",
+    "world_grid",
+]
 
 AMCL_DEFAULTS: dict[str, float] = {
     "alpha1": 1e-3,
@@ -111,6 +118,28 @@ def build_sensors(scenario: Scenario, world: Any) -> Any:
             landmark_rate_hz=marks.rate_hz,
         )
     return SensorSuite(**options)
+
+
+def build_imu(scenario: Scenario) -> Any:
+    """The scenario's IMU (:class:`~wheelbase.sensors.Imu`, angles in radians), or None.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario.
+    """
+    from wheelbase.sensors.imu import Imu
+
+    spec = scenario.sensors.imu
+    if spec is None:
+        return None
+    return Imu(
+        gyro_noise_density=math.radians(spec.gyro_noise_density_deg),
+        gyro_bias_std=math.radians(spec.gyro_bias_std_deg),
+        accel_noise_density=spec.accel_noise_density,
+        accel_bias_std=spec.accel_bias_std,
+        mount=tuple(spec.mount),
+    )
 
 
 def build_odometry(scenario: Scenario, robot: Any) -> Any:

@@ -255,8 +255,8 @@ class TractionSpec(_Strict):
     friction: Literal["map", "estimate"] | float = Field(
         "map", description="The friction coefficient to respect: 'map', the peak friction of "
         "the terrain under each wheel (the robot knows its floor); 'estimate', the robot's own "
-        "online estimate from its encoders, its torques and its model (it never reads the "
-        "terrain); or a number."
+        "online estimate from its encoders, its torques and its model, and with sensors.imu "
+        "its IMU (it never reads the terrain); or a number."
     )  # fmt: skip
     margin: float = Field(
         0.8, gt=0, le=1, description="Share of the friction limit the torques may use."

@@ -31,7 +31,11 @@ per wheel against its casters' 0.10·N̂: it did not move. μ̂:
   (:class:`~wheelbase.control.friction_estimate.FrictionEstimator`: a wheel whose slip speed
   against the body the model predicts grows in the direction of its force is spinning, and the
   friction the ground gave it meanwhile is the estimate). While a wheel spins its torque is cut
-  to ``regrip`` times what the ground gave (below the sliding friction, so it grips again);
+  to ``regrip`` times what the ground gave (below the sliding friction, so it grips again).
+  With ``imu=True`` the wrapper reads the robot's IMU (``reads_imu``: the engine passes its
+  readings, never the truth) and the estimate compares the wheels with what it measures —
+  the yaw rate and the ground speed of each contact, the body's lateral slide — so that a
+  sideways skid or one wheel's spin in a turn, which the encoders cannot see, lowers it too;
 - a coefficient it is given (``friction=0.1`` on ice);
 - the peak friction of the floor it knows, looked up under each wheel's estimated position in
   its terrain map (``friction="map"``: :attr:`wheelbase.terrain.Surface.peak_friction`).
@@ -127,6 +131,9 @@ class TractionControl(WrappedLaw):
         Give the wrapped law (the innermost one with a ``max_torque``) the smallest friction
         limit as its torque saturation during the call, so that its anti-windup stops its
         integrators while traction clips (module docstring).
+    imu : bool
+        With ``friction="estimate"``: the estimate also reads the IMU's readings the engine
+        passes (``imu=`` of each call; module docstring).
     """
 
     command_names: ClassVar[tuple[str, ...]] = ("tau_left", "tau_right")
@@ -148,6 +155,7 @@ class TractionControl(WrappedLaw):
         reference_share: float = 0.8,
         rolling_resistance: float = 0.0,
         casters: ArrayLike = (),
+        imu: bool = False,
     ) -> None:
         if not callable(law) or tuple(getattr(law, "command_names", ())) != self.command_names:
             raise ConfigError("traction control wraps a controller that gives wheel torques")
@@ -198,13 +206,18 @@ class TractionControl(WrappedLaw):
         if where.ndim != 2 or where.shape[1] != 2 or not np.all(np.isfinite(where)):
             raise ConfigError(f"casters must be finite (x, y) pairs in m (got shape {where.shape})")
         self.casters = where
+        if not isinstance(imu, bool):
+            raise ConfigError(f"imu must be true or false (got {imu!r})")
+        if imu and friction != "estimate":
+            raise ConfigError("imu goes with friction 'estimate': only the estimate reads it")
+        self.reads_imu = imu
         self.estimator = None
         if friction == "estimate":
             from wheelbase.control.friction_estimate import FrictionEstimator
 
             self.estimator = FrictionEstimator(
                 model, wheel_inertia=wheel_inertia, drive_load_share=self.drive_load_share,
-                initial=initial_friction,
+                initial=initial_friction, inertial=imu,
             )  # fmt: skip
         self._last: np.ndarray | None = None
         self._timing: tuple[object, object] | None = None  # (reference, FrictionTiming)
@@ -306,7 +319,9 @@ class TractionControl(WrappedLaw):
         return share * self.model.wheel_radius * grip
 
     # ------------------------------------------------------------------ control
-    def __call__(self, t: float, state: ArrayLike, reference: object) -> np.ndarray:
+    def __call__(
+        self, t: float, state: ArrayLike, reference: object, imu: ArrayLike | None = None
+    ) -> np.ndarray:
         """The wrapped law's wheel torques, each clipped to its friction limit.
 
         Parameters
@@ -317,6 +332,8 @@ class TractionControl(WrappedLaw):
             Estimated (x, y, θ, u, v, r).
         reference : object
             Passed to the law.
+        imu : array_like, shape (..., 3), optional
+            The IMU's last readings (ω_z, f_x, f_y) with ``imu=True`` (ignored otherwise).
         """
         s = as_float_array("state", state, 6)
         flat = s.reshape(-1, 6)
@@ -324,7 +341,10 @@ class TractionControl(WrappedLaw):
             last = self._last
             if last is None or last.shape != (flat.shape[0], 2):
                 last = np.zeros((flat.shape[0], 2))
-            self.estimator.update(t, flat, last)
+            readings = None
+            if self.reads_imu and imu is not None:
+                readings = np.asarray(imu, dtype=np.float64).reshape(-1, 3)
+            self.estimator.update(t, flat, last, readings)
         if self.slow_down:
             reference = self._slowed(t, flat, reference)
         inner = self._saturated_law() if self.hold_integrators else None

@@ -19,7 +19,9 @@ code. Each :meth:`Engine.step`, for every robot still running:
 5. *plant*: the true state advances by ``dt`` (kinematic or dynamic);
 6. *encoders and sensors*: the wheel angles' change becomes tick differences, and the sensors
    that are due (:class:`~wheelbase.sim.sensors.SensorSuite`: a lidar, landmarks) are read at
-   the new true poses; both go to the estimator, whose estimate the controller sees next.
+   the new true poses; both go to the estimator, whose estimate the controller sees next. An
+   IMU (:class:`~wheelbase.sim.imu_sensing.ImuReadings`) is read from the step's true motion
+   and goes to the controllers that read it (``reads_imu``: called with ``imu=`` its rows).
 
 Finished robots are frozen (masks, not branches); a controller's own per-step status (MPPI's
 ``ok``/``all_collide``/``arrived``) is recorded beside the engine's status. Nothing a robot does
@@ -47,6 +49,7 @@ from wheelbase._validate import as_float_array, integer, nonnegative, positive
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
 from wheelbase.limits import MAX_STEPS
+from wheelbase.sim.imu_sensing import IMU_SIGNALS, ImuReadings
 from wheelbase.sim.log import STATUSES, Log
 from wheelbase.sim.sensing import EncoderReadings, PerfectState
 
@@ -181,6 +184,10 @@ class EngineState:
     track_scores : numpy.ndarray, shape (N, 3), or None
         For the metrics only (nothing that decides reads it): each robot's running sums of
         squared track position and velocity errors against the true agents, and of matches.
+    imu : ImuReadings or None
+        The IMUs and their robots' biases (counter-based noise).
+    imu_reading : numpy.ndarray, shape (N, 3), or None
+        The last IMU readings (ω_z, f_x, f_y) (the start-up calibration before the first step).
     """
 
     step: int
@@ -204,6 +211,8 @@ class EngineState:
     perception: Any = None
     still: np.ndarray | None = None
     track_scores: np.ndarray | None = None
+    imu: Any = None
+    imu_reading: np.ndarray | None = None
 
     @property
     def running(self) -> np.ndarray:
@@ -291,6 +300,11 @@ class Engine:
     stuck : Stuck, optional
         The ``stuck`` rule (:class:`~wheelbase.sim.stuck.Stuck`): a robot commanded to move
         that does not move for its time ends ``stuck``.
+    imu : Imu, optional
+        An IMU on each robot (:class:`~wheelbase.sensors.Imu`, a dynamic plant), read after
+        every step; a controller with ``reads_imu`` is called with ``imu=`` the last readings
+        ``(N, 3)`` (its robot's ``(3,)`` for a per-robot one; before the first step its
+        start-up calibration, :meth:`~wheelbase.sim.imu_sensing.ImuReadings.calibration`).
     """
 
     plant: Any
@@ -313,6 +327,7 @@ class Engine:
     perception: Any = None
     references: tuple | None = None
     stuck: Any = None
+    imu: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "dt", positive("dt", self.dt, "s"))
@@ -336,6 +351,13 @@ class Engine:
                 "wheel-encoder odometry needs the plant's encoder axle (WheelAxle); "
                 "run this plant with perfect state"
             )
+        if self.imu is not None:
+            from wheelbase.sensors.imu import Imu
+
+            if not isinstance(self.imu, Imu):
+                raise ConfigError(f"imu must be an Imu (got {type(self.imu).__name__})")
+            if not self.plant.dynamic:
+                raise ConfigError("an IMU reads a dynamic plant's accelerations: use one")
         if self.sensors is not None:
             from wheelbase.sim.sensors import SensorSuite
 
@@ -407,6 +429,7 @@ class Engine:
             controllers = [self.controller] + [copy.deepcopy(self.controller) for _ in range(n - 1)]
         else:
             controllers = [self.controller]
+        imu = None if self.imu is None else ImuReadings(self.imu, seeds)
         encoder = self.estimator.encoder
         estimator_state = self.estimator.start(start, seeds)
         first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
@@ -431,6 +454,8 @@ class Engine:
             perception=None if self.perception is None else self.perception.start(start),
             still=None if self.stuck is None else np.zeros(n),
             track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
+            imu=imu,
+            imu_reading=None if imu is None else imu.calibration(twist),
         )
 
     @property
@@ -458,8 +483,14 @@ class Engine:
             measured = np.concatenate([state.estimate, state.estimated_twist], axis=-1)
         n, width = measured.shape[0], len(self.command_names)
         controllers = state.controllers
+        imu = state.imu_reading
         if len(controllers) == 1 and not getattr(controllers[0], "per_robot", False):
-            raw = np.asarray(controllers[0](t, measured.copy(), self.reference), dtype=np.float64)
+            extra = {}
+            if imu is not None and getattr(controllers[0], "reads_imu", False):
+                extra["imu"] = imu.copy()
+            raw = np.asarray(
+                controllers[0](t, measured.copy(), self.reference, **extra), dtype=np.float64
+            )
             command = _shaped(raw, n, width, self.command_names)
             reported = getattr(controllers[0], "status", None)
             return command, [reported if isinstance(reported, str) else None] * n
@@ -472,6 +503,8 @@ class Engine:
             extra = {}
             if self.perception is not None and getattr(law, "uses_perception", False):
                 extra["perception"] = self.perception.view(state.perception, int(i), t)
+            if imu is not None and getattr(law, "reads_imu", False):
+                extra["imu"] = imu[i].copy()
             raw = np.asarray(law(t, measured[i].copy(), reference, **extra), dtype=np.float64)
             command[i] = _shaped(raw, 1, width, self.command_names)[0]
             reported = getattr(law, "status", None)
@@ -538,6 +571,9 @@ class Engine:
             signals = {**signals, "track_position_sq_sum": state.track_scores[:, 0],
                        "track_velocity_sq_sum": state.track_scores[:, 1],
                        "track_matches": state.track_scores[:, 2]}  # fmt: skip
+        if state.imu_reading is not None:  # read after the last step: what the controller saw
+            signals = {**signals, **{name: state.imu_reading[:, k]
+                                     for k, name in enumerate(IMU_SIGNALS)}}  # fmt: skip
         if self.surroundings is not None:
             signals = {**signals, **self.surroundings.signals(state.world, state.pose, state.twist)}
             if self.record_sensors:
@@ -591,6 +627,7 @@ class Engine:
         world_state = state.world
         perception_state = state.perception
         track_scores = state.track_scores
+        imu_reading = state.imu_reading
         if active.any():
             index = np.flatnonzero(active)
             new_pose, new_twist, turned, plant_state = self.plant.step(
@@ -610,6 +647,11 @@ class Engine:
             else:
                 delta = None
             pose[moving], twist[moving], wheel_angle[moving] = new_pose, new_twist, new_angle
+            if state.imu is not None:
+                imu_reading = imu_reading.copy()
+                imu_reading[moving] = state.imu.read(
+                    state.step, self.dt, state.twist[moving], new_twist, moving
+                )
             extra = {}
             cast = None
             if self.surroundings is not None:  # the agents move with the robots, from time t
@@ -674,6 +716,8 @@ class Engine:
             perception=perception_state,
             still=still,
             track_scores=track_scores,
+            imu=state.imu,
+            imu_reading=imu_reading,
         )
         return new_state, row
 
