@@ -217,42 +217,16 @@ def dwa_kernel(
                 soft_cost += soft
                 hit = hit or bad
             if has_tracks:
-                soft, bad = track_cost_at(
-                    x,
-                    y,
-                    c,
-                    s,
-                    j,
-                    tracks,
-                    relief,
-                    disks,
-                    dynamic_inflation,
-                    steps,
-                    reach,
-                    order,
-                    counts,
-                )
+                soft, bad = track_cost_at(x, y, c, s, j, tracks, relief, disks, dynamic_inflation,
+                                          steps, reach, order, counts)  # fmt: skip
                 soft_dyn += soft
                 hit = hit or bad
             if hit and first == steps:
                 first = j
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
-                soft, bad = track_cost_at(
-                    x,
-                    y,
-                    c,
-                    s,
-                    j,
-                    tracks,
-                    relief,
-                    disks,
-                    dynamic_inflation,
-                    steps,
-                    reach,
-                    order,
-                    counts,
-                )
+                soft, bad = track_cost_at(x, y, c, s, j, tracks, relief, disks, dynamic_inflation,
+                                          steps, reach, order, counts)  # fmt: skip
                 soft_dyn += hold_weight * soft
                 hit = hit or bad
         # the forward point, never past the section's end (it would pull the end short of it)

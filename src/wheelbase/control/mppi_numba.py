@@ -247,21 +247,8 @@ def mppi_kernel(
                 cost += w_costmap * soft
                 collided = collided or hit
             if has_tracks:
-                soft, hit = track_cost_at(
-                    x,
-                    y,
-                    c,
-                    s,
-                    t,
-                    tracks,
-                    relief,
-                    disks,
-                    dynamic_inflation,
-                    steps,
-                    reach,
-                    order,
-                    counts,
-                )
+                soft, hit = track_cost_at(x, y, c, s, t, tracks, relief, disks, dynamic_inflation,
+                                          steps, reach, order, counts)  # fmt: skip
                 cost += w_dynamic * soft
                 collided = collided or hit
             if collided and first == steps:
@@ -278,21 +265,8 @@ def mppi_kernel(
             p0, p1, p2 = u0, u1, u2
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for t in range(steps, tracks.shape[0]):
-                soft, hit = track_cost_at(
-                    x,
-                    y,
-                    c,
-                    s,
-                    t,
-                    tracks,
-                    relief,
-                    disks,
-                    dynamic_inflation,
-                    steps,
-                    reach,
-                    order,
-                    counts,
-                )
+                soft, hit = track_cost_at(x, y, c, s, t, tracks, relief, disks, dynamic_inflation,
+                                          steps, reach, order, counts)  # fmt: skip
                 cost += w_dynamic * hold_weight * soft
                 collided = collided or hit
         if goal_mode:
