@@ -55,15 +55,28 @@ def test_observation_jacobians_match_finite_differences():
 
 @needs_data
 def test_smoothing_on_mrclam_robot_1_with_unknown_landmarks():
+    # measured: 0.118 m robot and 0.109 m landmark RMSE (localisation with the landmarks
+    # known: 0.09-0.11 m); the map is turned 1.3 deg against the survey
     result = landmark_slam(MRCLAM, 1, "smoothing")
     m = result.metrics()
     assert m["landmarks_seen"] == 15
-    assert m["position_rmse_m"] < 0.15  # localisation with the landmarks known: 0.09-0.11 m
-    assert m["landmark_rmse_m"] < 0.2
+    assert m["position_rmse_m"] < 0.13
+    assert m["landmark_rmse_m"] < 0.125
     assert m["dead_reckoning_rmse_m"] > 2.0
     assert 1.0 < m["camera_range_scale"] < 1.05
     with pytest.raises(ConfigError, match="method"):
         landmark_slam(MRCLAM, 1, "fastslam")
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        landmark_slam(MRCLAM, 1, "smoothing", {"smoothing_heading_noise": 0.01})
+
+
+@needs_data
+def test_smoothing_weighs_the_odometry_heading_by_its_measured_errors():
+    # with the filters' inflated heading noise (0.12 rad^2/rad) the relative heading across a
+    # turn floats, and robot 1's map turns 2.1 deg: 0.172 m landmark RMSE, against 0.109 m with
+    # the measured 0.01 rad^2/rad
+    m = landmark_slam(MRCLAM, 1, "smoothing", {"smoothing_heading_per_rad": 0.12}).metrics()
+    assert m["landmark_rmse_m"] > 0.16
 
 
 def test_relative_information_is_that_of_the_end_pose_residual():
