@@ -1248,6 +1248,7 @@ def _constructors() -> dict[str, tuple[Callable[..., Any], dict[str, Any]]]:
                 "dynamic_inflation": 0.5,
                 "oscillation": True,
                 "goal_tolerance": (0.05, 0.25),
+                "trajectory_generator": "standard",
             },
         ),
         "simulate": (
