@@ -298,3 +298,26 @@ def test_the_blocked_check_skips_only_poses_that_cannot_touch_an_obstacle():
         np.testing.assert_array_equal(_footprint_hits(grid, samples, poses), expected)
         hits += int(expected.sum())
     assert 0 < hits < 150 * 60  # both answers occur
+
+
+def test_a_spin_recovery_stops_before_a_corner_swings_into_a_box():
+    # only spins; a box against the square footprint's front edge: the robot stands clear of
+    # it, but 5 degrees of turn put a corner into it, so the spin must not start (as the back-up
+    # does not reverse into what is behind); without the box it turns (the test above)
+    nav, _, first = navigator(rate_hz=0.0, max_retries=1, behaviours=("spin",))
+    wall = box(room(), 4.0, 4.6, 0.0, 4.0)  # the room cut in two: no plan, so it recovers
+    ahead = View(Costmap(box(wall, 1.25, 1.55, 1.6, 2.4)))
+    grid = believed_grid(ahead, 0.2)
+    assert not grid.in_collision(FOOTPRINT, START[None]).any()
+    assert grid.in_collision(FOOTPRINT, np.array([[1.0, 2.0, math.radians(5.0)]])).any()
+    t, pose, poses = 0.0, START.copy(), []
+    for _ in range(200):
+        command = nav(t, pose, first, perception=ahead)
+        pose = pose + 0.05 * np.array([0.0, 0.0, command[1]])
+        poses.append(pose)
+        t += 0.05
+        if nav.status == "blocked":
+            break
+    assert nav.status == "blocked" and nav.recoveries == 1
+    # never turned into the box (a square turned by 90 degrees is clear again: every pose)
+    assert not grid.in_collision(FOOTPRINT, np.array(poses)).any()
