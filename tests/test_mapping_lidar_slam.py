@@ -185,7 +185,7 @@ def test_closures_leave_the_front_end_alone():
     # local_frontend: the sequential edges with closures are those of a run without them,
     # bit for bit (Intel's odometry fields are its corrected poses: a log with odometry)
     log = read_carmen(INTEL).subset(slice(12, 82))
-    slam = LidarSlam(use_odometry=True, loop_min_separation=8)
+    slam = LidarSlam(use_odometry=True, loop_min_separation=8, loop_gate=16.27)
     closed = slam.run(log)
     alone = LidarSlam(use_odometry=True, loop_min_separation=8, loop_every=10**9).run(log)
     loops = closed.loop_edges
