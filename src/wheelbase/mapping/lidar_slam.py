@@ -33,7 +33,8 @@ For each scan, in time order:
    to the current keyframe (an upper bound of the graph's, which the loop edges only tighten)
    and the closure's ``loop_std`` added. An accepted closure is an edge between the candidate
    and the current keyframe, and the graph is optimised (:func:`optimize_pose_graph`, dynamic
-   covariance scaling on the loop edges against false closures). The scans after the last keyframe follow it rigidly.
+   covariance scaling on the loop edges against false closures). The scans after the last
+   keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
 """
 
