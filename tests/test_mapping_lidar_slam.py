@@ -178,3 +178,72 @@ def test_fusing_a_match_with_the_prediction_is_the_product_of_the_gaussians():
     pose, fused = _fuse(np.zeros(3), along, np.array([0.3, 0.05, 0.0]), np.diag([1e-4] * 3))
     assert pose[0] == pytest.approx(0.3, abs=1e-3) and pose[1] == pytest.approx(0.025)
     assert np.all(np.linalg.eigvalsh(np.linalg.inv(fused) - np.linalg.inv(along)) > 0)
+
+
+@needs_intel
+def test_closures_leave_the_front_end_alone():
+    # local_frontend: the sequential edges with closures are those of a run without them,
+    # bit for bit (Intel's odometry fields are its corrected poses: a log with odometry)
+    log = read_carmen(INTEL).subset(slice(12, 82))
+    slam = LidarSlam(use_odometry=True, loop_min_separation=8, loop_gate=16.27)
+    closed = slam.run(log)
+    alone = LidarSlam(use_odometry=True, loop_min_separation=8, loop_every=10**9).run(log)
+    loops = closed.loop_edges
+    assert closed.stats["loops_accepted"] >= 1 and closed.stats["optimizations"] >= 1
+    assert np.array_equal(closed.keyframes, alone.keyframes)
+    assert np.array_equal(closed.graph.measurements[~loops], alone.graph.measurements)
+    assert np.array_equal(closed.graph.information[~loops], alone.graph.information)
+
+
+def _composed(steps):
+    from wheelbase.geometry import compose
+
+    out = np.zeros(3)
+    for step in steps:
+        out = compose(out, step)
+    return out
+
+
+def test_the_chain_covariance_is_that_of_the_composed_edges():
+    from wheelbase.geometry import compose, inverse_pose
+    from wheelbase.mapping.lidar_slam import _chain_covariance
+    from wheelbase.mapping.se2 import se2_exp_map, se2_log
+
+    rng = np.random.default_rng(0)
+    meas = [np.array([0.3, 0.05, 0.2]) + rng.normal(0.0, 0.05, 3) for _ in range(12)]
+    sigma = np.diag([0.01, 0.02, 0.03]) ** 2
+    info = [np.linalg.inv(sigma)] * 12 + [np.eye(3)]  # a loop edge at the end: not summed
+    flags = [False] * 12 + [True]
+    c, j = 2, 10
+    cov = _chain_covariance(meas, info, flags, c, j)
+    mean = _composed(meas[c:j])
+    noise = rng.multivariate_normal(np.zeros(3), sigma, size=(j - c, 20000))
+    drawn = np.zeros((20000, 3))
+    for m, e in zip(meas[c:j], noise, strict=True):  # each edge perturbed on its right
+        drawn = compose(drawn, compose(np.broadcast_to(m, e.shape), se2_exp_map(e)))
+    samples = se2_log(compose(np.broadcast_to(inverse_pose(mean), drawn.shape), drawn))
+    assert np.allclose(np.cov(samples.T), cov, rtol=0.03, atol=1e-5)
+
+
+def test_the_gate_keeps_a_true_closure_and_rejects_an_aisle_away():
+    from wheelbase.geometry import compose, relative_pose
+    from wheelbase.mapping.lidar_slam import _closure_chi2
+
+    # 60 keyframes 0.2 m apart down an aisle and back (a U-turn in the middle), edges with
+    # the errors measured in simulation (3 mm along, 1.5 mm across, 0.06°)
+    steps = [np.array([0.2, 0.0, 0.0])] * 30 + [np.array([0.0, 0.0, math.pi])]
+    steps += [np.array([0.2, 0.0, 0.0])] * 29
+    sigma = np.diag([0.003, 0.0015, math.radians(0.06)]) ** 2
+    info = [np.linalg.inv(sigma)] * len(steps)
+    poses = [np.zeros(3)]
+    for step in steps:
+        poses.append(compose(poses[-1], step))
+    c, j = 5, len(poses) - 6  # the same place, 50 keyframes apart
+    loop_info = np.linalg.inv(np.diag([0.005, 0.003, math.radians(0.08)]) ** 2)
+    truth = relative_pose(poses[c], poses[j])
+    true_closure = truth + np.array([0.006, -0.003, math.radians(0.05)])
+    flags = [False] * len(steps)
+    kept = _closure_chi2(poses, steps, info, flags, c, j, true_closure, loop_info)
+    assert kept < 16.27
+    aliased = compose(truth, np.array([2.7, 0.0, 0.0]))  # the next aisle's twin
+    assert _closure_chi2(poses, steps, info, flags, c, j, aliased, loop_info) > 1e3
