@@ -28,16 +28,6 @@ The rule, step by step:
    centre are not to be trusted: its R gains ρ² I (its centre is uncertain by about the
    radius seen; the tracker then leans on its prediction, and does not learn the radius from
    it).
-7. A cluster that is *not a disc* gains ρ² I too: the root mean square of its points'
-   distances to the fitted circle, |p − c| − ρ, exceeds :data:`DISC_MISFIT` ρ. On a disc
-   only the range noise is left (walkers in ``crowd_crossing``: 5 % of ρ at the median, 10 %
-   at the 90th percentile); on a square seen across a corner the points lie between ρ and
-   ρ√2 of its centre, about 12 % of ρ and more (the boxes of ``unexpected_boxes``: 17 % at
-   the median), and on two discs merged into one cluster more still. The disc model does not
-   hold there, and the fitted centre moves with the viewpoint: a box the robot drives past
-   seemed to move at 0.4–0.55 m/s towards it, every rollout was predicted to collide, and
-   the robot stopped by the box until its recoveries ran out (``unexpected_boxes`` seeds 22
-   and 27, ``blocked``).
 """
 
 from __future__ import annotations
@@ -54,11 +44,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.perception.specs import TrackerSpec, check_scan_geometry
 from wheelbase.planning import OccupancyGrid
 
-__all__ = ["DISC_MISFIT", "Detections", "detect"]
-
-DISC_MISFIT = 0.1
-"""Root-mean-square misfit of a cluster's points to its fitted circle, as a share of the
-radius, above which it is not read as a disc (module docstring, step 7)."""
+__all__ = ["Detections", "detect"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,11 +213,7 @@ def _clusters(
         edge = ~same & (neighbour >= 0) & (neighbour < beam_count)
         edge[edge] &= readings[neighbour[edge]] < reach[edge]  # NaN compares False
         occluded[label[edge]] = True
-    # step 7: the points' misfit to the fitted circle
-    miss = np.hypot(*(points - centre[label]).T) - np.where(keep, radius, 0.0)[label]
-    misfit = np.sqrt(np.bincount(label, miss * miss, minlength=count.size) / count)
-    not_disc = (count >= 3) & (misfit > DISC_MISFIT * np.where(keep, radius, np.inf))
-    hidden = np.where((occluded | not_disc) & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
+    hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
     covariance = spread / count[:, None, None] + spec.measurement_std**2 * np.eye(2) + hidden
     return Detections(centre[keep], covariance[keep], radius[keep], count[keep].astype(np.int64),
                       occluded[keep])  # fmt: skip
