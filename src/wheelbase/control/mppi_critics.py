@@ -63,6 +63,7 @@ import numpy as np
 from wheelbase._validate import finite, nonnegative, positive
 from wheelbase.control.obstacle_critics import ACCELERATION_NOISE, HOLD_TIME
 from wheelbase.errors import ConfigError
+from wheelbase.limits import MAX_SAMPLE_STEPS
 
 __all__ = ["MPPICritics", "critics_from_mapping", "split_critic_gains"]
 
@@ -190,8 +191,14 @@ class MPPICritics:
             raise ConfigError(f"near_goal_distance must be >= 0 m (got {near:g})")
         object.__setattr__(self, "near_goal_distance", near)
         stride = self.path_stride
-        if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
-            raise ConfigError(f"path_stride must be an integer >= 1 (got {stride!r})")
+        if (
+            isinstance(stride, bool)
+            or not isinstance(stride, (int, np.integer))
+            or not 1 <= stride <= MAX_SAMPLE_STEPS
+        ):  # a stride past the horizon is checked once: no need for more than the work bound
+            raise ConfigError(
+                f"path_stride must be an integer in [1, {MAX_SAMPLE_STEPS}] (got {stride!r})"
+            )
         if self.extra is not None and not callable(self.extra):
             raise ConfigError(f"extra critic must be callable (got {type(self.extra).__name__})")
 
