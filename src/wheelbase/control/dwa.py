@@ -18,9 +18,9 @@ That is ``trajectory_generator="limited_accel"`` (DWB's LimitedAccelGenerator, F
 method, the default). ``"standard"`` is DWB's StandardTrajectoryGenerator, Nav2's default: the
 window spans what the robot can reach over the whole ``sim_time``,
 [v_c − a_dec·T, v_c + a_acc·T] × [ω_c − α·T, ω_c + α·T], and each sample is a target the
-trajectory ramps to at the acceleration limits (:func:`~wheelbase.control.dwa_kernels.
-ramp_profile`): from a stop it sees where it could be at full speed, not only the crawl a
-single period allows. DWB sends the target and leaves the ramp to the base; here the command
+trajectory ramps to at the acceleration limits
+(:func:`~wheelbase.control.dwa_kernels.ramp_profile`): from a stop it sees where it could be
+at full speed, not only the crawl a single period allows. DWB sends the target and leaves the ramp to the base; here the command
 is the ramp's velocity after Δ, so the robot keeps the limits the trajectory was scored with.
 
 ====================  ============================================================  ========
