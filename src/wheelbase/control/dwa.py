@@ -12,19 +12,9 @@ command, which a kinematic plant follows; Δ the time since the last call, or
 where V_d does) are each held for ``sim_time`` (a circular arc,
 :mod:`wheelbase.control.dwa_kernels`) and scored by critics, as Nav2's DWB splits the method
 into a trajectory generator and critics (nav2_dwb_controller; weights from Nav2's
-``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres).
-
-That is ``trajectory_generator="limited_accel"`` (DWB's LimitedAccelGenerator, Fox et al.'s
-method, the default). ``"standard"`` is DWB's StandardTrajectoryGenerator, Nav2's default: the
-window spans what the robot can reach over the whole ``sim_time``,
-[v_c − a_dec·T, v_c + a_acc·T] × [ω_c − α·T, ω_c + α·T], and each sample is a target the
-trajectory ramps to at the acceleration limits
-(:func:`~wheelbase.control.dwa_kernels.ramp_profile`): from a stop it sees where it could be
-at full speed, not only the crawl a single period allows. DWB sends the target and leaves the ramp to the base; here the command
-is the ramp's velocity after Δ, so the robot keeps the limits the trajectory was scored with.
+``nav2_params.yaml``, converted from DWB's cell units at its 0.05 m resolution to metres):
 
 ====================  ============================================================  ========
-
 critic (weight)       score of one trajectory                                       default
 ====================  ============================================================  ========
 ``path_dist``         distance [m] from its end to the path window (DWB PathDist,   640 /m
@@ -46,6 +36,17 @@ critic (weight)       score of one trajectory                                   
 ``rotate_to_goal``    within the goal's position tolerance: |θ_end − θ_goal| [rad]  32 /rad
                       (+ ``slowing_factor``·v² while still slowing down)
 ====================  ============================================================  ========
+
+The velocities of one period's window, held, are ``trajectory_generator="limited_accel"``
+(DWB's LimitedAccelGenerator, Fox et al.'s method, the default). ``"standard"`` is DWB's
+StandardTrajectoryGenerator, Nav2's default: the window spans what the robot can reach over
+the whole ``sim_time``,
+[v_c − a_dec·T, v_c + a_acc·T] × [ω_c − α·T, ω_c + α·T], and each sample is a target the
+trajectory ramps to at the acceleration limits
+(:func:`~wheelbase.control.dwa_kernels.ramp_profile`): from a stop it sees where it could be
+at full speed, not only the crawl a single period allows. DWB sends the target and leaves the
+ramp to the base; here the command is the ramp's velocity after Δ, so the robot keeps the
+limits the trajectory was scored with.
 
 Two defaults were set on the cases of ``tests/test_dwa.py``, not taken from Nav2: ``costmap``
 (DWB's BaseObstacle scale, 0.02 per cost unit summed over the 9 poses of its default
