@@ -248,6 +248,13 @@ def dwa_kernel(
         first_contact[i] = first  # the held checks are never lethal
 
 
+def _sinc_array(u: np.ndarray) -> np.ndarray:
+    """sin u / u elementwise, as the kernel's ``_sinc`` (its series below 1e-4)."""
+    small = np.abs(u) < 1.0e-4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(small, 1.0 - u * u / 6.0, np.sin(u) / np.where(small, 1.0, u))
+
+
 def ramp_profile(
     start: np.ndarray, samples: np.ndarray, rates: np.ndarray, dt: float, steps: int
 ) -> np.ndarray:
@@ -304,11 +311,7 @@ def profile_poses(theta: float, profile: np.ndarray, dt: float) -> np.ndarray:
     for k in range(steps):
         v, w = profile[:, k, 0], profile[:, k, 1]
         half = 0.5 * w * dt
-        small = np.abs(half) < 1.0e-4
-        with np.errstate(divide="ignore", invalid="ignore"):
-            sinc = np.where(small, 1.0 - half * half / 6.0,
-                            np.sin(half) / np.where(small, 1.0, half))  # fmt: skip
-        chord = v * dt * sinc
+        chord = v * dt * _sinc_array(half)
         x = x + chord * np.cos(th + half)
         y = y + chord * np.sin(th + half)
         th = th + w * dt
@@ -338,10 +341,7 @@ def arc_poses(theta: float, samples: np.ndarray, dt: float, steps: int) -> np.nd
     tau = dt * np.arange(1, steps + 1)
     v, w = samples[:, :1], samples[:, 1:]
     half = 0.5 * w * tau
-    small = np.abs(half) < 1.0e-4
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(half) / np.where(small, 1.0, half))
-    chord = v * tau * sinc
+    chord = v * tau * _sinc_array(half)
     return np.stack(
         [chord * np.cos(theta + half), chord * np.sin(theta + half), theta + w * tau], -1
     )
