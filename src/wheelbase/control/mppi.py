@@ -618,11 +618,10 @@ class MPPI:
         own rules, fed the sequences as its perturbations of a zero mean (a NumPy rollout of one
         sequence cost 2.4 ms a call in the crowd loop), else
         :func:`~wheelbase.control.mppi_numpy.contact_steps`."""
-        local, mean, *rest = args
+        local, mean, _lo, _hi, _scale, _window, info, *_rest = args
         if self.backend == "numba":
-            probe = (local, np.zeros_like(mean), *rest)
+            probe = (local, np.zeros_like(mean), *args[2:])
             return self._costs_numba(probe, sequences, local_map, seen, len(sequences))[2]
-        info = args[6]
         return contact_steps(self, local, sequences, info, local_map, seen)
 
     def _costs_numba(
