@@ -1,19 +1,21 @@
-"""Hand-made lidar scenes for the perception tests and benchmark: rooms and moving discs.
+"""Hand-made lidar scenes for the perception tests and benchmark: rooms, moving discs, boxes.
 
 The true range of a beam is the nearer of the map's (``wheelbase.sensors.scan_rays``, exact
 traversal) and the first crossing of a disc's circle, solved in closed form: a ray ``o + t u``
 meets the circle of centre ``c`` and radius ρ at ``t = b − sqrt(b² − (|c − o|² − ρ²))`` with
-``b = u · (c − o)`` (0 when ``o`` is inside).
+``b = u · (c − o)`` (0 when ``o`` is inside); a box's, the nearest crossing of its edges.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from wheelbase.planning import OccupancyGrid
 from wheelbase.sensors import scan_rays
 
-__all__ = ["crossing_discs", "disc_ranges", "room"]
+__all__ = ["box_corners", "box_ranges", "crossing_discs", "disc_ranges", "room"]
 
 
 def room(width: float, height: float, resolution: float = 0.05) -> OccupancyGrid:
@@ -49,6 +51,35 @@ def disc_ranges(
         with np.errstate(invalid="ignore"):
             t = np.where(c <= 0.0, 0.0, b - np.sqrt(disc))
         hit = (disc >= 0.0) & (t >= 0.0)
+        ranges = np.where(hit & (t < ranges), t, ranges)
+    return ranges
+
+
+def box_corners(cx: float, cy: float, length: float, width: float, yaw: float) -> np.ndarray:
+    """The corners ``(4, 2)`` [m] of a ``length × width`` box centred at (cx, cy), turned by
+    ``yaw`` [rad], counter-clockwise."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    half = 0.5 * np.array([[length, width], [-length, width], [-length, -width],
+                           [length, -width]])  # fmt: skip
+    return np.array([cx, cy]) + half @ np.array([[c, s], [-s, c]])
+
+
+def box_ranges(
+    sensor_pose: np.ndarray, beam_angles: np.ndarray, max_range: float, corners: np.ndarray
+) -> np.ndarray:
+    """True ranges ``(K,)`` from one sensor (x, y, θ) to a convex polygon ``corners`` (P, 2)
+    in open space (``max_range`` where a beam misses it)."""
+    angles = sensor_pose[2] + np.asarray(beam_angles, float)
+    ux, uy = np.cos(angles), np.sin(angles)
+    ranges = np.full(angles.shape, float(max_range))
+    for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True):
+        ex, ey = b - a
+        wx, wy = a[0] - sensor_pose[0], a[1] - sensor_pose[1]
+        det = ex * uy - ey * ux
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (ex * wy - ey * wx) / det  # along the beam
+            lam = (ux * wy - uy * wx) / det  # along the edge
+        hit = (np.abs(det) > 1e-12) & (t > 0.0) & (lam >= 0.0) & (lam <= 1.0)
         ranges = np.where(hit & (t < ranges), t, ranges)
     return ranges
 

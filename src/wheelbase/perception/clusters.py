@@ -23,11 +23,32 @@ The rule, step by step:
 5. The measurement covariance is the points' spread over their number plus the floor
    σ² with σ = ``measurement_std``: R = C/n + σ² I, with C the points' covariance (divided
    by n).
-6. A cluster is *occluded* when the beam just outside one of its edges returns nearer than
+6. A cluster that is no disc is read as a rectangle, since a disc's centre moves with the
+   viewpoint (a box seen from a passing robot then seems to drive at it). Clusters of at least
+   ``_RECTANGLE_MIN_POINTS`` returns are also fitted by the L-shape fit of Zhang et al.
+   ("Efficient L-shape fitting for vehicle detection using laser scanners", IEEE IV 2017:
+   the search over headings in [0°, 90°) of the closeness criterion Σ 1 / max(d, d₀), d the
+   distance of a return to the nearer of the two edges it may lie on, d₀ =
+   ``_CLOSENESS_FLOOR``); the rectangle is taken when its RMS d is below ``_RECTANGLE_MARGIN``
+   times the RMS distance of the returns to the disc's circle. Its sides are the returns'
+   extents along its axes, grown where the beams leave room: past each end of the chain of
+   returns, the face it ends goes on at most to where the next beam, which missed, meets the
+   face's line (without bound when that beam is hidden by something nearer, step 7); with
+   one face seen, the depth goes on away from the sensor without bound. The side with less
+   room takes the middle of it; the other the middle of its own when that is at most
+   ``_TRUSTED_ROOM`` times the first side, else the first side's length (a square) within
+   what its beams allow. The centre is the rectangle's, ρ half its diagonal: both stay where
+   they are as the viewpoint moves while the faces are seen whole, and a square box is found
+   at its centre from any side (with one face seen, a rectangle is off by half the
+   difference of its sides).
+7. A cluster is *occluded* when the beam just outside one of its edges returns nearer than
    that edge's return: the object may go on behind what is in front, so its span, radius and
    centre are not to be trusted: its R gains ρ² I (its centre is uncertain by about the
    radius seen; the tracker then leans on its prediction, and does not learn the radius from
    it).
+
+A moving rectangle (another robot) is read the same way; its covariance R is the one of
+step 5, as for a disc, and its disc (centre, ρ) is what the tracker and the critics use.
 """
 
 from __future__ import annotations
@@ -46,6 +67,15 @@ from wheelbase.planning import OccupancyGrid
 
 __all__ = ["Detections", "detect"]
 
+_RECTANGLE_MIN_POINTS = 8  # fewer returns cannot tell a disc from a rectangle
+_RECTANGLE_MARGIN = 1.0  # a rectangle is read when its RMS miss of the returns is below this
+#                          times the disc's (step 6)
+_END_STEP = 3  # fewest returns next to a chain's end that tell which face it ends
+_TRUSTED_ROOM = 0.5  # room the beams leave, in the other side's lengths, below which
+#                      a side takes the middle of it rather than a square's length
+_CLOSENESS_FLOOR = 0.01  # m: d₀ of the closeness criterion (Zhang et al. 2017)
+_HEADINGS = np.deg2rad(np.arange(0.0, 90.0, 1.0))  # the L-shape search's headings
+
 
 @dataclass(frozen=True, eq=False)
 class Detections:
@@ -62,7 +92,7 @@ class Detections:
     points : numpy.ndarray
         ``(M,)`` int64 number of returns in each cluster.
     occluded : numpy.ndarray
-        ``(M,)`` bool: something nearer hides an edge of the cluster (step 6).
+        ``(M,)`` bool: something nearer hides an edge of the cluster (step 7).
     """
 
     position: np.ndarray
@@ -203,7 +233,7 @@ def _clusters(
     middle = towards + 0.5 * (low + high)
     centre = sensor + (nearest + radius)[:, None] * np.column_stack([np.cos(middle),
                                                                      np.sin(middle)])  # fmt: skip
-    # step 6: an edge beam whose neighbour outside the cluster returns nearer is hidden there
+    # step 7: an edge beam whose neighbour outside the cluster returns nearer is hidden there
     occluded = np.zeros(count.size, bool)
     for same, step in ((np.concatenate([[seam], linked]), -1),
                        (np.concatenate([linked, [seam]]), 1)):  # fmt: skip
@@ -213,7 +243,92 @@ def _clusters(
         edge = ~same & (neighbour >= 0) & (neighbour < beam_count)
         edge[edge] &= readings[neighbour[edge]] < reach[edge]  # NaN compares False
         occluded[label[edge]] = True
+    misfit = np.zeros(count.size)
+    fitted = np.flatnonzero(keep & (count >= _RECTANGLE_MIN_POINTS))
+    if fitted.size:
+        gap = np.hypot(*(points - centre[label]).T) - radius[label]
+        misfit[fitted] = np.sqrt(np.bincount(label, gap * gap, count.size)[fitted]
+                                 / count[fitted])  # fmt: skip
+    for k in np.flatnonzero(misfit > 0.0):
+        members = np.flatnonzero(label == k)
+        members = members[np.argsort(side[members], kind="stable")]
+        box = _rectangle(points[members], sensor, spacing, bool(occluded[k]))
+        if box[2] < _RECTANGLE_MARGIN * misfit[k]:
+            centre[k], radius[k] = box[0], box[1]
+    keep &= radius <= spec.max_radius
     hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
     covariance = spread / count[:, None, None] + spec.measurement_std**2 * np.eye(2) + hidden
     return Detections(centre[keep], covariance[keep], radius[keep], count[keep].astype(np.int64),
                       occluded[keep])  # fmt: skip
+
+
+def _rectangle(
+    points: np.ndarray, sensor: np.ndarray, spacing: float, occluded: bool
+) -> tuple[np.ndarray, float, float]:
+    """Centre [m], radius [m] and RMS misfit [m] of the rectangle read from one cluster's
+    ``points`` (n, 2),
+    in the order of their bearings from ``sensor``, beams ``spacing`` [rad] apart; an
+    ``occluded`` cluster's faces may go on behind its ends (step 6 of the module docstring)."""
+    axis = np.stack([np.cos(_HEADINGS), np.sin(_HEADINGS)], -1)  # e₁ per heading
+    along = points @ axis.T  # (n, H)
+    across = points @ np.stack([-axis[:, 1], axis[:, 0]], -1).T
+    d1 = np.minimum(along.max(0) - along, along - along.min(0))
+    d2 = np.minimum(across.max(0) - across, across - across.min(0))
+    closeness = (1.0 / np.maximum(np.minimum(d1, d2), _CLOSENESS_FLOOR)).sum(0)
+    best = int(np.argmax(closeness))
+    frame = np.array([axis[best], [-axis[best, 1], axis[best, 0]]])  # rows e₁, e₂
+    coords = points @ frame.T
+    low, high = coords.min(0), coords.max(0)
+    # how far each face may go on past the chain's end, on each axis and side: up to where
+    # the next beam, which missed, would have met the face's line
+    room = np.zeros((2, 2))  # [axis, side (0: low, 1: high)]
+    ends_on = np.zeros(2, bool)
+    # which face each return lies on: the nearer of the edges (Zhang's d₁, d₂ at the best
+    # heading); an end's face is the one most of the returns next to it lie on (the end
+    # itself is extreme along both axes at a corner of the chain)
+    on_first = d2[:, best] < d1[:, best]  # on a face along e₁
+    run = max(_END_STEP, points.shape[0] // 5)
+    for end, near, turn in ((0, slice(1, 1 + run), -spacing), (-1, slice(-1 - run, -1), spacing)):
+        k = 0 if 2 * np.count_nonzero(on_first[near]) >= on_first[near].size else 1
+        side = int(coords[end, k] > np.median(coords[near, k]))
+        ends_on[k] = True
+        if occluded:
+            room[k, side] = np.inf
+            continue
+        bearing = math.atan2(points[end, 1] - sensor[1], points[end, 0] - sensor[0]) + turn
+        outward = frame[k] if side else -frame[k]
+        # sensor + t (cos, sin)(bearing) = end point + λ outward
+        lhs = np.array([[math.cos(bearing), -outward[0]], [math.sin(bearing), -outward[1]]])
+        if abs(np.linalg.det(lhs)) < 1e-9:
+            room[k, side] = np.inf
+            continue
+        t, extra = np.linalg.solve(lhs, points[end] - sensor)
+        room[k, side] = np.inf if t <= 0.0 else max(float(extra), 0.0)
+    for k in np.flatnonzero(~ends_on):  # one face seen: its depth goes on away from the sensor
+        away = frame[k] @ (0.5 * (low + high) @ frame - sensor) > 0.0
+        room[k, int(away)] = np.inf
+    total = room.sum(1)
+    extent = high - low
+    # the side with less room: the middle of what the beams allow (as seen if they allow any
+    # length); the other as long as that one (a square) within what the beams allow, or the
+    # middle of it when that is narrower than half the first side
+    known = int(np.argmin(total))
+    other = 1 - known
+    size = extent.copy()
+    if np.isfinite(total[known]):
+        size[known] += 0.5 * total[known]
+    if total[other] <= _TRUSTED_ROOM * size[known]:
+        size[other] += 0.5 * total[other]
+    else:
+        size[other] = min(max(size[known], extent[other]), extent[other] + total[other])
+    grow = size - extent
+    # the growth goes where the beams leave room, in proportion (all of it to an open side)
+    share = np.full((2, 2), 0.5)
+    for k in range(2):
+        if np.isinf(total[k]):
+            share[k] = np.isinf(room[k]) / np.count_nonzero(np.isinf(room[k]))
+        elif total[k] > 0.0:
+            share[k] = room[k] / total[k]
+    centre_coords = 0.5 * (low - grow * share[:, 0] + high + grow * share[:, 1])
+    misfit = float(np.sqrt(np.mean(np.minimum(d1[:, best], d2[:, best]) ** 2)))
+    return centre_coords @ frame, 0.5 * float(np.hypot(*size)), misfit
