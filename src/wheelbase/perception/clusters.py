@@ -30,17 +30,22 @@ The rule, step by step:
    the search over headings in [0°, 90°) of the closeness criterion Σ 1 / max(d, d₀), d the
    distance of a return to the nearer of the two edges it may lie on, d₀ =
    ``_CLOSENESS_FLOOR``); the rectangle is taken when its RMS d is below ``_RECTANGLE_MARGIN``
-   times the RMS distance of the returns to the disc's circle. Its sides are the returns'
+   times the RMS distance of the returns to the disc's circle, and below σ =
+   ``measurement_std`` (two boxes side by side fit neither, and the L-shape fit of them
+   jumps between headings from scan to scan: the disc holds still). Its sides are the returns'
    extents along its axes, grown where the beams leave room: past each end of the chain of
    returns, the face it ends goes on at most to where the next beam, which missed, meets the
    face's line (without bound when that beam is hidden by something nearer, step 7); with
    one face seen, the depth goes on away from the sensor without bound. The side with less
    room takes the middle of it; the other the middle of its own when that is at most
    ``_TRUSTED_ROOM`` times the first side, else the first side's length (a square) within
-   what its beams allow. The centre is the rectangle's, ρ half its diagonal: both stay where
-   they are as the viewpoint moves while the faces are seen whole, and a square box is found
-   at its centre from any side (with one face seen, a rectangle is off by half the
-   difference of its sides).
+   what its beams allow. The centre is the rectangle's, ρ half its longer side: both stay
+   where they are as the viewpoint moves while the faces are seen whole, and a square box is
+   found at its centre from any side (with one face seen, a rectangle is off by half the
+   difference of its sides). ρ is the disc within the rectangle, not the one around it: the
+   corners are left to the costmap, which marks the returns themselves. With the disc around
+   it (0.49 m for the 0.7 m square robots of ``corridor_swap``, meeting in a 1.2 m corridor
+   with a passing bay), 2 of seeds 0–5 ended ``blocked``; with this one, none.
 7. A cluster is *occluded* when the beam just outside one of its edges returns nearer than
    that edge's return: the object may go on behind what is in front, so its span, radius and
    centre are not to be trusted: its R gains ρ² I (its centre is uncertain by about the
@@ -253,7 +258,7 @@ def _clusters(
         members = np.flatnonzero(label == k)
         members = members[np.argsort(side[members], kind="stable")]
         box = _rectangle(points[members], sensor, spacing, bool(occluded[k]))
-        if box[2] < _RECTANGLE_MARGIN * misfit[k]:
+        if box[2] < min(_RECTANGLE_MARGIN * misfit[k], spec.measurement_std):
             centre[k], radius[k] = box[0], box[1]
     keep &= radius <= spec.max_radius
     hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
@@ -331,4 +336,4 @@ def _rectangle(
             share[k] = room[k] / total[k]
     centre_coords = 0.5 * (low - grow * share[:, 0] + high + grow * share[:, 1])
     misfit = float(np.sqrt(np.mean(np.minimum(d1[:, best], d2[:, best]) ** 2)))
-    return centre_coords @ frame, 0.5 * float(np.hypot(*size)), misfit
+    return centre_coords @ frame, 0.5 * float(size.max()), misfit
