@@ -6,6 +6,7 @@ import numba
 import numpy as np
 import pytest
 
+from wheelbase.errors import MapError
 from wheelbase.geometry import compose, relative_pose
 from wheelbase.mapping.evaluation import (
     absolute_trajectory_error,
@@ -94,6 +95,26 @@ def test_scan_to_scan_recovers_the_motion(offset):
     assert np.hypot(*error[:2]) < 0.01 and abs(error[2]) < math.radians(0.3)
     assert np.all(np.linalg.eigvalsh(found.covariance) > 0)
     assert found.inliers > 0.8 and found.rms < 0.01
+
+
+def test_references_merged_from_their_own_frames_keep_their_own_lines():
+    # two walls seen from two poses, each fitted in its own frame, then placed in the world
+    wall = np.column_stack([np.linspace(-1.0, 1.0, 41), np.full(41, 2.0)])  # y = 2 m, local
+    poses = np.array([[1.0, 0.5, 0.3], [-2.0, 1.0, -1.2]])
+    other = wall + np.array([0.0, 1.0])
+    parts = [PointReference.build(wall), PointReference.build(other)]
+    merged = PointReference.merge(parts, poses)
+    world = np.vstack([_transform(poses[0], wall), _transform(poses[1], other)])
+    np.testing.assert_allclose(merged.points, world, atol=1e-12)
+    # each normal is its own wall's (local ±y) turned by its pose, not a fit across the walls
+    for k, q in enumerate(poses):
+        rows = merged.normals[41 * k : 41 * (k + 1)]
+        across = np.abs(rows @ np.array([-math.sin(q[2]), math.cos(q[2])]))
+        np.testing.assert_allclose(across, 1.0, atol=1e-9)
+    d, i = merged.tree.query(world[50])
+    assert d == 0.0 and i == 50
+    with pytest.raises(MapError):
+        PointReference.merge(parts, poses[:1])
 
 
 def test_window_and_min_score_reject_what_is_not_there():

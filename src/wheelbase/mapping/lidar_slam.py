@@ -33,7 +33,8 @@ For each scan, in time order:
    to the current keyframe (an upper bound of the graph's, which the loop edges only tighten)
    and the closure's ``loop_std`` added. An accepted closure is an edge between the candidate
    and the current keyframe, and the graph is optimised (:func:`optimize_pose_graph`, dynamic
-   covariance scaling on the loop edges against false closures). The scans after the last
+   covariance scaling on the loop edges against false closures; with ``robust_sequential`` on
+   every edge). The scans after the last
    keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
 """
@@ -166,6 +167,23 @@ class LidarSlam:
         Matching against the submap as the optimisation moved it bent the front end: the
         sequential edges of the simulated maze's run with closures, chained, were 0.021 m ATE
         off against 0.013 m without closures (360 beams; 60 beams 0.032 against 0.026 m).
+    robust_sequential : bool
+        The robust kernel weighs the sequential edges too, not only the closures
+        (:meth:`without_odometry`: on). Without odometry a wrong step of the front end is as
+        sure of itself as a right one (floored at ``min_std``, 5 times the closures'
+        ``loop_std``), and the kernel weighed the true closures against it to nothing: Intel's
+        scans 1-11 (a turn on the spot where the scene repeats 0.45 m along the robot's
+        heading) stayed 0.45 m off scans 0 and 12 against closures from scans 105-108 and
+        754-755. Relative error without and with: Intel 0.040 / 0.036 m, 0.51 / 0.49°; ACES
+        0.041 / 0.047 m (the chain broke in ACES's corridor at scans 314-318), with
+        :attr:`keyframe_normals` 0.039 / 0.039 m.
+    keyframe_normals : bool
+        The ICP reference of a submap joins each keyframe's own lines (fitted once, in its own
+        frame: ``PointReference.merge``) instead of fitting lines to the submap's merged
+        points at every new keyframe (:meth:`without_odometry`: on). Refitting took 24 of the
+        52 s that Intel's front end spent; own lines are not blurred by the neighbouring
+        keyframes' scatter. Without and with (no ``robust_sequential``): Intel 0.040 / 0.041 m,
+        0.51 / 0.48°, 62 / 46 s; ACES 0.041 / 0.039 m, 0.31 / 0.31°, 39 / 24 s.
     mapper : OccupancyMapper
         The map's parameters (the counting model by default: with log odds and hits first, the
         free cell before a wall's face, where range noise puts half the returns short of the
@@ -206,6 +224,8 @@ class LidarSlam:
     mapper: OccupancyMapper = field(default_factory=lambda: OccupancyMapper(model="counting"))
     local_frontend: bool = True
     loop_gate: float | None = None
+    robust_sequential: bool = False
+    keyframe_normals: bool = False
 
     def __post_init__(self) -> None:
         for name in ("max_range", "keyframe_distance", "keyframe_angle", "loop_radius",
@@ -227,9 +247,10 @@ class LidarSlam:
         cell: with σ 0.05 m the correlative optimum on the 0.1 m grid fell between a
         corridor's true pose and one 0.8 m short, ACES scans 314–322). Relative translation
         error against the logs' corrected poses: Intel 0.41 ± 0.98 m → 0.20 ± 0.66 m (as
-        measured before the surfaces) → 0.040 ± 0.057 m, ACES 0.70 ± 2.40 m → 0.084 ± 0.22 m
-        → 0.041 ± 0.034 m. Kept off with odometry, which bridges a corridor (and the
-        exploration loop's time stays).
+        measured before the surfaces) → 0.040 ± 0.057 m → 0.036 ± 0.047 m (with
+        :attr:`robust_sequential` and :attr:`keyframe_normals`), ACES 0.70 ± 2.40 m → 0.084 ±
+        0.22 m → 0.041 ± 0.034 m → 0.039 ± 0.031 m. Kept off with odometry, which bridges a
+        corridor (and the exploration loop's time stays).
 
         Parameters
         ----------
@@ -242,7 +263,8 @@ class LidarSlam:
         """
         base = {"submap_keyframes": 30, "loop_linear_window": 5.0, "loop_radius": 8.0,
                 "local_frontend": False, "two_stage": True,
-                "anchor_by_overlap": True, "surfaces": True,
+                "anchor_by_overlap": True, "surfaces": True, "robust_sequential": True,
+                "keyframe_normals": True,
                 "matcher": ScanMatcher(resolution=0.1, sigma=0.1, linear_window=1.5,
                                        angular_window=math.radians(90.0),
                                        max_correspondence=0.3, huber=0.03)}  # fmt: skip
@@ -327,11 +349,15 @@ class LidarSlam:
         return self.mapper.build(poses, log.ranges, log.angles, mount=log.mount,
                                  sensor_max_range=log.max_range, **kwargs)  # fmt: skip
 
-    def _tables(self, world):
-        """The matcher's tables of a submap's points. (Penalising the points that land in
-        the free space the submap's scans saw was measured worse on Intel: local relations
-        0.061 m against 0.056 m, loop relations 2.9 m against 1.7 m.)"""
+    def _tables(self, world, parts=None, poses=None):
+        """The matcher's tables of a submap's points; with ``parts`` (the keyframes' own
+        references, :attr:`keyframe_normals`) at ``poses`` the ICP reference joins them instead
+        of fitting lines to the merged points. (Penalising the points that land in the free
+        space the submap's scans saw was measured worse on Intel: local relations 0.061 m
+        against 0.056 m, loop relations 2.9 m against 1.7 m.)"""
         table = LikelihoodTable.build(world, self.matcher.resolution, self.matcher.sigma)
+        if parts is not None:
+            return table, PointReference.merge(parts, poses)
         return table, PointReference.build(world)
 
     def _edge_information(self, cov: np.ndarray, theta: float) -> np.ndarray:
@@ -344,7 +370,7 @@ class LidarSlam:
         return np.linalg.inv(body)
 
     def _close_loops(self, points, kf_points, kf_scan, kf_pose, edges, meas, info, loop_edge,
-                     stats, cache=None):  # fmt: skip
+                     stats, cache=None, kf_refs=None):  # fmt: skip
         """Step 4 of the module docstring at the newest keyframe; True when a closure was
         accepted. ``cache`` (a dict kept by the session) holds the tables of the last
         candidate submaps with their keyframes' poses: the next search usually picks the same
@@ -379,7 +405,9 @@ class LidarSlam:
                 table, reference = hit[1], hit[2]
             else:
                 world = np.vstack([_transform(kf_pose[i], kf_points[i]) for i in keys])
-                table, reference = self._tables(world)
+                table, reference = self._tables(
+                    world, None if kf_refs is None else [kf_refs[i] for i in keys], poses
+                )
                 if cache is not None:
                     cache.pop((lo, hi), None)
                     cache[(lo, hi)] = (poses, table, reference)
@@ -425,7 +453,8 @@ class LidarSlam:
             graph = PoseGraph(graph.ids, first.poses, graph.edges, graph.measurements,
                               graph.information)  # fmt: skip
         result = optimize_pose_graph(graph, robust="dcs", robust_scale=self.robust_scale,
-                                     robust_edges=np.array(loop_edge, bool),
+                                     robust_edges=(None if self.robust_sequential
+                                                   else np.array(loop_edge, bool)),
                                      max_iterations=20, tolerance=1e-6)  # fmt: skip
         for k, p in enumerate(result.poses):
             kf_pose[k] = p
@@ -451,6 +480,8 @@ class SlamSession:
         self.kf_scan: list[int] = []
         self.kf_points: list[np.ndarray] = []  # a keyframe's points in submaps (``surfaces``)
         self.loop_tables: dict = {}  # candidate submaps' tables (LidarSlam._close_loops)
+        # each keyframe's ICP reference in its own frame (``keyframe_normals``)
+        self.kf_refs: list[PointReference] | None = [] if slam.keyframe_normals else None
         self.kf_pose: list[np.ndarray] = []
         # the front end's keyframe poses: the graph's own, or (``local_frontend``) the poses
         # as matched, which the optimisation leaves alone
@@ -523,7 +554,9 @@ class SlamSession:
         first_kf = max(0, len(kf_scan) - slam.submap_keyframes)
         keys = range(first_kf, len(kf_scan))
         world = np.vstack([_transform(kf_pose[k], self.kf_points[k]) for k in keys])
-        return slam._tables(world)
+        if self.kf_refs is None:
+            return slam._tables(world)
+        return slam._tables(world, [self.kf_refs[k] for k in keys], [kf_pose[k] for k in keys])
 
     def _add_keyframe(self, scan: int, p: np.ndarray, cov: np.ndarray | None) -> None:
         kf_scan, kf_pose = self.kf_scan, self.kf_local
@@ -534,6 +567,8 @@ class SlamSession:
         kf_pose.append(p.copy())
         own = self.points[scan]
         self.kf_points.append(surface_points(own) if self.slam.surfaces else own)
+        if self.kf_refs is not None:
+            self.kf_refs.append(PointReference.build(self.kf_points[-1]))
         if cov is not None:
             i = len(kf_scan) - 2
             self.edges.append((i, i + 1))
@@ -609,7 +644,8 @@ class SlamSession:
             if len(self.kf_scan) % slam.loop_every == 0:
                 closed = slam._close_loops(self.points, self.kf_points, self.kf_scan,
                                            self.kf_pose, self.edges, self.meas, self.info,
-                                           self.loop_edge, stats, self.loop_tables)  # fmt: skip
+                                           self.loop_edge, stats, self.loop_tables,
+                                           self.kf_refs)  # fmt: skip
             if closed:
                 self.pending_optimizations += 1
             if self.pending_optimizations >= slam.optimize_every:

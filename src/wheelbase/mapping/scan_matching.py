@@ -456,6 +456,31 @@ class PointReference:
         normals = vectors[:, :, 0]  # the smallest principal axis: the line's normal
         return cls(points, normals, tree)
 
+    @classmethod
+    def merge(cls, parts: list[PointReference], poses: ArrayLike) -> PointReference:
+        """References fitted in their own frames (e.g. one per keyframe), placed at ``poses``
+        and joined: points and normals moved, one tree over all; each normal stays that of its
+        own part's fit (no line is fitted across parts).
+
+        Parameters
+        ----------
+        parts : list of PointReference
+            The references, each in its own frame.
+        poses : array_like, shape (len(parts), 3)
+            Pose of each part's frame in the world [m, m, rad].
+
+        Returns
+        -------
+        PointReference
+        """
+        poses = as_float_array("poses", poses, 3, min_ndim=2, max_ndim=2)
+        if len(parts) == 0 or poses.shape[0] != len(parts):
+            raise MapError(f"{len(parts)} references and {poses.shape[0]} poses to merge")
+        placed = list(zip(poses, parts, strict=True))
+        points = np.vstack([_transform(q, part.points) for q, part in placed])
+        normals = np.vstack([_transform((0.0, 0.0, q[2]), part.normals) for q, part in placed])
+        return cls(points, normals, cKDTree(points))
+
 
 @dataclass(frozen=True)
 class ScanMatcher:
