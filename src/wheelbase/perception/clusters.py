@@ -73,7 +73,7 @@ from wheelbase.planning import OccupancyGrid
 __all__ = ["Detections", "detect"]
 
 _RECTANGLE_MIN_POINTS = 8  # fewer returns cannot tell a disc from a rectangle
-_RECTANGLE_MARGIN = 1.0  # a rectangle is read when its RMS miss of the returns is below this
+_RECTANGLE_MARGIN = 0.8  # a rectangle is read when its RMS miss of the returns is below this
 #                          times the disc's (step 6)
 _END_STEP = 3  # fewest returns next to a chain's end that tell which face it ends
 _TRUSTED_ROOM = 0.5  # room the beams leave, in the other side's lengths, below which
