@@ -178,15 +178,21 @@ def surfaces(quick: bool) -> dict:
     return out
 
 
+TYRE_ROLLING_RESISTANCE = 0.013
+"""c_rr the robot is told with ``friction: estimate``: its own tyres', as a steady-speed torque
+measures it on its (concrete) floor; ice's is the same tyre hysteresis, grass's is not."""
+
+ESTIMATE = {"friction": "estimate", "rolling_resistance": TYRE_ROLLING_RESISTANCE}
+
 ICE_VARIANTS = {
     "without": (None, False),
     "with": ({"friction": "map"}, False),
     "with_hold_integrators": ({"friction": "map", "hold_integrators": True}, False),
     "with_slow_down": ({"friction": "map", "slow_down": True}, False),
     "with_slow_down_slip_compensation": ({"friction": "map", "slow_down": True}, True),
-    "estimated": ({"friction": "estimate"}, False),
-    "estimated_slow_down": ({"friction": "estimate", "slow_down": True}, False),
-    "estimated_imu_slow_down": ({"friction": "estimate", "slow_down": True}, False),
+    "estimated": (ESTIMATE, False),
+    "estimated_slow_down": ({**ESTIMATE, "slow_down": True}, False),
+    "estimated_imu_slow_down": ({**ESTIMATE, "slow_down": True}, False),
 }
 """Traction control's variants on ice: (traction_control, odometry.slip_compensation)."""
 

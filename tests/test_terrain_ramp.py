@@ -105,6 +105,40 @@ def test_slip_from_force_inverts_the_rising_branch_of_the_friction_curve():
     assert slip_from_force(np.array(5.0), np.array(9.0), np.zeros(3)) == 0.0
 
 
+def test_slip_compensation_counts_a_wheels_spin_up_as_the_torque_it_takes():
+    # both wheels speeding up by one tick a step, each commanded the torque J_w·ω̇ that spins
+    # it up plus its rolling moment: no ground force, so no slip and the odometry's own
+    # distances once the 50 ms filter has settled; counted as ground force (the estimator
+    # without its state) the same torque reads as a push, and the distances come out shorter
+    from wheelbase.odometry import Encoder, WheelOdometry
+    from wheelbase.sim.slip_odometry import SlipCompensatedOdometry
+    from wheelbase.terrain import WheelContacts
+
+    ice = SURFACES["ice"]
+    contacts = WheelContacts()
+    odometry = WheelOdometry(wheel_radius=RM100.wheel_radius, half_track=RM100.half_track,
+                             pulses_per_revolution=2048)  # fmt: skip
+    compensated = SlipCompensatedOdometry(
+        Encoder(2048), odometry, RM100, contacts, TerrainMap.uniform(ice)
+    )
+    dt, a = 0.01, RM100.wheel_radius
+    tick = 2 * math.pi * a / 2048
+    load = compensated.wheel_loads(np.zeros((1, 3)), np.zeros(1))[0]
+    torque = contacts.wheel_inertia * tick / dt**2 / a + ice.rolling_resistance * load * a
+    state = compensated.start(np.zeros((1, 3)), np.zeros(1))
+    pose = blind = np.zeros((1, 3))
+    for k in range(1, 60):
+        ticks = np.full((1, 2), k, dtype=np.int64)
+        before = pose
+        pose, _twist, state = compensated.update(pose, ticks, dt, None, None, state=state,
+                                                 command=torque[None, :])  # fmt: skip
+        blind_before = blind
+        blind, _twist, _ = compensated.update(blind, ticks, dt, None, None,
+                                              command=torque[None, :])  # fmt: skip
+    assert pose[0, 0] - before[0, 0] == pytest.approx(59 * tick, rel=1e-3)
+    assert blind[0, 0] - blind_before[0, 0] < 0.99 * 59 * tick
+
+
 # --------------------------------------------------------------------------- the ramp
 def test_on_the_ramp_the_pid_lags_by_the_closed_form_and_the_slip_drives_the_odometry_off():
     # what was wrong: with the true state the only error is the slope's pull taken up by the

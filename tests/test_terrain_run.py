@@ -265,7 +265,13 @@ def test_the_torque_window_adds_each_wheels_rolling_moment_to_its_grip():
     assert high == pytest.approx(np.full((1, 2), (0.08 + 0.09) * load * a))
     assert sticky(0.0, forward, None)[0, 1] == 0.0
     with pytest.raises(ConfigError, match="rolling_resistance"):
-        TractionControl(Constant(), RM100, friction="estimate", rolling_resistance=0.1)
+        TractionControl(Constant(), RM100, friction="map", rolling_resistance=0.1,
+                        terrain=TerrainMap.uniform(SURFACES["grass"]))  # fmt: skip
+    # with the estimate the robot's own c_rr: its window counts the moment, its estimate not
+    told = TractionControl(Constant(), RM100, friction="estimate", rolling_resistance=0.1)
+    assert told.estimator.rolling_resistance == 0.1
+    low, high = told.bounds(forward)
+    assert high == pytest.approx(np.full((1, 2), 0.8 * 1.0 * load * a + moment))
     with pytest.raises(ConfigError, match="rolling_resistance"):
         TractionControl(Constant(), RM100, friction=0.2, rolling_resistance=-0.1)
 

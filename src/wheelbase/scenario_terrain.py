@@ -276,9 +276,11 @@ class TractionSpec(_Strict):
         "the slowed reference's own wheel forces may use; the rest is left to the feedback."
     )  # fmt: skip
     rolling_resistance: float = Field(
-        0.0, ge=0, lt=1, description="With a friction coefficient: the ground's rolling "
+        0.0, ge=0, lt=1, description="With a friction coefficient or 'estimate': the rolling "
         "resistance c_rr, whose moment on each drive wheel the torques may add to the grip "
-        "(with 'map' the map's is used; with 'estimate' it must be 0)."
+        "(with 'map' the map's is used). With 'estimate' the robot's own figure (its tyres on "
+        "its floor): the estimate takes the moment out of the torque and learns the grip "
+        "alone; 0: the estimate holds the rolling moment too."
     )  # fmt: skip
 
     hold_integrators: bool = Field(

@@ -12,12 +12,13 @@ controller and clips each wheel's torque to the window
     G_i = √((μ̂_i·N̂_i)² − F_y²),   N̂_i = s·m̂·g/2,   F_y = m̂·|u·r|/2,
     M̂_i = c_rr,i·N̂_i·a,   h(v) = min(1, 1 + 2·tanh(v / 1 mm/s)),   v_i = u ∓ d·r,
 
-N̂ the static load of a drive wheel (share s of the weight m̂·g of the controller's model:
-an unknown payload only adds grip), F_y its share of the centripetal force of a turn (the
-casters take none), at least a fifth of the circle left for braking, M̂ the rolling moment
-(c_rr the map's under the wheel with ``friction="map"``, else ``rolling_resistance``), and μ̂
-the friction it believes in. A wheel rolling forward (v_i ≫ 1 mm/s, the plant's smoothing of
-the moment) may be driven up to (margin·μ̂ + c_rr)·N̂·a and braked down to
+N̂ the static load of a drive wheel (share s of the weight m̂·g of the controller's model: an
+unknown payload only adds grip), F_y its share of the centripetal force of a turn (the casters take
+none), at least a fifth of the circle left for braking, M̂ the rolling moment (c_rr the map's under
+the wheel with ``friction="map"``, else ``rolling_resistance``), and μ̂ the friction it believes in
+(with ``friction="estimate"`` and ``rolling_resistance`` > 0 the estimate leaves the rolling moment
+out, as the window counts it: the grip alone). A wheel rolling forward (v_i ≫ 1 mm/s, the plant's
+smoothing of the moment) may be driven up to (margin·μ̂ + c_rr)·N̂·a and braked down to
 −(margin·μ̂ − c_rr)·N̂·a, since the moment helps it brake; backward the same, mirrored; at rest
 either way up to (margin·μ̂ + c_rr)·N̂·a, since a wheel that starts to turn meets its moment
 whichever way it turns (without that a robot whose ground force at rest does not overcome its
@@ -116,11 +117,13 @@ class TractionControl(WrappedLaw):
         With ``slow_down``: share of ``margin`` times the friction circle that the slowed
         reference's own wheel forces may use, in (0, 1]; the rest is left to the feedback.
     rolling_resistance : float
-        The ground's rolling-resistance coefficient c_rr [-], in [0, 1), with a friction
-        coefficient (with ``"map"`` the map's c_rr under each wheel is used; with
-        ``"estimate"`` it must be 0: the estimated friction holds the rolling moment): the
-        wheels' rolling moment widens the torque window and the casters' share loads the
-        slowed reference's circles (module docstring). 0 by default.
+        The rolling-resistance coefficient c_rr [-], in [0, 1), with a friction coefficient or
+        ``"estimate"`` (with ``"map"`` the map's c_rr under each wheel is used): the wheels'
+        rolling moment widens the torque window and the casters' share loads the slowed
+        reference's circles (module docstring). With ``"estimate"`` it is the robot's own
+        figure (its tyres, measured on its floor), and the estimator takes the moment out of
+        the torque, so that μ̂ is the ground's grip alone; 0 (the default): μ̂ holds the
+        wheels' rolling moment too, c_rr above the grip.
     casters : array_like, shape (C, 2)
         Caster positions (x [m], y [m]) in the body frame, sharing (1 − s) of the weight
         equally; with ``slow_down`` their rolling resistance along each caster's own velocity
@@ -193,11 +196,10 @@ class TractionControl(WrappedLaw):
         c_rr = finite("rolling_resistance", rolling_resistance)
         if not 0.0 <= c_rr < 1.0:
             raise ConfigError(f"rolling_resistance must be in [0, 1) (got {c_rr:g})")
-        if c_rr > 0.0 and friction in ("map", "estimate"):
+        if c_rr > 0.0 and friction == "map":
             raise ConfigError(
-                "rolling_resistance goes with a friction coefficient: with 'map' the map's is "
-                "used, and the estimate learns the wheels' rolling moment with the friction "
-                "(its ground force is the torque's)"
+                "rolling_resistance goes with a friction coefficient or 'estimate': with 'map' "
+                "the map's is used"
             )
         self.rolling_resistance = c_rr
         where = np.asarray(casters, dtype=np.float64)
@@ -217,7 +219,7 @@ class TractionControl(WrappedLaw):
 
             self.estimator = FrictionEstimator(
                 model, wheel_inertia=wheel_inertia, drive_load_share=self.drive_load_share,
-                initial=initial_friction, inertial=imu,
+                initial=initial_friction, rolling_resistance=c_rr, inertial=imu,
             )  # fmt: skip
         self._last: np.ndarray | None = None
         self._timing: tuple[object, object] | None = None  # (reference, FrictionTiming)
