@@ -104,7 +104,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wheelbase._validate import finite
-from wheelbase.control.traction import ROLLING_SPEED
+from wheelbase.control.slope import ROLLING_SPEED
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 

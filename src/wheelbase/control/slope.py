@@ -80,8 +80,9 @@ BREAKAWAY_ACCELERATION = 0.01
 direction, tanh(|α| / 0.01 m/s²): 0.26 N on the RM100, 8 mN·m a wheel."""
 
 ROLLING_SPEED = 1e-3
-"""Contact speed [m/s] over which the fed-forward resistance turns with the direction of rolling,
-tanh(w / 1 mm/s): the plant's smoothing (:mod:`wheelbase.terrain.dynamics`)."""
+"""Contact speed [m/s] over which a modelled rolling resistance turns with the direction of
+rolling, tanh(w / 1 mm/s): the plant's smoothing (:mod:`wheelbase.terrain.dynamics`), used by
+the fed-forward resistance here, traction control's torque window and the friction estimate."""
 
 
 def slope_torques(model: DiffDriveDynamics, state: ArrayLike, slope: ArrayLike) -> np.ndarray:

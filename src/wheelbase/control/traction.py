@@ -74,14 +74,11 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import as_float_array, finite
 from wheelbase.control.base import WrappedLaw
+from wheelbase.control.slope import ROLLING_SPEED
 from wheelbase.dynamics import GRAVITY, DiffDriveDynamics
 from wheelbase.errors import ConfigError
 
-__all__ = ["REPLAN_CHANGE", "ROLLING_SPEED", "TractionControl"]
-
-ROLLING_SPEED = 1e-3
-"""Contact speed [m/s] over which the torque window's rolling moment turns with the wheel's
-direction, tanh(v / 1 mm/s), the plant's smoothing (:mod:`wheelbase.terrain.dynamics`)."""
+__all__ = ["REPLAN_CHANGE", "TractionControl"]
 
 REPLAN_CHANGE = 0.02
 """Relative change of the friction estimate [-] after which ``slow_down`` plans its clock again."""
