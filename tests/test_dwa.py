@@ -191,6 +191,7 @@ def test_oscillation_bars_the_old_sign_until_the_robot_has_moved():
         ({"v_samples": 0}, "v_samples must be an integer >= 1"),
         ({"sim_dt": -1.0}, "sim_dt must be > 0"),
         ({"sim_time": 1e6, "sim_dt": 1e-3}, "trajectory steps: more than"),
+        ({"sim_dt": 5.9e9, "v_samples": 1.4e96}, r"sim_dt must be <= sim_time"),
         ({"speed": 1.0}, "unknown DWA gain 'speed'"),
         ({"critics": {"nonsense": 1.0}}, "unknown DWA critic 'nonsense'"),
         ({"path_dist": -1.0}, "path_dist must be >= 0"),

@@ -370,7 +370,11 @@ class DWA:
         self.sim_dt = positive("sim_dt", sim_dt, "s")
         self.v_samples = integer("v_samples", v_samples, minimum=1)
         self.w_samples = integer("w_samples", w_samples, minimum=1)
-        self.steps = math.ceil(min(self.sim_time / self.sim_dt, 1e12) - 1e-9)
+        if self.sim_dt > self.sim_time:  # no step would fit the horizon
+            raise ConfigError(
+                f"sim_dt must be <= sim_time ({self.sim_time:g} s), got {self.sim_dt:g} s"
+            )
+        self.steps = max(1, math.ceil(min(self.sim_time / self.sim_dt, 1e12) - 1e-9))
         work = self.v_samples * self.w_samples * self.steps
         if work > MAX_SAMPLE_STEPS:
             raise ConfigError(
