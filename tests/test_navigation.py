@@ -281,6 +281,21 @@ def test_a_refuge_the_planner_cannot_reach_is_not_the_end_of_yielding():
     assert nav.recoveries == 1 and nav.yields == 1
 
 
+def test_a_robot_that_stopped_against_a_box_is_not_blocked_by_it_when_the_way_is_open():
+    """A robot that stopped with its side on a box's corner marks (the lidar's cells reach a
+    few cm past the box) and a plan that leaves the box behind: the plan starts on the grid cleared
+    around the robot, and the blocked check judges it on that grid, not on the marks the
+    robot stands on (it found every plan blocked and spent its recoveries). A box across the
+    plan farther ahead still blocks it."""
+    nav, _, first = navigator(rate_hz=0.0)
+    pose = np.array([3.0, 2.0, 0.0])
+    beside = OccupancyGrid(box(room(), 2.9, 3.2, 2.1, 2.6) >= 254, RES)  # under its side
+    assert nav._hits(beside, pose[None])[0]  # the robot stands on the marks
+    assert not nav._blocked(pose, beside, first.plan)
+    across = OccupancyGrid(box(box(room(), 2.9, 3.2, 2.1, 2.6), 4.2, 4.6, 1.5, 2.5) >= 254, RES)
+    assert nav._blocked(pose, across, first.plan)
+
+
 def test_the_blocked_check_skips_only_poses_that_cannot_touch_an_obstacle():
     """The footprint check samples only the poses near an occupied cell or the edge: the
     same answer as sampling every pose, on random grids from nearly empty to cluttered."""
