@@ -59,6 +59,33 @@ def test_saved_map_loads_and_amcl_navigates_on_it(explored, tmp_path):
     assert run.metrics["collisions"] == 0 if "collisions" in run.metrics else True
 
 
+def test_amcl_on_the_explored_map_sees_the_true_world(explored, tmp_path):
+    # benchmarks/slam.py: the robot's map is the explored one, the lidar and the arrival see
+    # the scenario's map; a true world 0.2 m off the one explored puts the robot 0.2 m off
+    from slam import amcl_on_explored_map
+    from wheelbase.planning import load_map
+    from wheelbase.planning.map_io import write_ros_yaml
+
+    scenario = {
+        "name": "amcl_on_explored", "map": "doorway",
+        "robot": {"model": "diffdrive", "preset": "rm100"}, "controller": {"law": "kanayama"},
+        "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
+        "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
+        "localization": {"method": "amcl"},
+        "start": [1.5, 3.0, 0.0], "goal": [10.0, 3.0, 0.0], "goal_tolerance": [0.1, 10.0],
+        "trajectory": {"max_speed": 0.6}, "dt": 0.05, "duration": 90,
+    }  # fmt: skip
+    row = amcl_on_explored_map(explored.grid, [0], scenario)
+    assert row["arrived"] == 1 and row["final_position_error_true_max_m"] < 0.1
+    truth = load_map("doorway")
+    write_ros_yaml(truth.with_origin(np.add(truth.origin, (0.0, 0.2))), tmp_path / "moved.yaml")
+    moved = amcl_on_explored_map(
+        explored.grid, [0], {**scenario, "map": str(tmp_path / "moved.yaml")}
+    )
+    assert moved["statuses"] == {"missed_goal": 1}
+    assert 0.1 < moved["final_position_error_true_max_m"] < 0.3
+
+
 def test_a_long_plan_is_cut_at_the_replan_distance():
     from wheelbase.exploration import _cut
     from wheelbase.planning.path import PlannedPath
