@@ -164,9 +164,9 @@ def test_the_engine_hands_the_start_up_calibration_to_the_odometry():
 def test_the_start_spin_on_ice_no_longer_turns_the_odometry():
     # the ice demo with the friction estimate: the start spin (right wheel, t ≈ 0.3-0.4 s)
     # turned the wheels' heading 0.5° within 0.5 s and the turns' slip 1.9° by 20 s (seed 0,
-    # measured); with the gyro the heading stays within 0.3° and the odometry within 0.06 m
-    # of the truth at the end (0.05 measured; 0.20 without), the true error below 0.12 m
-    # (0.094 measured; 0.22 without)
+    # measured, 1.96° at most); with the gyro the heading stays within 0.5° (0.26° measured)
+    # and the odometry within 0.06 m of the truth at the end (0.05 measured; 0.20 without),
+    # the true error below 0.12 m (0.094 measured; 0.22 without)
     errors = {}
     for gyro in (False, True):
         prepared = prepare(_ice_demo(gyro))
@@ -181,6 +181,6 @@ def test_the_start_spin_on_ice_no_longer_turns_the_odometry():
                         metrics["final_position_error_true_m"])  # fmt: skip
     assert errors[False][0] > math.radians(0.3)  # what the gyro is for
     assert errors[True][0] < math.radians(0.05)
-    assert errors[True][1] < math.radians(0.3)
+    assert errors[True][1] < math.radians(0.5) < math.radians(1.0) < errors[False][1]
     assert errors[True][2] < 0.06 < errors[False][2]
     assert errors[True][3] < 0.12 < errors[False][3]
