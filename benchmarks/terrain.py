@@ -25,8 +25,11 @@ what a user gets.
   ``estimated`` (``friction: estimate``: the robot's own estimate from encoders, torques and
   model — the first spin is how it learns, so ``max_slip_after_first_spin`` is the figure to
   hold against the bound), ``estimated_slow_down`` (the reference slowed to the estimate) and
-  ``estimated_imu_slow_down`` (the estimate reading an IMU, ``sensors.imu``).
-  Each row: status, largest slip, the true final error, the time to the end against the
+  ``estimated_imu_slow_down`` (the estimate reading an IMU, ``sensors.imu``) and
+  ``estimated_imu_gyro_slow_down`` (and the odometry's heading from the IMU's gyro where the
+  wheels slip, ``odometry.gyro``: :mod:`wheelbase.sim.gyrodometry`).
+  Each row: status, largest slip, the true final error, the odometry's final error against
+  the truth (``final_odometry_error_m``), the time to the end against the
   reference's, the tracking error against the reference as timed, the deviation from the path,
   and with ``slow_down`` the tracking error against the slowed reference. A ``collision`` is
   reported with its cause: on the demo's turns ice's side grip runs out.
@@ -193,11 +196,16 @@ ICE_VARIANTS = {
     "estimated": (ESTIMATE, False),
     "estimated_slow_down": ({**ESTIMATE, "slow_down": True}, False),
     "estimated_imu_slow_down": ({**ESTIMATE, "slow_down": True}, False),
+    "estimated_imu_gyro_slow_down": ({**ESTIMATE, "slow_down": True}, False),
 }
 """Traction control's variants on ice: (traction_control, odometry.slip_compensation)."""
 
-IMU_VARIANTS = frozenset({"estimated_imu_slow_down"})
+IMU_VARIANTS = frozenset({"estimated_imu_slow_down", "estimated_imu_gyro_slow_down"})
 """Variants of ``ICE_VARIANTS`` whose robot has an IMU (``sensors.imu``, the defaults)."""
+
+GYRO_VARIANTS = frozenset({"estimated_imu_gyro_slow_down"})
+"""Variants of ``IMU_VARIANTS`` whose odometry takes its heading from the gyro where the
+wheels slip (``odometry.gyro``)."""
 
 
 def _slowed_error(prepared, log) -> float:
@@ -226,7 +234,8 @@ def ice_traction() -> dict:
         out[route] = {}
         for label, (traction, compensate) in ICE_VARIANTS.items():
             out[route][label] = _traction_row(base, traction, compensate,
-                                              imu=label in IMU_VARIANTS)  # fmt: skip
+                                              imu=label in IMU_VARIANTS,
+                                              gyro=label in GYRO_VARIANTS)  # fmt: skip
     return out
 
 
@@ -285,12 +294,17 @@ def rolling_feedforward(quick: bool) -> dict:
     return out
 
 
-def _traction_row(base: dict, traction: dict | None, compensate: bool, imu: bool = False) -> dict:
-    """One run of ``base`` with ``traction_control``, the odometry's slip compensation and
-    (``imu``) an IMU the friction estimate reads."""
+def _traction_row(
+    base: dict, traction: dict | None, compensate: bool, imu: bool = False, gyro: bool = False
+) -> dict:
+    """One run of ``base`` with ``traction_control``, the odometry's slip compensation,
+    (``imu``) an IMU the friction estimate reads and (``gyro``) the odometry's heading from
+    its gyro where the wheels slip."""
     data = copy.deepcopy(base)
     if imu:
         data["sensors"] = {**data.get("sensors", {}), "imu": {}}
+    if gyro:
+        data["odometry"]["gyro"] = True
     data["controller"]["traction_control"] = traction
     if compensate:
         data["odometry"]["slip_compensation"] = True
@@ -299,6 +313,7 @@ def _traction_row(base: dict, traction: dict | None, compensate: bool, imu: bool
         "status": metrics["status"],
         "max_slip": metrics["max_slip"],
         "final_position_error_true_m": metrics.get("final_position_error_true_m"),
+        "final_odometry_error_m": float(np.hypot(*(log.final_estimate - log.final_pose)[0, :2])),
         "odometry_drift_per_m": metrics["odometry_drift_per_m"],
         "duration_s": metrics["duration_s"],
         "trajectory_duration_s": metrics["trajectory_duration_s"],

@@ -711,6 +711,7 @@ def prepare(
     estimator = _field("localization", lambda: build_estimator(scenario, robot, grid, sensors))
     if dynamic:
         estimator = ground.compensate_slip(scenario, estimator, robot, terrain)
+        estimator = ground.gyrodometry(scenario, estimator, imu)
     surroundings = _field(
         "world", lambda: _surroundings(scenario, grid, robot, footprint, robots, plans, seed)
     )

@@ -235,6 +235,13 @@ class OdometrySpec(_Strict):
         "the terrain's friction curves (wheelbase.sim.SlipCompensatedOdometry: the robot knows "
         "its floor; a dynamic plant, localization: odometry).",
     )
+    gyro: bool = Field(
+        False,
+        description="Gyrodometry: the heading increment from the IMU's gyro while it and the "
+        "wheels disagree over a window by more than the ticks' quantisation (a wheel spins or "
+        "skids), else the wheels' (wheelbase.sim.gyrodometry; needs sensors.imu, "
+        "odometry.mode: encoders and localization: odometry).",
+    )
 
 
 class LidarSpec(_Strict):
@@ -637,6 +644,8 @@ class Scenario(_Strict):
             raise ValueError(
                 "sensors.imu reads the accelerations of the dynamics: set plant: dynamic"
             )
+        if self.odometry.gyro and self.sensors.imu is None:
+            raise ValueError("odometry.gyro reads the IMU's gyro: give sensors.imu")
         if self.goal_payloads is not None and len(self.goal_payloads) != len(self.goals):
             raise ValueError(
                 f"goal_payloads has {len(self.goal_payloads)} entries for {len(self.goals)} goals"

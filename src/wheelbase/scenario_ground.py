@@ -9,6 +9,7 @@
 - :func:`wrap_controller`: the controller's model schedule, slope feed-forward and traction
   control;
 - :func:`compensate_slip`: the encoder odometry that takes out its torques' slip;
+- :func:`gyrodometry`: the heading from the IMU's gyro where the wheels slip;
 - :func:`build_stuck`: the ``stuck`` rule of a scenario with terrain.
 
 Decisions where the scenario is silent: a payload changes when the reference trajectory comes to
@@ -42,6 +43,7 @@ __all__ = [
     "compensate_slip",
     "controller_model",
     "ground_active",
+    "gyrodometry",
     "payload_timeline",
     "surface_of",
     "terrain_metrics",
@@ -442,6 +444,33 @@ def compensate_slip(scenario: Scenario, estimator: Any, robot: Any, terrain: Any
         )  # fmt: skip
     except ConfigError as error:
         raise ScenarioError(f"odometry.slip_compensation: {error}") from None
+
+
+def gyrodometry(scenario: Scenario, estimator: Any, imu: Any) -> Any:
+    """The estimator with ``odometry.gyro`` applied (unchanged without it): its heading the
+    IMU's gyro where the wheels slip (:class:`~wheelbase.sim.gyrodometry.Gyrodometry`).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+    estimator : object
+        The encoder odometry (after :func:`compensate_slip`).
+    imu : Imu or None
+        The robot's IMU (``sensors.imu``).
+    """
+    if not scenario.odometry.gyro:
+        return estimator
+    from wheelbase.sim.gyrodometry import Gyrodometry
+    from wheelbase.sim.sensing import EncoderOdometry
+
+    if imu is None:
+        raise ScenarioError("odometry.gyro reads the IMU's gyro: give sensors.imu")
+    if not isinstance(estimator, EncoderOdometry) or scenario.localization.method != "odometry":
+        raise ScenarioError(
+            "odometry.gyro needs odometry.mode: encoders and localization: odometry"
+        )
+    return Gyrodometry(estimator, imu)
 
 
 def build_stuck(scenario: Scenario) -> Any:

@@ -4,6 +4,8 @@
   slip and payloads), and its encoder axle;
 - :mod:`wheelbase.sim.sensing`: encoders and the estimator the controller reads;
 - :mod:`wheelbase.sim.slip_odometry`: encoder odometry that takes out the slip of its torques;
+- :mod:`wheelbase.sim.gyrodometry`: encoder odometry whose heading follows the gyro where a
+  wheel slips;
 - :mod:`wheelbase.sim.sensors`: a lidar and a landmark sensor read at the true poses;
 - :mod:`wheelbase.sim.localizers`: EKF, UKF and AMCL fusing the encoders with the sensors;
 - :mod:`wheelbase.sim.streams`: counter-based random streams (a step is a function of its
@@ -24,6 +26,7 @@ from wheelbase._lazy import attach
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
     from wheelbase.sim.drive_train import DriveTrainPlant, run_go_to_goal
     from wheelbase.sim.engine import Arrival, Engine, EngineState, closed_loop
+    from wheelbase.sim.gyrodometry import Gyrodometry
     from wheelbase.sim.localizers import KalmanLocalizer, ParticleLocalizer
     from wheelbase.sim.log import STATUSES, Log, status_code
     from wheelbase.sim.perceiving import PerceptionState, PerceptionSuite
@@ -48,6 +51,7 @@ _EXPORTS = {
     "Engine": "wheelbase.sim.engine",
     "EngineState": "wheelbase.sim.engine",
     "closed_loop": "wheelbase.sim.engine",
+    "Gyrodometry": "wheelbase.sim.gyrodometry",
     "KalmanLocalizer": "wheelbase.sim.localizers",
     "ParticleLocalizer": "wheelbase.sim.localizers",
     "STATUSES": "wheelbase.sim.log",
@@ -80,6 +84,7 @@ __all__ = [
     "EncoderOdometry",
     "Engine",
     "EngineState",
+    "Gyrodometry",
     "KalmanLocalizer",
     "KinematicPlant",
     "Log",

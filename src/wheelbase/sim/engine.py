@@ -21,7 +21,8 @@ code. Each :meth:`Engine.step`, for every robot still running:
    that are due (:class:`~wheelbase.sim.sensors.SensorSuite`: a lidar, landmarks) are read at
    the new true poses; both go to the estimator, whose estimate the controller sees next. An
    IMU (:class:`~wheelbase.sim.imu_sensing.ImuReadings`) is read from the step's true motion
-   and goes to the controllers that read it (``reads_imu``: called with ``imu=`` its rows).
+   and goes to the controllers that read it (``reads_imu``: called with ``imu=`` its rows),
+   and to an estimator with ``reads_imu`` with the step's ticks (gyrodometry).
 
 Finished robots are frozen (masks, not branches); a controller's own per-step status (MPPI's
 ``ok``/``all_collide``/``arrived``) is recorded beside the engine's status. Nothing a robot does
@@ -305,6 +306,9 @@ class Engine:
         every step; a controller with ``reads_imu`` is called with ``imu=`` the last readings
         ``(N, 3)`` (its robot's ``(3,)`` for a per-robot one; before the first step its
         start-up calibration, :meth:`~wheelbase.sim.imu_sensing.ImuReadings.calibration`).
+        An estimator with ``reads_imu`` gets that calibration at the start
+        (``estimator.calibrate(state, reading, start_twists)``) and each step's readings with
+        its ticks (``update(..., imu=)``, :class:`~wheelbase.sim.gyrodometry.Gyrodometry`).
     """
 
     plant: Any
@@ -430,8 +434,12 @@ class Engine:
         else:
             controllers = [self.controller]
         imu = None if self.imu is None else ImuReadings(self.imu, seeds)
+        calibration = None if imu is None else imu.calibration(twist)
         encoder = self.estimator.encoder
         estimator_state = self.estimator.start(start, seeds)
+        if calibration is not None and getattr(self.estimator, "reads_imu", False):
+            # the start-up reading the controller sees is the estimator's too (gyro bias)
+            estimator_state = self.estimator.calibrate(estimator_state, calibration, twist)
         first = getattr(self.estimator, "first_estimate", None)  # one that ignores the start
         estimate = start.copy() if first is None else np.array(first(estimator_state), float)
         return EngineState(
@@ -455,7 +463,7 @@ class Engine:
             still=None if self.stuck is None else np.zeros(n),
             track_scores=np.zeros((n, 3)) if self._scores_tracks else None,
             imu=imu,
-            imu_reading=None if imu is None else imu.calibration(twist),
+            imu_reading=calibration,
         )
 
     @property
@@ -666,6 +674,8 @@ class Engine:
                     scan, scan_index = readings.scan, moving
             if getattr(self.estimator, "reads_command", False):  # its own torques (slip)
                 extra["command"] = command[moving]
+            if imu_reading is not None and getattr(self.estimator, "reads_imu", False):
+                extra["imu"] = imu_reading[moving]  # this step's, as the ticks (gyrodometry)
             est, est_twist, estimator_state = self.estimator.update(
                 state.estimate[moving], delta, self.dt, new_pose, new_twist,
                 state=state.estimator, index=moving, **extra,
