@@ -266,6 +266,7 @@ BASES: list[dict[str, Any]] = [
             "traction_control": {"friction": "map", "slow_down": True},
         },
         "sensors": {"imu": {}},
+        "odometry": {"mode": "encoders", "gyro": True},
         "terrain": {
             "surface": "dry_concrete",
             "regions": [
