@@ -38,25 +38,14 @@ def test_exploration_ends_with_no_reachable_frontier(explored):
     assert all(np.min(np.hypot(*(explored.frontiers - f.centroid).T)) < 1.5 for _, f, _ in ranked)
 
 
-def test_saved_map_loads_and_amcl_navigates_on_it(explored, tmp_path):
-    import wheelbase
+def test_the_saved_map_loads_back_as_it_was(explored, tmp_path):
+    # AMCL on it, with the lidar on the true world: the next test
     from wheelbase.planning.map_io import read_ros_yaml, write_ros_yaml
 
     write_ros_yaml(explored.grid, tmp_path / "map.yaml")
     again = read_ros_yaml(tmp_path / "map.yaml")
     assert np.array_equal(again.occupied, explored.grid.occupied)
     assert np.array_equal(again.unknown, explored.grid.unknown)
-    run = wheelbase.run({
-        "name": "amcl_on_explored", "map": str(tmp_path / "map.yaml"),
-        "robot": {"model": "diffdrive", "preset": "rm100"}, "controller": {"law": "kanayama"},
-        "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
-        "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
-        "localization": {"method": "amcl"},
-        "start": [1.5, 3.0, 0.0], "goal": [10.0, 3.0, 0.0], "goal_tolerance": [0.1, 10.0],
-        "trajectory": {"max_speed": 0.6}, "dt": 0.05, "duration": 90,
-    })  # fmt: skip
-    assert run.metrics["status"] == "arrived"
-    assert run.metrics["collisions"] == 0 if "collisions" in run.metrics else True
 
 
 def test_amcl_on_the_explored_map_sees_the_true_world(explored, tmp_path):
