@@ -8,14 +8,12 @@ meets the circle of centre ``c`` and radius ρ at ``t = b − sqrt(b² − (|c �
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from wheelbase.planning import OccupancyGrid
 from wheelbase.sensors import scan_rays
 
-__all__ = ["box_corners", "box_ranges", "crossing_discs", "disc_ranges", "room"]
+__all__ = ["box_ranges", "crossing_discs", "disc_ranges", "room"]
 
 
 def room(width: float, height: float, resolution: float = 0.05) -> OccupancyGrid:
@@ -53,15 +51,6 @@ def disc_ranges(
         hit = (disc >= 0.0) & (t >= 0.0)
         ranges = np.where(hit & (t < ranges), t, ranges)
     return ranges
-
-
-def box_corners(cx: float, cy: float, length: float, width: float, yaw: float) -> np.ndarray:
-    """The corners ``(4, 2)`` [m] of a ``length × width`` box centred at (cx, cy), turned by
-    ``yaw`` [rad], counter-clockwise."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    half = 0.5 * np.array([[length, width], [-length, width], [-length, -width],
-                           [length, -width]])  # fmt: skip
-    return np.array([cx, cy]) + half @ np.array([[c, s], [-s, c]])
 
 
 def box_ranges(

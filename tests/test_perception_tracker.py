@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from perception_scenes import box_corners, box_ranges, crossing_discs, disc_ranges, room
+from perception_scenes import box_ranges, crossing_discs, disc_ranges, room
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.perception import (
     TrackErrors,
@@ -23,6 +23,7 @@ from wheelbase.perception import (
     update_tracker,
 )
 from wheelbase.planning import OccupancyGrid
+from wheelbase.world.obstacles import box_polygon
 
 BEAMS = -math.pi + 2.0 * math.pi * np.arange(360) / 360
 OPEN = OccupancyGrid(np.zeros((300, 300), bool), 0.05, (-7.5, -7.5))  # nothing mapped
@@ -61,7 +62,7 @@ def test_a_box_is_detected_at_its_centre_from_any_side(size, distance):
     for yaw in (0.0, 0.4, 1.0):
         for bearing in (0.2, 1.5, -2.4):
             centre = distance * np.array([math.cos(bearing), math.sin(bearing)])
-            corners = box_corners(*centre, length, width, yaw)
+            corners = box_polygon(*centre, length, width, yaw)
             truth = box_ranges(np.zeros(3), BEAMS, 8.0, corners)
             found = detect(TrackerSpec(), (0.0, 0.0, 0.0), BEAMS, noisy(truth, rng), 8.0, OPEN)
             assert len(found) == 1
@@ -86,7 +87,7 @@ def test_a_box_passed_by_a_moving_sensor_keeps_still():
     where the face fits a disc nearly as well), 0.08 m/s, 0.07 m."""
     rng = np.random.default_rng(7)
     spec = TrackerSpec()
-    corners = box_corners(4.0, 0.8, 0.6, 0.6, 0.0)
+    corners = box_polygon(4.0, 0.8, 0.6, 0.6, 0.0)
     state = TrackerState.initial(spec)
     speeds, errors = [], []
     for k in range(60):

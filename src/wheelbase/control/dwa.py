@@ -374,7 +374,7 @@ class DWA:
             raise ConfigError(
                 f"sim_dt must be <= sim_time ({self.sim_time:g} s), got {self.sim_dt:g} s"
             )
-        self.steps = max(1, math.ceil(min(self.sim_time / self.sim_dt, 1e12) - 1e-9))
+        self.steps = math.ceil(min(self.sim_time / self.sim_dt, 1e12) - 1e-9)
         work = self.v_samples * self.w_samples * self.steps
         if work > MAX_SAMPLE_STEPS:
             raise ConfigError(

@@ -34,8 +34,7 @@ For each scan, in time order:
    and the closure's ``loop_std`` added. An accepted closure is an edge between the candidate
    and the current keyframe, and the graph is optimised (:func:`optimize_pose_graph`, dynamic
    covariance scaling on the loop edges against false closures; with ``robust_sequential`` on
-   every edge). The scans after the last
-   keyframe follow it rigidly.
+   every edge). The scans after the last keyframe follow it rigidly.
 5. **The map** is rendered from the optimised poses (:class:`OccupancyMapper`).
 """
 

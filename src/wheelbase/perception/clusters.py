@@ -271,9 +271,9 @@ def _rectangle(
     points: np.ndarray, sensor: np.ndarray, spacing: float, occluded: bool
 ) -> tuple[np.ndarray, float, float]:
     """Centre [m], radius [m] and RMS misfit [m] of the rectangle read from one cluster's
-    ``points`` (n, 2),
-    in the order of their bearings from ``sensor``, beams ``spacing`` [rad] apart; an
-    ``occluded`` cluster's faces may go on behind its ends (step 6 of the module docstring)."""
+    ``points`` (n, 2), in the order of their bearings from ``sensor``, beams ``spacing`` [rad]
+    apart; an ``occluded`` cluster's faces may go on behind its ends (step 6 of the module
+    docstring)."""
     axis = np.stack([np.cos(_HEADINGS), np.sin(_HEADINGS)], -1)  # e₁ per heading
     along = points @ axis.T  # (n, H)
     across = points @ np.stack([-axis[:, 1], axis[:, 0]], -1).T
