@@ -323,11 +323,20 @@ def amcl_on_explored_map(grid, seeds, scenario: str | dict) -> dict:
     }  # fmt: skip
 
 
-AMCL_ROUTES = {
-    "doorway": ([1.5, 3.0, 0.0], [10.0, 3.0, 0.0]),
-    "maze": ([2.0, 2.0, 0.0], [18.5, 6.0, 90.0]),
-    "warehouse": ([2.0, 2.0, 0.0], [13.6, 9.0, -90.0]),
-}
+def amcl_route(world: str, duration: float = 200.0) -> dict:
+    """The scenario that drives :data:`AMCL_ROUTES`' route across ``world`` under AMCL (on its
+    bundled map; :func:`amcl_on_explored_map` gives it the explored one)."""
+    start, goal = AMCL_ROUTES[world]
+    return {
+        "name": f"amcl_on_explored_{world}", "map": world,
+        "robot": {"model": "diffdrive", "preset": "rm100"}, "controller": {"law": "kanayama"},
+        "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
+        "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
+        "localization": {"method": "amcl"}, "start": start, "goal": goal,
+        "goal_tolerance": [0.1, 10.0], "trajectory": {"max_speed": 0.6},
+        "dt": 0.05, "duration": duration,
+    }  # fmt: skip
+
 
 DEMO_ON_EXPLORED = {"warehouse": "amcl_warehouse"}
 """The bundled scenario that drives the demo's route under AMCL on each world's map: run again
@@ -345,18 +354,7 @@ def exploration(quick: bool, seeds: int = 20, worlds: tuple[str, ...] | None = N
         result = explore(world)
         row = dict(result.metrics)
         if result.metrics["status"] == "explored":
-            start, goal = AMCL_ROUTES[world]
-            scenario = {
-                "name": f"amcl_on_explored_{world}", "map": world,
-                "robot": {"model": "diffdrive", "preset": "rm100"},
-                "controller": {"law": "kanayama"},
-                "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
-                "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
-                "localization": {"method": "amcl"}, "start": start, "goal": goal,
-                "goal_tolerance": [0.1, 10.0], "trajectory": {"max_speed": 0.6},
-                "dt": 0.05, "duration": 200,
-            }  # fmt: skip
-            amcl = amcl_on_explored_map(result.grid, range(n), scenario)
+            amcl = amcl_on_explored_map(result.grid, range(n), amcl_route(world))
             row["amcl_arrived"], row["amcl_seeds"] = amcl["arrived"], amcl["seeds"]
             if world in DEMO_ON_EXPLORED:
                 demo = amcl_on_explored_map(result.grid, range(n), DEMO_ON_EXPLORED[world])

@@ -51,19 +51,11 @@ def test_the_saved_map_loads_back_as_it_was(explored, tmp_path):
 def test_amcl_on_the_explored_map_sees_the_true_world(explored, tmp_path):
     # benchmarks/slam.py: the robot's map is the explored one, the lidar and the arrival see
     # the scenario's map; a true world 0.2 m off the one explored puts the robot 0.2 m off
-    from slam import amcl_on_explored_map
+    from slam import amcl_on_explored_map, amcl_route
     from wheelbase.planning import load_map
     from wheelbase.planning.map_io import write_ros_yaml
 
-    scenario = {
-        "name": "amcl_on_explored", "map": "doorway",
-        "robot": {"model": "diffdrive", "preset": "rm100"}, "controller": {"law": "kanayama"},
-        "odometry": {"mode": "encoders", "tick_noise_std": 0.3},
-        "sensors": {"lidar": {"beams": 60, "max_range": 6.0, "range_std": 0.02}},
-        "localization": {"method": "amcl"},
-        "start": [1.5, 3.0, 0.0], "goal": [10.0, 3.0, 0.0], "goal_tolerance": [0.1, 10.0],
-        "trajectory": {"max_speed": 0.6}, "dt": 0.05, "duration": 90,
-    }  # fmt: skip
+    scenario = amcl_route("doorway", duration=90.0)
     row = amcl_on_explored_map(explored.grid, [0], scenario)
     assert row["arrived"] == 1 and row["final_position_error_true_max_m"] < 0.1
     truth = load_map("doorway")
