@@ -1,7 +1,7 @@
 """Navigation among obstacles the map does not show (issue 22): arrival, contacts and speed.
 
-Run ``python benchmarks/obstacles.py`` (``--seeds 100`` by default, ``--sections`` to pick,
-``--workers 2``); prints one JSON object. Every run is a bundled scenario through
+Run ``python benchmarks/obstacles.py`` (``--seeds 100`` by default, ``--sections`` and
+``--crowds 20_mppi,50_dwa,...`` to pick, ``--workers 2``); prints one JSON object. Every run is a bundled scenario through
 :func:`wheelbase.runner.run_seeds`, seeds 0 … n − 1 (each seed its own walkers, boxes and
 sensor noise):
 
@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 SECTIONS = ("crowd", "irsim", "boxes", "doorway", "swap", "speed")
+CROWDS = ("20_mppi", "20_dwa", "50_mppi", "50_dwa")
 
 
 def _crowd(walkers: int, law: str) -> dict:
@@ -172,18 +173,24 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=100)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--sections", default=",".join(SECTIONS))
+    parser.add_argument("--crowds", default=",".join(CROWDS),
+                        help="crowd runs to make (walkers_law), default all")  # fmt: skip
     args = parser.parse_args()
     sections = [name for name in args.sections.split(",") if name]
     unknown = sorted(set(sections) - set(SECTIONS))
     if unknown:
         parser.error(f"unknown sections {unknown}; allowed: {', '.join(SECTIONS)}")
+    crowds = [name for name in args.crowds.split(",") if name]
+    unknown = sorted(set(crowds) - set(CROWDS))
+    if unknown:
+        parser.error(f"unknown crowds {unknown}; allowed: {', '.join(CROWDS)}")
     out: dict[str, Any] = {"seeds": args.seeds}
     if "crowd" in sections:
-        out["crowd"] = {
-            f"{walkers}_{law}": summary(run_many(_crowd(walkers, law), args.seeds, args.workers))
-            for walkers in (20, 50)
-            for law in ("mppi", "dwa")
-        }
+        out["crowd"] = {}
+        for name in crowds:
+            walkers, law = name.split("_")
+            rows = run_many(_crowd(int(walkers), law), args.seeds, args.workers)
+            out["crowd"][name] = summary(rows)
     if "irsim" in sections:
         try:
             out["irsim"] = {str(n): irsim_crossings(n, args.seeds) for n in (20, 50)}

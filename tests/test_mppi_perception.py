@@ -22,7 +22,9 @@ from wheelbase.control.obstacle_critics import (
     certainty,
     costmap_check,
     costmap_costs,
+    evasion_choice,
     predict_tracks,
+    struck_step,
     track_costs,
 )
 from wheelbase.errors import ConfigError, InputError
@@ -433,3 +435,24 @@ def test_tracks_out_of_a_rollouts_reach_are_not_tested_and_change_nothing():
     disks = np.array([[0.0, 0.0, 0.2]])
     _order, counts = reachable_tracks(table, times, 1.0, disks, 0.45)
     np.testing.assert_array_equal(counts, [0, 1, 1])  # 1 − 0.1 ≥ 0.85, 1 − 0.2 < 0.85
+
+
+def test_a_walker_that_strikes_a_standing_robot_as_soon_as_any_command_is_evaded():
+    """Every command and standing still touch at step 0: a stop is struck, so when the contact
+    of standing still is a track's the cheapest command drives; against a wall (no track) the
+    stop stays (static obstacles never strike)."""
+    disks = np.array([[0.0, 0.0, 0.2]])
+    steps = 4
+    # a walker (r 0.3 m) 0.49 m ahead, coming at 1 m/s: it touches the standing robot at once
+    ahead = 0.49 - 0.05 * np.arange(1, steps + 1)
+    table = np.zeros((steps, 1, 4))
+    table[:, 0, 0], table[:, 0, 2] = ahead, 0.3
+    seen = SimpleNamespace(table=table, relief=np.zeros(1), disks=disks)
+    assert struck_step(seen, 0.0, steps) == 0
+    far = SimpleNamespace(table=table + [[[5.0, 0.0, 0.0, 0.0]]], relief=np.zeros(1), disks=disks)
+    assert struck_step(far, 0.0, steps) is None
+    first, costs = np.zeros(3, np.int64), np.array([5.0, 2.0, 9.0])
+    assert evasion_choice(first, 0, costs, 0.05, struck_step(seen, 0.0, steps)) == 1
+    assert evasion_choice(first, 0, costs, 0.05, None) is None
+    # standing still struck later than every command collides: still a stop
+    assert evasion_choice(first, 2, costs, 0.05, 2) is None

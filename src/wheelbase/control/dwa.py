@@ -120,6 +120,7 @@ from wheelbase.control.obstacle_critics import (
     PerceptionInputs,
     evasion_choice,
     path_blocked,
+    struck_step,
 )
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -583,7 +584,8 @@ class DWA:
             if perception is not None:
                 # a stop, held: what all_collide would do, against the walkers coming on
                 standing = int(self._score(pose, np.zeros((1, 2)), None, context)[1][0])
-                best = evasion_choice(first, standing, costs, self.sim_dt)
+                struck = struck_step(seen, float(pose[2]), self.steps)
+                best = evasion_choice(first, standing, costs, self.sim_dt, struck)
             if best is None:
                 plan = self._stop(pose, "all_collide")
                 plan = DWAPlan(plan.command, samples, costs, scores, collided, legal,

@@ -107,6 +107,7 @@ from wheelbase.control.obstacle_critics import (
     PerceptionInputs,
     evasion_choice,
     path_blocked,
+    struck_step,
 )
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
@@ -586,7 +587,7 @@ class MPPI:
                 return self._first_contacts(args, sequences, local_map, seen)
 
             if float(np.min(costs)) >= self.critics.collision_cost:
-                evasion = self._evasion(first, costs, contacts)
+                evasion = self._evasion(first, costs, contacts, seen, float(pose[2]))
 
             def collides(sequence: np.ndarray) -> bool:
                 return bool(contacts(sequence[None])[0] < self.horizon_steps)
@@ -598,13 +599,17 @@ class MPPI:
         first: np.ndarray,
         costs: np.ndarray,
         contacts: Callable[[np.ndarray], np.ndarray],
+        seen: PerceptionArrays,
+        heading: float,
     ) -> int | None:
         """When every sample collides: the sample that stays clear longest (the cheapest of
         those), by :func:`~wheelbase.control.obstacle_critics.evasion_choice`; else None
         (a stop). ``first``: each sample's first colliding step, from the costs; ``contacts``:
-        the first colliding steps of command sequences ``(N, T, m)``."""
+        the first colliding steps of command sequences ``(N, T, m)``; ``seen`` and ``heading``
+        [rad]: the call's arrays and the robot's heading (when a track strikes it standing)."""
         stop = np.zeros((1, self.horizon_steps, self.nu))
-        return evasion_choice(first, int(contacts(stop)[0]), costs, self.dt)
+        struck = struck_step(seen, heading, self.horizon_steps)
+        return evasion_choice(first, int(contacts(stop)[0]), costs, self.dt, struck)
 
     def _first_contacts(
         self,
