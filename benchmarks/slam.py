@@ -282,10 +282,9 @@ def amcl_on_explored_map(grid, seeds, scenario: str | dict) -> dict:
     """
     import tempfile
 
-    from wheelbase.limits import BATCH_MEMORY
     from wheelbase.planning import load_map
     from wheelbase.planning.map_io import write_ros_yaml
-    from wheelbase.runner import _run_batch, prepare
+    from wheelbase.runner import prepare, run_prepared
     from wheelbase.scenario import load_scenario
     from wheelbase.scenario_sensors import build_sensors
 
@@ -303,7 +302,7 @@ def amcl_on_explored_map(grid, seeds, scenario: str | dict) -> dict:
     engine = replace(prepared.engine, sensors=build_sensors(on_map, truth),
                      collides=lambda poses: truth.in_collision(footprint, poses))  # fmt: skip
     wall = time.perf_counter()
-    rows = _run_batch(replace(prepared, grid=truth, engine=engine), seeds, BATCH_MEMORY)
+    rows = run_prepared(replace(prepared, grid=truth, engine=engine), seeds)
     statuses: dict[str, int] = {}
     for row in rows:
         statuses[row["status"]] = statuses.get(row["status"], 0) + 1

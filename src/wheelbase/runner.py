@@ -55,6 +55,7 @@ __all__ = [
     "prepare",
     "run",
     "run_metrics",
+    "run_prepared",
     "run_seeds",
     "seeds_per_chunk",
 ]
@@ -1000,26 +1001,48 @@ def run_seeds(
     list of dict
         The metrics of each run (as :func:`run` gives them), in the order of ``seeds``.
     """
-    from wheelbase.limits import BATCH_MEMORY
-
-    budget = BATCH_MEMORY if memory_budget is None else memory_budget
-    budget = positive("memory_budget", budget, "bytes")
+    if memory_budget is not None:
+        positive("memory_budget", memory_budget, "bytes")
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     seeds = [int(seed) for seed in seeds]
     if scenario.world is not None and scenario.world.path_boxes is not None:
         # each seed drops its own boxes: its own world, run alone
-        return [
-            row
-            for seed in seeds
-            for row in _run_batch(prepare(scenario, seed=seed), [seed], budget)
-        ]
-    return _run_batch(prepare(scenario), seeds, budget)
+        rows = []
+        for seed in seeds:
+            rows += run_prepared(prepare(scenario, seed=seed), [seed], memory_budget=memory_budget)
+        return rows
+    return run_prepared(prepare(scenario), seeds, memory_budget=memory_budget)
 
 
-def _run_batch(prepared: Prepared, seeds: list[int], budget: float) -> list[dict[str, Any]]:
+def run_prepared(
+    prepared: Prepared, seeds: Any, *, memory_budget: float | None = None
+) -> list[dict[str, Any]]:
     """Engine runs of a prepared scenario for ``seeds`` (a world of R robots per seed), as many
-    worlds at a time as fit ``budget`` bytes (:func:`seeds_per_chunk`)."""
+    worlds at a time as fit ``memory_budget`` bytes (:func:`seeds_per_chunk`): what
+    :func:`run_seeds` does after :func:`prepare`, for a caller that changed the prepared
+    scenario first (another engine, map or sensors: ``dataclasses.replace``).
+
+    Parameters
+    ----------
+    prepared : Prepared
+        From :func:`prepare`, changed or not.
+    seeds : sequence of int
+        Noise seeds, one world each.
+    memory_budget : float, optional
+        Bytes the logs of one chunk may take (default
+        :data:`wheelbase.limits.BATCH_MEMORY`), > 0.
+
+    Returns
+    -------
+    list of dict
+        The metrics of each world, in the order of ``seeds``.
+    """
+    from wheelbase.limits import BATCH_MEMORY
+
+    budget = BATCH_MEMORY if memory_budget is None else memory_budget
+    budget = positive("memory_budget", budget, "bytes")
+    seeds = [int(seed) for seed in seeds]
     if prepared.engine is None:
         return [{**_base_metrics(prepared, seed), "status": "planning_failed"} for seed in seeds]
     fleet = len(prepared.starts)
