@@ -306,6 +306,7 @@ class Navigator:
         self.plan_margin = nonnegative("plan_margin", plan_margin, "m")
         self.command_names = tuple(getattr(local, "command_names", ("v", "omega")))
         self._samples: dict[float, np.ndarray] = {}  # the footprint sampled, per resolution
+        self._plan_grids: tuple[Any, bytes, Any] | None = None  # see _plan_grid
         self.reset()
 
     # ------------------------------------------------------------------ engine protocol
@@ -457,9 +458,20 @@ class Navigator:
         # as marked, a robot that stopped 9 cm from a box found every plan blocked where it
         # starts and spent its recoveries (unexpected_boxes seed 27: 14 of 63 poses ahead
         # on the box's marks, a 1.5 m gap beside it)
-        hit = self._hits(_cleared(grid, pose, self.footprint, self.plan_margin), ahead[inside])
+        hit = self._hits(self._plan_grid(grid, pose), ahead[inside])
         # the robot's own cell: an obstacle the robot already overlaps is not ahead of it
         return bool(np.any(hit[1:]) if len(hit) > 1 else False)
+
+    def _plan_grid(self, grid: Any, pose: np.ndarray) -> Any:
+        """The grid plans are made and checked on: ``grid`` with the robot's neighbourhood
+        cleared (:func:`_cleared`), made once per believed grid and pose: the blocked check,
+        the replan and the check of the new plan in one step share it, and with it the
+        distance field a fresh grid computes on first use."""
+        key = pose.tobytes()
+        last = self._plan_grids
+        if last is None or last[0] is not grid or last[1] != key:
+            self._plan_grids = (grid, key, _cleared(grid, pose, self.footprint, self.plan_margin))
+        return self._plan_grids[2]
 
     def _hits(self, grid: Any, poses: np.ndarray) -> np.ndarray:
         """Which poses put the footprint on an obstacle cell of ``grid`` (or off it)."""
@@ -472,7 +484,7 @@ class Navigator:
         # what the lidar marked where the robot stands is the robot's own neighbourhood (an
         # agent brushing past, a mark of noise): the plan may start there
         path = self.plan_route(
-            _cleared(grid, pose, self.footprint, self.plan_margin),
+            self._plan_grid(grid, pose),
             pose,
             self.goals[self.next_goal :],
         )
@@ -490,7 +502,7 @@ class Navigator:
         """Go aside for a robot of higher priority: True when a refuge and a way there exist."""
         if self.priority <= 0 or self.options.yield_time <= 0:
             return False
-        cleared = _cleared(grid, pose, self.footprint, self.plan_margin)
+        cleared = self._plan_grid(grid, pose)
         # the nearest refuges first, each facing as the robot does or the other way: a refuge
         # whose only way in the planner cannot find (a turn into a tight bay) is not the end
         for refuge in self._refuges(pose, grid):
@@ -521,9 +533,7 @@ class Navigator:
         if waiting.reached and t - waiting.last_try >= 1.0:
             waiting.last_try = t
             goals = self.goals[self.next_goal :]
-            path = self.plan_route(
-                _cleared(grid, pose, self.footprint, self.plan_margin), pose, goals
-            )
+            path = self.plan_route(self._plan_grid(grid, pose), pose, goals)
             if path is not None and self._way_clear(pose, grid, path, perception):
                 self.yielding = None
                 self.plan = path
