@@ -257,9 +257,10 @@ def _clusters(
     for k in np.flatnonzero(misfit > 0.0):
         members = np.flatnonzero(label == k)
         members = members[np.argsort(side[members], kind="stable")]
-        box = _rectangle(points[members], sensor, spacing, bool(occluded[k]))
-        if box[2] < min(_RECTANGLE_MARGIN * misfit[k], spec.measurement_std):
-            centre[k], radius[k] = box[0], box[1]
+        box = _rectangle(points[members], sensor, spacing, bool(occluded[k]),
+                         min(_RECTANGLE_MARGIN * misfit[k], spec.measurement_std))  # fmt: skip
+        if box is not None:
+            centre[k], radius[k] = box
     keep &= radius <= spec.max_radius
     hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
     covariance = spread / count[:, None, None] + spec.measurement_std**2 * np.eye(2) + hidden
@@ -268,12 +269,13 @@ def _clusters(
 
 
 def _rectangle(
-    points: np.ndarray, sensor: np.ndarray, spacing: float, occluded: bool
-) -> tuple[np.ndarray, float, float]:
-    """Centre [m], radius [m] and RMS misfit [m] of the rectangle read from one cluster's
-    ``points`` (n, 2), in the order of their bearings from ``sensor``, beams ``spacing`` [rad]
-    apart; an ``occluded`` cluster's faces may go on behind its ends (step 6 of the module
-    docstring)."""
+    points: np.ndarray, sensor: np.ndarray, spacing: float, occluded: bool, accept: float
+) -> tuple[np.ndarray, float] | None:
+    """Centre [m] and radius [m] of the rectangle read from one cluster's ``points`` (n, 2),
+    in the order of their bearings from ``sensor``, beams ``spacing`` [rad] apart; an
+    ``occluded`` cluster's faces may go on behind its ends (step 6 of the module docstring);
+    None when its RMS misfit is not below ``accept`` [m] (the sides are not worked out then:
+    a walker's cluster is fitted each scan, and rejected)."""
     axis = np.stack([np.cos(_HEADINGS), np.sin(_HEADINGS)], -1)  # e₁ per heading
     along = points @ axis.T  # (n, H)
     across = points @ np.stack([-axis[:, 1], axis[:, 0]], -1).T
@@ -284,6 +286,9 @@ def _rectangle(
     frame = np.array([axis[best], [-axis[best, 1], axis[best, 0]]])  # rows e₁, e₂
     coords = points @ frame.T
     low, high = coords.min(0), coords.max(0)
+    misfit = float(np.sqrt(np.mean(np.minimum(d1[:, best], d2[:, best]) ** 2)))
+    if not misfit < accept:
+        return None
     # how far each face may go on past the chain's end, on each axis and side: up to where
     # the next beam, which missed, would have met the face's line
     room = np.zeros((2, 2))  # [axis, side (0: low, 1: high)]
@@ -335,5 +340,4 @@ def _rectangle(
         elif total[k] > 0.0:
             share[k] = room[k] / total[k]
     centre_coords = 0.5 * (low - grow * share[:, 0] + high + grow * share[:, 1])
-    misfit = float(np.sqrt(np.mean(np.minimum(d1[:, best], d2[:, best]) ** 2)))
-    return centre_coords @ frame, 0.5 * float(size.max()), misfit
+    return centre_coords @ frame, 0.5 * float(size.max())
