@@ -68,35 +68,37 @@ class PathTables:
         spacing: float,
         end_heading: float | None = None,
     ) -> None:
-        xy, heading, direction, arc, section = [points[:1]], [], [], [0.0], []
+        directions = np.asarray(directions)
         seg = np.diff(points, axis=0)
         length = np.hypot(seg[:, 0], seg[:, 1])
-        needed = float(np.sum(np.maximum(1.0, np.ceil(length / spacing - 1e-9))))
+        counts = np.maximum(1.0, np.ceil(length / spacing - 1e-9))
+        needed = float(np.sum(counts))
         if not needed <= MAX_PATH_POINTS:
             raise ConfigError(
                 f"the reference path ({length.sum():.3g} m) at path_spacing = {spacing:g} m "
                 f"needs {needed:.3g} points: more than {MAX_PATH_POINTS:.0e} "
                 "(wheelbase.limits.MAX_PATH_POINTS); use a larger path_spacing"
             )
+        counts = counts.astype(np.int64)
+        # every segment cut into `count` equal steps: point k of segment i at k / count of it
+        of = np.repeat(np.arange(seg.shape[0]), counts)
+        k = np.arange(of.size) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+        frac = k / counts[of]
         seg_heading = np.arctan2(seg[:, 1], seg[:, 0])
-        run = 0
-        for i in range(seg.shape[0]):
-            if i > 0 and directions[i] != directions[i - 1]:
-                run += 1
-            count = max(1, math.ceil(length[i] / spacing - 1e-9))
-            frac = np.arange(1, count + 1) / count
-            xy.append(points[i] + frac[:, None] * seg[i])
-            robot_heading = seg_heading[i] if directions[i] > 0 else seg_heading[i] + math.pi
-            heading.extend([robot_heading] * count)
-            direction.extend([directions[i]] * count)
-            arc.extend(list(arc[-1] + frac * length[i]))
-            section.extend([run] * count)
+        robot_heading = np.where(directions > 0, seg_heading, seg_heading + math.pi)
+        runs = np.concatenate([[0], np.cumsum(directions[1:] != directions[:-1])])
+        start_arc = np.concatenate([[0.0], np.cumsum(length)[:-1]])
         # The first point takes the values of the first segment.
-        self.xy = np.concatenate(xy)
-        self.heading = np.asarray(wrap_angle(np.array([heading[0], *heading])), dtype=np.float64)
-        self.direction = np.array([direction[0], *direction], dtype=np.float64)
-        self.arc = np.array(arc)
-        self.section = np.array([section[0], *section], dtype=np.int64)
+        self.xy = np.concatenate([points[:1], points[of] + frac[:, None] * seg[of]])
+        heading = robot_heading[of]
+        self.heading = np.asarray(wrap_angle(np.concatenate([heading[:1], heading])),
+                                  dtype=np.float64)  # fmt: skip
+        direction = np.asarray(directions, dtype=np.float64)[of]
+        self.direction = np.concatenate([direction[:1], direction])
+        self.arc = np.concatenate([[0.0], start_arc[of] + frac * length[of]])
+        section = runs[of].astype(np.int64)
+        self.section = np.concatenate([section[:1], section])
+        run = int(runs[-1]) if runs.size else 0
         if end_heading is not None:
             # The goal's heading (a planned path knows it): the last chord's direction differs
             # from it by half the turn of the last segment.
