@@ -214,12 +214,10 @@ class Gyrodometry:
         if state is None:
             state = self.start(estimate, np.zeros(len(estimate), dtype=np.int64))
         rows = np.arange(len(estimate)) if index is None else np.asarray(index)
-        extra = {} if command is None else {"command": command}
-        _, wheel_twist, inner_state = self.inner.update(
-            estimate, ticks, dt, pose, twist, state=state["inner"], index=index, **extra
+        distance, rotation, inner_state = self.inner.travel(
+            estimate, ticks, dt, state=state["inner"], index=index, command=command
         )
-        wheel_twist = np.asarray(wheel_twist, dtype=np.float64)
-        distance, rotation = wheel_twist[:, 0] * dt, wheel_twist[:, 2] * dt
+        wheel_twist = np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
         state = {**state, "inner": inner_state}
         start = estimate
         if imu is not None:

@@ -183,8 +183,11 @@ class EncoderOdometry(_EstimateOnly):
                 f"odometry must be a WheelOdometry (got {type(self.odometry).__name__})"
             )
 
-    def update(self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None):
-        """Dead-reckon the estimate over one step, and the twist it implies.
+    def update(
+        self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None,
+        command=None,
+    ):  # fmt: skip
+        """Dead-reckon the estimate over one step (:meth:`travel`), and the twist it implies.
 
         Parameters
         ----------
@@ -200,9 +203,34 @@ class EncoderOdometry(_EstimateOnly):
             What the estimator keeps, and which robots these are (unused).
         readings : Readings, optional
             Sensor readings (unused: odometry alone).
+        command : numpy.ndarray, shape (N, 2), optional
+            The wheel torques held over the step, for an odometry that reads them.
+        """
+        extra = {} if command is None else {"command": command}
+        distance, rotation, state = self.travel(estimate, ticks, dt, state=state, index=index,
+                                                **extra)  # fmt: skip
+        return (*self.dead_reckon(estimate, distance, rotation, dt), state)
+
+    def travel(self, estimate, ticks, dt, *, state=None, index=None, command=None):
+        """The distance [m] and rotation [rad] the odometry counts over one step, ``(N,)``
+        each, and its state after (what :meth:`update` dead-reckons; a wrapper that changes
+        the heading, :class:`~wheelbase.sim.gyrodometry.Gyrodometry`, starts from it).
+
+        Parameters
+        ----------
+        estimate : numpy.ndarray, shape (N, 3)
+            The estimate at the start of the step (unused here).
+        ticks : numpy.ndarray, shape (N, 2)
+            Tick differences counted during the step.
+        dt : float
+            Step [s] (unused here).
+        state, index : optional
+            What the estimator keeps, and which robots these are (unused here).
+        command : numpy.ndarray, shape (N, 2), optional
+            The wheel torques (unused here).
         """
         distance, rotation = self.odometry.increments(ticks)
-        return (*self.dead_reckon(estimate, distance, rotation, dt), state)
+        return distance, rotation, state
 
     def dead_reckon(
         self, estimate: np.ndarray, distance: np.ndarray, rotation: np.ndarray, dt: float

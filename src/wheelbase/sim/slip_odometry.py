@@ -165,34 +165,28 @@ class SlipCompensatedOdometry(EncoderOdometry):
             out[i] = loads[:2]
         return out
 
-    def update(
-        self, estimate, ticks, dt, pose, twist, *, state=None, index=None, readings=None,
-        command=None,
-    ):  # fmt: skip
-        """Dead-reckon the estimate over one step on the slip-corrected wheel distances.
+    def travel(self, estimate, ticks, dt, *, state=None, index=None, command=None):
+        """The distance [m] and rotation [rad] of one step on the slip-corrected wheel
+        distances, ``(N,)`` each, and the rim speeds after (:meth:`start`).
 
         Parameters
         ----------
         estimate : numpy.ndarray, shape (N, 3)
-            The estimate at the start of the step.
+            The estimate at the start of the step (the surface and the loads under it).
         ticks : numpy.ndarray, shape (N, 2)
             Tick differences counted during the step.
         dt : float
             Step [s].
-        pose, twist : numpy.ndarray, shape (N, 3)
-            The truth (unused: odometry only sees ticks and its own torques).
         state : numpy.ndarray, shape (M, 2), optional
             The rim speeds of every robot's last step (:meth:`start`; None: no spin-up).
         index : numpy.ndarray, optional
             Which rows of ``state`` these robots are (default: all).
-        readings : Readings, optional
-            Sensor readings (unused).
         command : numpy.ndarray, shape (N, 2), optional
             The wheel torques (left, right) [N·m] held over the step; without them, plain
             encoder odometry.
         """
         if command is None:
-            return super().update(estimate, ticks, dt, pose, twist, state=state, index=index)
+            return super().travel(estimate, ticks, dt, state=state, index=index)
 
         distances = self.odometry.wheel_distances(ticks)
         rim = distances / dt
@@ -219,5 +213,4 @@ class SlipCompensatedOdometry(EncoderOdometry):
         ground = rim / (1.0 + kappa * np.sign(rim))
         corrected = ground * dt
         left, right = corrected[:, 0], corrected[:, 1]
-        distance, rotation = 0.5 * (left + right), (right - left) / self.odometry.track
-        return (*self.dead_reckon(estimate, distance, rotation, dt), state)
+        return 0.5 * (left + right), (right - left) / self.odometry.track, state
