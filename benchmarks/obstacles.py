@@ -231,6 +231,8 @@ def _targets(out: dict) -> dict:
         checks["doorway"] = (
             out["doorway"]["all_blocked_within_60_s"] and not out["doorway"]["collisions"]
         )
+    if "swap" in out:  # both robots of every seed arrive, no contact
+        checks["swap"] = out["swap"]["arrived"] == 1.0 and out["swap"]["collisions"] == 0
     if "speed" in out:
         checks["speed"] = out["speed"]["crowd_real_time_factor"] >= 20
     return {name: bool(value) if not isinstance(value, float) or math.isfinite(value) else None
