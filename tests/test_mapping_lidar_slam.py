@@ -124,29 +124,31 @@ def test_true_closures_survive_a_slide_that_the_robust_kernel_alone_would_not_fo
 ACES = DATA / "carmen" / "aces-corrected.log.gz"
 
 
-@pytest.mark.skipif(not ACES.is_file(), reason=absent(ACES))
-def test_the_front_end_does_not_slide_along_the_first_corridor_of_aces():
+def _frontend_steps(log):
+    """The front end's errors (x, y, θ) between consecutive scans against the log's
+    reference poses, and the result (loop closures off)."""
     from wheelbase.geometry import relative_pose
 
-    log = read_carmen(ACES).subset(slice(0, 45))
     result = LidarSlam.without_odometry(loop_every=10**9).run(log)  # the front end alone
     ref, est = log.reference, result.frontend_poses
-    err = relative_pose(relative_pose(ref[:-1], ref[1:]), relative_pose(est[:-1], est[1:]))
+    return relative_pose(relative_pose(ref[:-1], ref[1:]), relative_pose(est[:-1], est[1:])), result
+
+
+@pytest.mark.skipif(not ACES.is_file(), reason=absent(ACES))
+def test_the_front_end_does_not_slide_along_the_first_corridor_of_aces():
+    log = read_carmen(ACES).subset(slice(0, 45))
+    err, _ = _frontend_steps(log)
     # with a 12-keyframe submap scans 25 and 26 matched 1.0 m and 1.1 m short
     assert np.hypot(err[:, 0], err[:, 1]).max() < 0.3
 
 
 @needs_intel
 def test_identical_scans_along_a_corridor_are_not_matched_in_place():
-    from wheelbase.geometry import relative_pose
-
     log = read_carmen(INTEL).subset(slice(95, 125))
     # scans 108, 109 and 110 of the log: 1 m apart along a corridor, their ranges equal to 1-4 cm
     # (median) as the side walls look the same from everywhere; from the returns alone the
     # next scan matched 1.0-1.3 m short, on the samples of the last keyframe's walls
-    result = LidarSlam.without_odometry(loop_every=10**9).run(log)  # the front end alone
-    ref, est = log.reference, result.frontend_poses
-    err = relative_pose(relative_pose(ref[:-1], ref[1:]), relative_pose(est[:-1], est[1:]))
+    err, _ = _frontend_steps(log)
     along = np.hypot(err[13:, 0], err[13:, 1])  # from scan 108 on: in the corridor
     assert along.max() < 0.15
     assert np.median(along) < 0.04
@@ -154,14 +156,10 @@ def test_identical_scans_along_a_corridor_are_not_matched_in_place():
 
 @needs_intel
 def test_a_submap_bent_by_drift_does_not_break_the_chain_where_the_last_keyframe_disagrees():
-    from wheelbase.geometry import relative_pose
-
     # scans 793-794 of the log: the 30-keyframe submap, its oldest keyframes drifted, ranked a
     # pose 0.45 m across the true one first (7 % of the scan within 5 cm of scan 793 there)
     log = read_carmen(INTEL).subset(slice(740, 830))
-    result = LidarSlam.without_odometry(loop_every=10**9).run(log)  # the front end alone
-    ref, est = log.reference, result.frontend_poses
-    err = relative_pose(relative_pose(ref[:-1], ref[1:]), relative_pose(est[:-1], est[1:]))
+    err, result = _frontend_steps(log)
     steps = np.hypot(err[:, 0], err[:, 1])
     assert steps.max() < 0.2 and steps.mean() < 0.035  # without the check: 0.45 m, 0.046 m
     assert result.stats["last_checks"] >= 1
