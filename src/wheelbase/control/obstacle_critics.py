@@ -121,6 +121,7 @@ __all__ = [
     "reachable_tracks",
     "read_costmap",
     "read_tracks",
+    "struck_step",
     "track_cost_at",
     "track_costs",
 ]
