@@ -53,6 +53,7 @@ from wheelbase.control.base import (
 )
 from wheelbase.errors import ConfigError, InputError
 from wheelbase.geometry import wrap_angle
+from wheelbase.limits import MAX_COORDINATE
 
 __all__ = [
     "PathFollower",
@@ -525,7 +526,9 @@ class PurePursuit(PathFollower):
         )
 
     def _law(self, point, heading, speed, seg, u, tab):
-        lookahead = self.lookahead_gain * speed + self.min_lookahead
+        with np.errstate(over="ignore"):  # a wild speed: the lookahead runs to the path's end
+            lookahead = np.minimum(self.lookahead_gain * np.abs(speed), MAX_COORDINATE)
+        lookahead = np.copysign(lookahead, speed) + self.min_lookahead
         s_here = tab["arc"][seg] + np.clip(u, 0.0, 1.0) * tab["length"][seg]
         end = tab["section_end"][seg]
         s_end = tab["arc"][end]
