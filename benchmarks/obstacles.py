@@ -1,9 +1,9 @@
 """Navigation among obstacles the map does not show (issue 22): arrival, contacts and speed.
 
 Run ``python benchmarks/obstacles.py`` (``--seeds 100`` by default, ``--sections`` and
-``--crowds 20_mppi,50_dwa,...`` to pick, ``--workers 2``); prints one JSON object. Every run is a bundled scenario through
-:func:`wheelbase.runner.run_seeds`, seeds 0 … n − 1 (each seed its own walkers, boxes and
-sensor noise):
+``--crowds 20_mppi,50_dwa,...`` to pick, ``--workers 2``); prints one JSON object. Every run
+is a bundled scenario through :func:`wheelbase.runner.run_seeds`, seeds 0 … n − 1 (each seed
+its own walkers, boxes and sensor noise):
 
 ``crowd``
     ``crowd_crossing`` with 20 and with 50 walkers that do not avoid the robot, for MPPI and

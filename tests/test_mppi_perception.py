@@ -449,7 +449,8 @@ def test_a_walker_that_strikes_a_standing_robot_as_soon_as_any_command_is_evaded
     table[:, 0, 0], table[:, 0, 2] = ahead, 0.3
     seen = SimpleNamespace(table=table, relief=np.zeros(1), disks=disks)
     assert struck_step(seen, 0.0, steps) == 0
-    far = SimpleNamespace(table=table + [[[5.0, 0.0, 0.0, 0.0]]], relief=np.zeros(1), disks=disks)
+    away = table + np.array([5.0, 0.0, 0.0, 0.0])  # the walker 5 m further off
+    far = SimpleNamespace(table=away, relief=np.zeros(1), disks=disks)
     assert struck_step(far, 0.0, steps) is None
     first, costs = np.zeros(3, np.int64), np.array([5.0, 2.0, 9.0])
     assert evasion_choice(first, 0, costs, 0.05, struck_step(seen, 0.0, steps)) == 1
