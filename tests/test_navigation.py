@@ -281,6 +281,41 @@ def test_a_refuge_the_planner_cannot_reach_is_not_the_end_of_yielding():
     assert nav.recoveries == 1 and nav.yields == 1
 
 
+class Stalled(Straight):
+    """A local law that never moves the robot (a way aside it cannot follow)."""
+
+    def __call__(self, t, pose, path):
+        super().__call__(t, pose, path)
+        return np.zeros(2)
+
+
+def test_a_yielding_robot_that_makes_no_headway_plans_its_way_aside_again():
+    """Nav2's progress checker on the way aside: without 0.5 m of headway in 10 s the way is
+    planned again from where the robot stands (each time a new yield), and the yield's time
+    still counts from the first; standing still, it then recovers at yield_time."""
+    from wheelbase.navigation import YIELD_PROGRESS_TIME
+
+    def corridor_planner(grid, start, goals):
+        path = HybridAStar(grid, footprint=(0.8, 0.8), turning_radius=0.0).plan(start, goals[0])
+        return path if path.success else None
+
+    square = Footprint.rectangle(0.7, 0.7)
+    grid = corridor_view()[1]
+    other = corridor_view((5.4, 6.1, 0.45, 1.15))[0]  # a stopped robot in the corridor ahead
+    start, goal = np.array([8.6, 0.8, math.pi]), np.array([1.0, 0.8, math.pi])
+    first = corridor_planner(OccupancyGrid(grid.occupied, grid.resolution), start, [goal])
+    options = NavigatorOptions(rate_hz=0.0, yield_time=25.0)
+    nav = Navigator(Stalled(), corridor_planner, square, options)
+    route = Route(first, (goal,), priority=1)
+    drive(nav, route, other, start, 0.0, 1.0)
+    assert nav.yields == 1 and nav.yielding is not None
+    began = nav.yielding.started
+    drive(nav, route, other, start, 1.0, YIELD_PROGRESS_TIME + 0.5)
+    assert nav.yields == 2 and nav.yielding.started == began and nav.recoveries == 0
+    drive(nav, route, other, start, YIELD_PROGRESS_TIME + 1.5, 15.0)  # past yield_time
+    assert nav.recoveries >= 1
+
+
 def test_a_robot_that_stopped_against_a_box_is_not_blocked_by_it_when_the_way_is_open():
     """A robot that stopped with its side on a box's corner marks (the lidar's cells reach a
     few cm past the box) and a plan that leaves the box behind: the plan starts on the grid cleared

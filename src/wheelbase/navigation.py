@@ -71,6 +71,14 @@ ARRIVED_ASIDE = 0.15
 refuge's, less the 0.1 m within which a robot has reached the refuge itself."""
 """The navigator's own statuses, beside the local controller's (``ok``, ``all_collide``, …)."""
 
+YIELD_PROGRESS_RADIUS = 0.5
+"""Headway [m] a yielding robot must make on its way aside within :data:`YIELD_PROGRESS_TIME`
+(Nav2's progress checker: ``required_movement_radius``)."""
+
+YIELD_PROGRESS_TIME = 10.0
+"""[s] (Nav2's ``movement_time_allowance``): past it without headway the way aside is planned
+again from where the robot stands."""
+
 LETHAL = 254
 """Nav2's lethal cost: an obstacle cell."""
 
@@ -237,13 +245,16 @@ class Route:
 
 @dataclass
 class _Yield:
-    """Waiting aside: since when, where, and the way there."""
+    """Waiting aside: since when, where, the way there, and the last headway on it (where the
+    robot was when it last moved :data:`YIELD_PROGRESS_RADIUS`, and when)."""
 
     started: float
     refuge: np.ndarray
     path: Any
     last_try: float
     reached: bool = False
+    anchor: np.ndarray | None = None
+    anchor_time: float = 0.0
 
 
 @dataclass
@@ -511,7 +522,8 @@ class Navigator:
                 path = self.plan_route(cleared, pose, [target])
                 if path is not None:
                     self.yields += 1
-                    self.yielding = _Yield(t, target, path, t)
+                    self.yielding = _Yield(t, target, path, t, anchor=pose[:2].copy(),
+                                           anchor_time=t)  # fmt: skip
                     self.plans.append((t, np.asarray(path.poses)))
                     return True
         return False
@@ -530,6 +542,19 @@ class Navigator:
         waiting.reached = (
             waiting.reached or near or bool(self._aside(pose[None, :2], ARRIVED_ASIDE)[0])
         )
+        if not waiting.reached:
+            # Nav2's progress checker: no headway of YIELD_PROGRESS_RADIUS within
+            # YIELD_PROGRESS_TIME, and the way aside is planned again from where the robot is
+            # (in corridor_swap a robot stalled at the bay's mouth, fled from the other robot
+            # backwards down the corridor and stopped in its way at the far end)
+            if math.dist(pose[:2], waiting.anchor) >= YIELD_PROGRESS_RADIUS:
+                waiting.anchor, waiting.anchor_time = pose[:2].copy(), t
+            elif t - waiting.anchor_time > YIELD_PROGRESS_TIME:
+                self.yielding = None
+                if not self._start_yield(t, pose, grid):
+                    return self._start_recovery(t, pose, grid)
+                self.yielding.started = waiting.started  # yield_time counts from the first
+                waiting = self.yielding
         if waiting.reached and t - waiting.last_try >= 1.0:
             waiting.last_try = t
             goals = self.goals[self.next_goal :]
