@@ -252,9 +252,9 @@ class _Yield:
     refuge: np.ndarray
     path: Any
     last_try: float
+    anchor: np.ndarray
+    anchor_time: float
     reached: bool = False
-    anchor: np.ndarray | None = None
-    anchor_time: float = 0.0
 
 
 @dataclass
@@ -522,8 +522,7 @@ class Navigator:
                 path = self.plan_route(cleared, pose, [target])
                 if path is not None:
                     self.yields += 1
-                    self.yielding = _Yield(t, target, path, t, anchor=pose[:2].copy(),
-                                           anchor_time=t)  # fmt: skip
+                    self.yielding = _Yield(t, target, path, t, pose[:2].copy(), t)
                     self.plans.append((t, np.asarray(path.poses)))
                     return True
         return False

@@ -98,7 +98,7 @@ class PathTables:
         self.arc = np.concatenate([[0.0], start_arc[of] + frac * length[of]])
         section = runs[of].astype(np.int64)
         self.section = np.concatenate([section[:1], section])
-        run = int(runs[-1]) if runs.size else 0
+        run = int(runs[-1])
         if end_heading is not None:
             # The goal's heading (a planned path knows it): the last chord's direction differs
             # from it by half the turn of the last segment.

@@ -51,7 +51,7 @@ import numpy as np
 from wheelbase._validate import integer, positive
 from wheelbase.datasets.g2o import PoseGraph
 from wheelbase.datasets.scans import ScanLog
-from wheelbase.errors import DataError
+from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import compose, inverse_pose, relative_pose
 from wheelbase.mapping.occupancy import LogOddsMap, OccupancyMapper
 from wheelbase.mapping.posegraph import optimize_pose_graph
@@ -252,6 +252,10 @@ class LidarSlam:
         for name in ("submap_keyframes", "loop_every", "loop_min_separation",
                      "loop_candidates", "loop_submap", "optimize_every"):  # fmt: skip
             integer(name, getattr(self, name), 1)
+        if self.last_check and not self.keyframe_normals:
+            # the check matches against the last keyframe's own reference, which only
+            # keyframe_normals keeps: without it the option would do nothing
+            raise ConfigError("last_check needs keyframe_normals=True")
 
     @classmethod
     def without_odometry(cls, **overrides: object) -> LidarSlam:
@@ -500,6 +504,7 @@ class SlamSession:
         self.loop_tables: dict = {}  # candidate submaps' tables (LidarSlam._close_loops)
         # each keyframe's ICP reference in its own frame (``keyframe_normals``)
         self.kf_refs: list[PointReference] | None = [] if slam.keyframe_normals else None
+        self._last_ref: tuple[tuple, PointReference] | None = None  # see _last_reference
         self.kf_pose: list[np.ndarray] = []
         # the front end's keyframe poses: the graph's own, or (``local_frontend``) the poses
         # as matched, which the optimisation leaves alone
@@ -595,6 +600,15 @@ class SlamSession:
             self.info.append(self.slam._edge_information(cov, p[2]))
             self.loop_edge.append(False)
 
+    def _last_reference(self) -> PointReference:
+        """The last keyframe's own ICP reference placed at its pose: made again only when a
+        keyframe is added or the graph moves the last one, not for every scan."""
+        key = (len(self.kf_refs), self.kf_local[-1].tobytes())
+        if self._last_ref is None or self._last_ref[0] != key:
+            placed = PointReference.merge([self.kf_refs[-1]], [self.kf_local[-1]])
+            self._last_ref = (key, placed)
+        return self._last_ref[1]
+
     def _check_last(self, k: int, result: MatchResult, guess: np.ndarray) -> MatchResult:
         """The submap match of scan ``k``, or the pose that point-to-line ICP against the last
         keyframe alone moves it to where both references together like that one better
@@ -610,7 +624,7 @@ class SlamSession:
         """
         slam = self.slam
         matcher = slam.matcher
-        last = PointReference.merge([self.kf_refs[-1]], [self.kf_local[-1]])
+        last = self._last_reference()
         points = self.points[k]
         alt, alt_cov, alt_in, alt_rms = matcher.icp(last, points, result.pose)
         jump = alt[:2] - result.pose[:2]

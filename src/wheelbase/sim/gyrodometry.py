@@ -217,7 +217,7 @@ class Gyrodometry:
         distance, rotation, inner_state = self.inner.travel(
             estimate, ticks, dt, state=state["inner"], index=index, command=command
         )
-        wheel_twist = np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
+        wheel_twist = self.inner.twist(distance, rotation, dt)
         state = {**state, "inner": inner_state}
         start = estimate
         if imu is not None:

@@ -206,9 +206,8 @@ class EncoderOdometry(_EstimateOnly):
         command : numpy.ndarray, shape (N, 2), optional
             The wheel torques held over the step, for an odometry that reads them.
         """
-        extra = {} if command is None else {"command": command}
         distance, rotation, state = self.travel(estimate, ticks, dt, state=state, index=index,
-                                                **extra)  # fmt: skip
+                                                command=command)  # fmt: skip
         return (*self.dead_reckon(estimate, distance, rotation, dt), state)
 
     def travel(self, estimate, ticks, dt, *, state=None, index=None, command=None):
@@ -255,4 +254,17 @@ class EncoderOdometry(_EstimateOnly):
         new = estimate.copy()
         new[:, :2] += pose_increment(estimate[:, 2], distance, rotation, self.odometry.method)
         new[:, 2] = wrap_angle(estimate[:, 2] + rotation)
-        return new, np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
+        return new, self.twist(distance, rotation, dt)
+
+    @staticmethod
+    def twist(distance: np.ndarray, rotation: np.ndarray, dt: float) -> np.ndarray:
+        """The body twist (u [m/s], v = 0, r [rad/s]) ``(N, 3)`` of one step's travel.
+
+        Parameters
+        ----------
+        distance, rotation : numpy.ndarray, shape (N,)
+            Distance travelled [m] and rotation [rad] over the step.
+        dt : float
+            Step [s].
+        """
+        return np.stack([distance / dt, np.zeros_like(distance), rotation / dt], -1)
