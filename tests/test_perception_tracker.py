@@ -19,7 +19,6 @@ from wheelbase.perception import (
     TrackerState,
     Tracks,
     detect,
-    fit_discs,
     track_errors,
     update_tracker,
 )
@@ -115,52 +114,6 @@ def test_a_disc_partly_hidden_is_flagged_occluded():
     assert len(found) == 2 and found.occluded[order].tolist() == [False, True]
     hidden, seen = found.covariance[order[1]], found.covariance[order[0]]
     assert np.all(np.linalg.eigvalsh(hidden - seen) > 0.9 * found.radius[order[1]] ** 2 - 0.01)
-
-
-def test_a_disc_of_known_radius_is_fitted_at_its_centre_even_half_hidden():
-    """The span of step 4 reads a partly hidden disc too small and too near (its centre
-    off by about its radius); with the radius known, the returns alone fix the centre."""
-    front, back = [2.0, 0.0, 0.3], [4.0, 0.45, 0.3]  # the front disc hides back's right side
-    ranges = disc_ranges(None, np.zeros((1, 3)), BEAMS, 8.0, [front, back])[0]
-    found = detect(TrackerSpec(), (0.0, 0.0, 0.0), BEAMS, ranges, 8.0, OPEN)
-    order = np.argsort(found.position[:, 0])
-    assert found.disc.all() and found.start[-1] == found.returns.shape[0] == found.points.sum()
-    hidden = int(order[1])
-    assert math.dist(found.position[hidden], back[:2]) > 0.1  # the span's reading
-    centre, information, rms = fit_discs(found, np.array([hidden, order[0]]), np.full(2, 0.3))
-    assert math.dist(centre[0], back[:2]) < 1e-6 and math.dist(centre[1], front[:2]) < 1e-6
-    assert np.all(rms < 1e-9) and np.all(np.linalg.eigvalsh(information) > 0.01)
-    # noisy returns: the fit is as good as the range noise allows, not as the beam spacing
-    rng = np.random.default_rng(7)
-    errors = []
-    for _ in range(50):
-        found = detect(TrackerSpec(), (0.0, 0.0, 0.0), BEAMS, noisy(ranges, rng), 8.0, OPEN)
-        far = int(np.argmax(found.position[:, 0]))
-        errors.append(math.dist(fit_discs(found, np.array([far]), np.array([0.3]))[0][0],
-                                back[:2]))  # fmt: skip
-    assert np.median(errors) < 0.02
-
-
-def test_a_confirmed_track_is_held_at_its_centre_while_partly_hidden():
-    """A disc walks behind a nearer one: while half hidden, the tracked centre stays within
-    3 cm of the truth (the span's centre is ~0.15 m off, the tracker's fit uses the radius it
-    learnt)."""
-    spec = TrackerSpec()
-    state = TrackerState.initial(spec)
-    rng = np.random.default_rng(1)
-    front = [2.0, 0.0, 0.3]
-    errors = []
-    for k in range(40):  # 4 s: the back disc goes from y = 1.6 m to 0.4 m behind the front one
-        t = 0.1 * k
-        back = [4.0, 1.6 - 0.3 * t, 0.3]
-        ranges = noisy(disc_ranges(None, np.zeros((1, 3)), BEAMS, 8.0, [front, back])[0], rng)
-        state = update_tracker(spec, state, t, (0.0, 0.0, 0.0), BEAMS, ranges, 8.0, OPEN)
-        found = detect(spec, (0.0, 0.0, 0.0), BEAMS, ranges, 8.0, OPEN)
-        tracks = state.tracks(confirmed_only=True)
-        if t >= 2.0 and found.occluded.any():
-            far = int(np.argmin(np.hypot(*(tracks.position - back[:2]).T)))
-            errors.append(math.dist(tracks.position[far], back[:2]))
-    assert len(errors) >= 5 and max(errors) < 0.03
 
 
 def test_the_bare_map_explains_every_return():

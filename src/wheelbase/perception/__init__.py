@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from wheelbase._lazy import attach
 
 if TYPE_CHECKING:  # the names, for type checkers and IDEs; imported on first use
-    from wheelbase.perception.clusters import Detections, detect, fit_discs
+    from wheelbase.perception.clusters import Detections, detect
     from wheelbase.perception.costmap import Costmap, CostmapState, LayeredCostmap, update_costmap
     from wheelbase.perception.costs import FREE, INSCRIBED, LETHAL, UNKNOWN, inflation_cost
     from wheelbase.perception.scoring import TrackErrors, track_errors
@@ -34,7 +34,6 @@ _EXPORTS = {
     "TrackerSpec": "wheelbase.perception.specs",
     "Detections": "wheelbase.perception.clusters",
     "detect": "wheelbase.perception.clusters",
-    "fit_discs": "wheelbase.perception.clusters",
     "TrackErrors": "wheelbase.perception.scoring",
     "track_errors": "wheelbase.perception.scoring",
     "TrackerState": "wheelbase.perception.tracking",
@@ -60,7 +59,6 @@ __all__ = [
     "TrackerState",
     "Tracks",
     "detect",
-    "fit_discs",
     "inflation_cost",
     "track_errors",
     "update_costmap",

@@ -70,7 +70,7 @@ from wheelbase.geometry import wrap_angle
 from wheelbase.perception.specs import TrackerSpec, check_scan_geometry
 from wheelbase.planning import OccupancyGrid
 
-__all__ = ["Detections", "detect", "fit_discs"]
+__all__ = ["Detections", "detect"]
 
 _RECTANGLE_MIN_POINTS = 8  # fewer returns cannot tell a disc from a rectangle
 _RECTANGLE_MARGIN = 0.8  # a rectangle is read when its RMS miss of the returns is below this
@@ -98,13 +98,6 @@ class Detections:
         ``(M,)`` int64 number of returns in each cluster.
     occluded : numpy.ndarray
         ``(M,)`` bool: something nearer hides an edge of the cluster (step 7).
-    disc : numpy.ndarray
-        ``(M,)`` bool: read as a disc (False: as a rectangle, step 6).
-    returns : numpy.ndarray
-        ``(points.sum(), 2)`` the clusters' returns (x, y) [m], cluster by cluster: those of
-        detection ``i`` are ``returns[start[i]:start[i + 1]]``.
-    start : numpy.ndarray
-        ``(M + 1,)`` int64 offsets of each detection's returns in ``returns``.
     """
 
     position: np.ndarray
@@ -112,9 +105,6 @@ class Detections:
     radius: np.ndarray
     points: np.ndarray
     occluded: np.ndarray
-    disc: np.ndarray
-    returns: np.ndarray
-    start: np.ndarray
 
     def __len__(self) -> int:
         return self.position.shape[0]
@@ -206,8 +196,7 @@ def _clusters(
     ``beams`` (ascending) of the scan ``readings``; ``ring``: the beams go round."""
     n = points.shape[0]
     empty = Detections(np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0, np.int64),
-                       np.zeros(0, bool), np.zeros(0, bool), np.zeros((0, 2)),
-                       np.zeros(1, np.int64))  # fmt: skip
+                       np.zeros(0, bool))  # fmt: skip
     if n == 0:
         return empty
     beam_count = readings.shape[0]
@@ -259,7 +248,6 @@ def _clusters(
         edge = ~same & (neighbour >= 0) & (neighbour < beam_count)
         edge[edge] &= readings[neighbour[edge]] < reach[edge]  # NaN compares False
         occluded[label[edge]] = True
-    disc = np.ones(count.size, bool)
     misfit = np.zeros(count.size)
     fitted = np.flatnonzero(keep & (count >= _RECTANGLE_MIN_POINTS))
     if fitted.size:
@@ -273,15 +261,11 @@ def _clusters(
                          min(_RECTANGLE_MARGIN * misfit[k], spec.measurement_std))  # fmt: skip
         if box is not None:
             centre[k], radius[k] = box
-            disc[k] = False
     keep &= radius <= spec.max_radius
     hidden = np.where(occluded & keep, radius, 0.0)[:, None, None] ** 2 * np.eye(2)
     covariance = spread / count[:, None, None] + spec.measurement_std**2 * np.eye(2) + hidden
-    order = np.argsort(label, kind="stable")
-    order = order[keep[label[order]]]
-    start = np.concatenate([[0], np.cumsum(count[keep])]).astype(np.int64)
     return Detections(centre[keep], covariance[keep], radius[keep], count[keep].astype(np.int64),
-                      occluded[keep], disc[keep], points[order], start)  # fmt: skip
+                      occluded[keep])  # fmt: skip
 
 
 def _rectangle(
@@ -357,65 +341,3 @@ def _rectangle(
             share[k] = room[k] / total[k]
     centre_coords = 0.5 * (low - grow * share[:, 0] + high + grow * share[:, 1])
     return centre_coords @ frame, 0.5 * float(size.max())
-
-
-def fit_discs(
-    found: Detections, index: np.ndarray, radius: np.ndarray, iterations: int = 6
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centres of discs of known radii through the returns of detections ``index``.
-
-    Gauss–Newton on Σⱼ (‖pⱼ − c‖ − ρ)² from the detection's own centre (which lies behind
-    the returns, on the side the disc is): with ρ known, the returns of even a partly hidden
-    disc fix its centre, where the span of step 4 does not.
-
-    Parameters
-    ----------
-    found : Detections
-        One scan's detections.
-    index : numpy.ndarray
-        ``(n,)`` int64 detections to fit.
-    radius : numpy.ndarray
-        ``(n,)`` their radii ρ [m], > 0.
-
-    Returns
-    -------
-    centre : numpy.ndarray
-        ``(n, 2)`` fitted centres [m].
-    information : numpy.ndarray
-        ``(n, 2, 2)`` JᵀJ of the fit (its inverse times the residuals' variance is the
-        centre's covariance).
-    rms : numpy.ndarray
-        ``(n,)`` RMS residual ‖pⱼ − c‖ − ρ [m].
-    """
-    index = np.asarray(index, np.int64)
-    size = found.start[index + 1] - found.start[index]
-    label = np.repeat(np.arange(index.size), size)
-    take = np.concatenate([np.arange(found.start[i], found.start[i + 1]) for i in index] or [[]])
-    points = found.returns[take.astype(np.int64)]
-    centre = found.position[index].copy()
-    information = np.zeros((index.size, 2, 2))
-    residual = np.zeros(points.shape[0])
-    for _ in range(iterations + 1):
-        offset = points - centre[label]
-        reach = np.maximum(np.hypot(offset[:, 0], offset[:, 1]), 1e-9)
-        unit = offset / reach[:, None]  # -J: the residual grows as c moves away from pⱼ
-        residual = reach - radius[label]
-        information[:, 0, 0] = np.bincount(label, unit[:, 0] ** 2, index.size)
-        information[:, 0, 1] = information[:, 1, 0] = np.bincount(
-            label, unit[:, 0] * unit[:, 1], index.size
-        )
-        information[:, 1, 1] = np.bincount(label, unit[:, 1] ** 2, index.size)
-        if _ == iterations:
-            break
-        gradient = np.stack(
-            [np.bincount(label, unit[:, j] * residual, index.size) for j in (0, 1)], -1
-        )
-        det = information[:, 0, 0] * information[:, 1, 1] - information[:, 0, 1] ** 2
-        ok = det > 1e-6
-        inverse_times = np.stack([
-            information[:, 1, 1] * gradient[:, 0] - information[:, 0, 1] * gradient[:, 1],
-            information[:, 0, 0] * gradient[:, 1] - information[:, 0, 1] * gradient[:, 0],
-        ], -1)  # fmt: skip
-        centre[ok] += inverse_times[ok] / det[ok, None]  # c += (JᵀJ)⁻¹ Σ uⱼ rⱼ
-    rms = np.sqrt(np.bincount(label, residual**2, index.size) / np.maximum(size, 1))
-    return centre, information, rms

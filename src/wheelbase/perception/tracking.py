@@ -15,18 +15,6 @@ Association
     tracks that pairs the most gated pairs at the least total d² is solved by
     ``scipy.optimize.linear_sum_assignment`` (pairs outside the gate cost more than any
     assignment inside it, and are dropped after).
-Measurement
-    A detection read as a disc (of 3 returns or more) taken by a confirmed track is fitted
-    again with the track's radius ρ (:func:`~wheelbase.perception.clusters.fit_discs`): the
-    centre c minimising Σⱼ (‖pⱼ − c‖ − ρ)² over its returns, with R = s² (JᵀJ)⁻¹ + σ_ρ² u uᵀ
-    (s² the residuals' variance, at least (1 cm)²; σ_ρ = 2 cm the radius's error, along the
-    view direction u). The span's centre of step 4 of :mod:`~wheelbase.perception.clusters`
-    is off by the beam spacing, and by about the radius when the disc is partly hidden; on
-    ``benchmarks/perception.py``'s 20 walkers (seed 0) the detections' median error falls
-    from 24 mm to 5 mm seen whole and from 163 mm to 9 mm half hidden. The fit is declined
-    (the span's disc kept) when its RMS residual exceeds ``measurement_std`` (two walkers
-    read as one cluster, a box), when it moves the centre by more than 2ρ, or when JᵀJ is
-    near singular.
 Update
     Kalman gain K = P Hᵀ S⁻¹, x̂ += K ν, P = (I − K H) P (I − K H)ᵀ + K R Kᵀ (Joseph form). The
     radius is a running mean of the radii of the detections not occluded (over the last 10 at
@@ -48,15 +36,13 @@ from numpy.typing import ArrayLike
 
 from wheelbase._validate import finite, flag
 from wheelbase.errors import InputError
-from wheelbase.perception.clusters import Detections, detect, fit_discs
+from wheelbase.perception.clusters import Detections, detect
 from wheelbase.perception.specs import TrackerSpec
 from wheelbase.planning import OccupancyGrid
 
 __all__ = ["TrackerState", "Tracks", "update_tracker"]
 
 _RADIUS_MEMORY = 10  # detections the running mean of a radius spans at most
-_FIT_STD_FLOOR = 0.01  # m: least residual std of a disc fit (a lidar's range noise)
-_RADIAL_STD = 0.02  # m: a track's radius error, which shifts a fitted centre along the view
 _MAX_TIME = 1e9  # s (31 years): beyond it Δt³ of a prediction nears the float range
 
 
@@ -228,42 +214,6 @@ def _associate(
     return rows[keep], cols[keep]
 
 
-def _measurements(
-    spec: TrackerSpec, found: Detections, taken: np.ndarray, slots: np.ndarray,
-    radius: np.ndarray, confirmed: np.ndarray, sensor_pose: ArrayLike,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Centres z and covariances R of the detections ``taken`` by the tracks ``slots``: a
-    confirmed track's disc is fitted through the returns with the track's radius (module
-    docstring), the detection's own disc otherwise."""
-    z, r = found.position[taken].copy(), found.covariance[taken].copy()
-    fit = np.flatnonzero(confirmed[slots] & found.disc[taken] & (found.points[taken] >= 3))
-    if fit.size == 0:
-        return z, r
-    centre, information, rms = fit_discs(found, taken[fit], radius[slots[fit]])
-    det = information[:, 0, 0] * information[:, 1, 1] - information[:, 0, 1] ** 2
-    shift = np.hypot(*(centre - z[fit]).T)
-    good = (det > 1e-3) & (rms <= spec.measurement_std) & (shift <= 2.0 * radius[slots[fit]])
-    fit, centre, information, rms, det = (
-        fit[good],
-        centre[good],
-        information[good],
-        rms[good],
-        det[good],
-    )
-    inverse = np.empty_like(information)
-    inverse[:, 0, 0], inverse[:, 1, 1] = information[:, 1, 1], information[:, 0, 0]
-    inverse[:, 0, 1] = inverse[:, 1, 0] = -information[:, 0, 1]
-    inverse /= det[:, None, None]
-    size = found.points[taken[fit]].astype(float)
-    variance = rms**2 * size / np.maximum(size - 2.0, 1.0)  # the residuals' unbiased variance
-    view = centre - np.asarray(sensor_pose, float)[:2]
-    view /= np.maximum(np.hypot(view[:, 0], view[:, 1]), 1e-9)[:, None]
-    z[fit] = centre
-    r[fit] = (np.maximum(variance, _FIT_STD_FLOOR**2)[:, None, None] * inverse
-              + _RADIAL_STD**2 * view[:, :, None] * view[:, None, :])  # fmt: skip
-    return z, r
-
-
 def update_tracker(
     spec: TrackerSpec,
     state: TrackerState,
@@ -322,10 +272,10 @@ def update_tracker(
     rows, taken = _associate(spec, mean[alive], cov[alive], found)
     slots = alive[rows]
     if slots.size:
-        z, r = _measurements(spec, found, taken, slots, radius, confirmed, sensor_pose)
+        r = found.covariance[taken]
         s = cov[slots, :2, :2] + r
         gain = cov[slots, :, :2] @ np.linalg.inv(s)  # K = P Hᵀ S⁻¹, (n, 4, 2)
-        nu = z - mean[slots, :2]
+        nu = found.position[taken] - mean[slots, :2]
         mean[slots] += np.einsum("nij,nj->ni", gain, nu)
         keep = np.eye(4) - np.concatenate([gain, np.zeros((slots.size, 4, 2))], axis=2)
         cov[slots] = keep @ cov[slots] @ keep.transpose(0, 2, 1) + gain @ r @ gain.transpose(
