@@ -20,6 +20,13 @@ The rule, step by step:
    disc at any range, up to the beam spacing and the range noise. Clusters with ρ >
    ``max_radius`` (or spanning half the view and more) are dropped: long unmapped walls are
    left to the costmap.
+   Why the span and not a fit: fitting a confirmed track's disc through the returns with the
+   radius it learnt (Gauss–Newton on ‖pⱼ − c‖ − ρ) brings the detections' median error from
+   24 to 5 mm seen whole and from 164 to 9 mm half hidden, and the tracks' RMSE down ~10 %,
+   yet navigated worse (2026-12-03: ``crowd_crossing`` 20 walkers MPPI, 100 seeds: 1 at-fault
+   contact against 0; 50 walkers, seeds 0–15: 10 and, with the span's R kept, 9 arrived
+   against 13): the span puts a half-hidden walker nearer the sensor, a margin on the safe
+   side that the critics rely on.
 5. The measurement covariance is the points' spread over their number plus the floor
    σ² with σ = ``measurement_std``: R = C/n + σ² I, with C the points' covariance (divided
    by n).
