@@ -25,8 +25,8 @@ The rule, step by step:
    24 to 5 mm seen whole and from 164 to 9 mm half hidden, and the tracks' RMSE down ~10 %,
    yet navigated worse (2026-12-03: ``crowd_crossing`` 20 walkers MPPI, 100 seeds: 1 at-fault
    contact against 0; 50 walkers, seeds 0–15: 10 and, with the span's R kept, 9 arrived
-   against 13): the span puts a half-hidden walker nearer the sensor, a margin on the safe
-   side that the critics rely on.
+   against 13; the fit is commit 1a10f44, reverted). Likely why, not proven: the span puts a
+   half-hidden walker nearer the sensor, a margin on the safe side the critics lean on.
 5. The measurement covariance is the points' spread over their number plus the floor
    σ² with σ = ``measurement_std``: R = C/n + σ² I, with C the points' covariance (divided
    by n).
