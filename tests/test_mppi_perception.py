@@ -23,6 +23,7 @@ from wheelbase.control.obstacle_critics import (
     costmap_check,
     costmap_costs,
     evasion_choice,
+    near_lethal,
     predict_tracks,
     struck_step,
     track_costs,
@@ -135,6 +136,27 @@ def test_costmap_numpy_twin_equals_the_compiled_one(seed):
     vectorised = costmap_costs(poses, cost, near, geometry, inputs.polygon)
     np.testing.assert_array_equal(compiled[1], vectorised[1])
     np.testing.assert_allclose(compiled[0], vectorised[0], rtol=1e-15)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 50), st.integers(1, 50),
+       st.sampled_from([0.025, 0.05, 0.1]), st.floats(0.0, 0.6))  # fmt: skip
+def test_the_outline_gate_is_the_thresholded_distance_transform(seed, rows, cols, res, radius):
+    from scipy.ndimage import distance_transform_edt
+
+    rng = np.random.default_rng(seed)
+    cost = np.where(rng.random((rows, cols)) < rng.uniform(0.0, 0.4), 254, 0).astype(np.uint8)
+    if seed % 2:  # a solid wall band: interior lethal cells paint nothing
+        start = int(rng.integers(rows))
+        cost[start : start + int(rng.integers(1, 8))] = 254
+    limit = radius + math.sqrt(2.0) * res
+    lethal = cost == 254
+    expected = np.zeros(cost.shape, bool)
+    if lethal.any():
+        expected = distance_transform_edt(~lethal) * res <= limit
+    near = np.zeros(cost.shape, np.uint8)
+    near_lethal(cost, res, limit, near)
+    np.testing.assert_array_equal(near.astype(bool), expected)
 
 
 # --------------------------------------------------------------------------- dynamic critic

@@ -470,14 +470,9 @@ class PerceptionInputs:
     def _near(self, cost: np.ndarray, res: float) -> np.ndarray:
         if self._gate is not None and self._gate[1] == res and np.array_equal(self._gate[0], cost):
             return self._gate[2]
-        lethal = cost == LETHAL
-        if self.polygon.shape[0] == 0 or not lethal.any():
-            near = np.zeros(cost.shape, np.uint8)
-        else:
-            from scipy.ndimage import distance_transform_edt
-
-            distance = distance_transform_edt(~lethal) * res  # cell centre to lethal centre
-            near = (distance <= self.radius + math.sqrt(2.0) * res).astype(np.uint8)
+        near = np.zeros(cost.shape, np.uint8)
+        if self.polygon.shape[0] > 0:
+            near_lethal(cost, res, self.radius + math.sqrt(2.0) * res, near)
         self._gate = (cost.copy(), res, near)
         return near
 
@@ -771,6 +766,40 @@ def certainty(zone, spread):
     if spread <= 0.0:
         return 1.0
     return -math.expm1(-0.5 * (zone / spread) ** 2)
+
+
+@numba.njit(cache=True)
+def near_lethal(cost, res, limit, near):
+    """Mark in ``near`` (uint8, zeroed, the shape of ``cost``) the cells whose centre lies within
+    ``limit`` [m] of a lethal cell's centre (the outline gate of the module docstring): the
+    thresholded Euclidean distance transform of the lethal cells (|Δ| = √(Δrow² + Δcol²)·res,
+    as ``scipy.ndimage.distance_transform_edt`` measures it, which it replaces: 0.8 ms a
+    132 × 132 window there, tens of µs here).
+
+    Only lethal cells with a non-lethal 4-neighbour (or on the edge) paint their disc: the
+    lethal cell nearest a free cell always is one (a step from it towards the free cell would
+    otherwise reach a nearer lethal cell), and lethal cells themselves are near."""
+    rows, cols = cost.shape
+    reach = int(limit / res) + 1
+    for row in range(rows):
+        for col in range(cols):
+            if cost[row, col] != LETHAL:
+                continue
+            near[row, col] = 1
+            if (
+                0 < row < rows - 1 and 0 < col < cols - 1
+                and cost[row - 1, col] == LETHAL and cost[row + 1, col] == LETHAL
+                and cost[row, col - 1] == LETHAL and cost[row, col + 1] == LETHAL
+            ):  # fmt: skip
+                continue
+            for dr in range(-reach, reach + 1):
+                r = row + dr
+                if r < 0 or r >= rows:
+                    continue
+                for dc in range(-reach, reach + 1):
+                    c = col + dc
+                    if 0 <= c < cols and math.sqrt(float(dr * dr + dc * dc)) * res <= limit:
+                        near[r, c] = 1
 
 
 @numba.njit(cache=True)
