@@ -260,3 +260,30 @@ def test_the_gate_keeps_a_true_closure_and_rejects_an_aisle_away():
     assert kept < 16.27
     aliased = compose(truth, np.array([2.7, 0.0, 0.0]))  # the next aisle's twin
     assert _closure_chi2(poses, steps, info, flags, c, j, aliased, loop_info) > 1e3
+
+
+@needs_intel
+def test_relocalisation_puts_a_misplaced_scan_back_and_leaves_the_others():
+    log = read_carmen(INTEL).subset(slice(12, 82))
+    slam = LidarSlam.without_odometry()
+    session = slam.session(log.angles, log.max_range, mount=log.mount)
+    session.add(log.ranges, log.odometry, log.t)
+    result = session.result()
+    assert result.stats["relocalized"] == 0  # a consistent map: nothing moves
+    estimate = result.poses.copy()
+    misplaced = 40
+    estimate[misplaced, :2] += [0.3, -0.2]  # beyond ICP's reach of the true spot, in the window
+    moved = session._relocalize(estimate, result.graph.poses)
+    assert moved == 1
+    assert np.hypot(*(estimate[misplaced, :2] - result.poses[misplaced, :2])) < 0.03
+    others = np.arange(log.n_scans) != misplaced
+    assert np.array_equal(estimate[others], result.poses[others])
+
+
+def test_relocalisation_needs_the_keyframes_own_references():
+    from wheelbase.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="relocalize needs keyframe_normals"):
+        LidarSlam(relocalize=True)
+    with pytest.raises(ConfigError, match="relocalize_gain"):
+        LidarSlam.without_odometry(relocalize_gain=-1.0)
