@@ -80,16 +80,31 @@ def _gtsam_lm(graph):
     return poses, int(optimizer.iterations()), elapsed
 
 
-def posegraphs(repeat: int) -> dict:
+POSE_GRAPHS = ("intel", "MIT", "CSAIL", "manhattan")
+"""The bundled graphs of ``../shared/data/posegraph/`` (SE-Sync's data folder)."""
+
+
+def posegraphs(repeat: int, folder: Path | None = None) -> dict:
+    """Our solver from the file's guess and from the chordal start beside GTSAM's LM: the
+    bundled graphs, or every 2-D ``*.g2o`` file of ``folder`` (``--graphs``)."""
     from wheelbase.datasets import read_g2o
+    from wheelbase.errors import WheelbaseError
     from wheelbase.mapping import graph_chi2, optimize_pose_graph
 
+    if folder is None:
+        paths = [DATA / "posegraph" / f"{name}.g2o" for name in POSE_GRAPHS]
+    else:
+        paths = sorted(Path(folder).glob("*.g2o"))
     out = {}
-    for name in ("intel", "MIT", "CSAIL", "manhattan"):
-        path = DATA / "posegraph" / f"{name}.g2o"
+    for path in paths:
+        name = path.stem
         if not path.is_file():
             continue
-        graph = read_g2o(path)
+        try:
+            graph = read_g2o(path)
+        except WheelbaseError as error:  # a 3-D graph, a broken file: said, not fatal
+            out[name] = {"error": str(error)}
+            continue
         row: dict = {"vertices": graph.n_vertices, "edges": graph.n_edges,
                      "chi2_initial": graph_chi2(graph)}  # fmt: skip
         times: dict = {"graph": [], "chordal": [], "gtsam": []}
@@ -419,6 +434,9 @@ def main() -> None:
                         "occupancy_speed,exploration", help="comma-separated sections")  # fmt: skip
     parser.add_argument("--logs", default="intel,aces",
                         help="comma-separated CARMEN logs of the carmen section")  # fmt: skip
+    parser.add_argument("--graphs", type=Path, default=None,
+                        help="a folder of 2-D g2o files for the posegraphs section "
+                        "(default: the bundled four)")  # fmt: skip
     parser.add_argument("--explore", default=None,
                         help="comma-separated worlds of the exploration section "
                         "(default doorway, with maze and warehouse without --quick)")  # fmt: skip
@@ -428,7 +446,7 @@ def main() -> None:
     if "occupancy_speed" in chosen:
         report["occupancy_speed"] = occupancy_speed(args.quick)
     if "posegraphs" in chosen:
-        report["posegraphs"] = posegraphs(1 if args.quick else args.repeat)
+        report["posegraphs"] = posegraphs(1 if args.quick else args.repeat, args.graphs)
     if "landmarks" in chosen and not args.quick:
         report["landmarks"] = landmarks()
     if "carmen" in chosen:
