@@ -698,6 +698,7 @@ class SlamSession:
         matcher = slam.matcher
         kf_scan = np.asarray(self.kf_scan)
         moved = 0
+        cached = None
         for k, points in enumerate(self.points):
             if not self.usable[k]:
                 continue
@@ -707,22 +708,26 @@ class SlamSession:
             keys = keys[: slam.relocalize_keyframes]
             if len(keys) < 2:
                 continue
-            world = np.vstack([_transform(kf[i], self.kf_points[i]) for i in keys])
-            table, reference = slam._tables(world, [self.kf_refs[i] for i in keys], kf[keys])
-            found = matcher.match(table, reference, points, estimate[k],
-                                  linear_window=slam.relocalize_window[0],
-                                  angular_window=slam.relocalize_window[1],
-                                  min_score=slam.min_score)  # fmt: skip
-            if found is None:
+            if cached is None or cached[0] != keys:  # neighbouring scans share their map
+                world = np.vstack([_transform(kf[i], self.kf_points[i]) for i in keys])
+                parts = [self.kf_refs[i] for i in keys]
+                cached = (keys, *slam._tables(world, parts, kf[keys]))
+            table, reference = cached[1], cached[2]
+            found = matcher.correlative(table, points, estimate[k],
+                                        linear_window=slam.relocalize_window[0],
+                                        angular_window=slam.relocalize_window[1],
+                                        min_score=slam.min_score)  # fmt: skip
+            # most scans are where the map puts them: nothing more to do
+            if found is None or math.hypot(*(found[0][:2] - estimate[k, :2])) <= matcher.resolution:
                 continue
             # the found pose must hold under ICP, pass a closure's inlier gate and fit the map
             # within ICP's Huber scale: along a corridor the coarse table can rank the window's
             # edge first where ICP slides back (Intel scans 12-82 alone: the first scan, 0.6 m
             # off), and where the map itself disagrees along a corridor a pose that fits it
             # loosely can still score higher (ACES scan 315: 0.2 m along, RMS 0.049 m)
-            pose, _, inliers, rms = matcher.icp(reference, points, found.pose)
+            pose, _, inliers, rms = matcher.icp(reference, points, found[0])
             if (
-                math.hypot(*(pose[:2] - found.pose[:2])) > matcher.resolution
+                math.hypot(*(pose[:2] - found[0][:2])) > matcher.resolution
                 or inliers < slam.loop_min_inliers
                 or not rms <= matcher.huber
                 or math.hypot(*(pose[:2] - estimate[k, :2])) <= matcher.resolution
