@@ -74,3 +74,41 @@ def test_bad_logs(tmp_path, text, match):
 def test_missing_file(tmp_path):
     with pytest.raises(DataError, match="not found"):
         read_carmen(tmp_path / "none.log")
+
+
+def test_stamps_that_are_not_times_keep_the_order_recorded(tmp_path):
+    # CSAIL's corrected log holds one stamp for nearly every scan, the MIT infinite corridor's
+    # jumps to 2^32 s: sorting by them would shuffle the scans
+    poses = [(float(k), 0.0, 0.0) for k in range(5)]
+    text = "".join(_flaser(3, [1.0, 2.0, 3.0], pose=p, t=7.0) for p in poses)
+    path = tmp_path / "flat.log"
+    path.write_text(text)
+    log = read_carmen(path)
+    assert not log.timed and log.duration == 0.0
+    np.testing.assert_array_equal(log.reference[:, 0], np.arange(5.0))
+    stamps = [-0.4, -0.9, -1.3, 4.29497e9, 4.29497e9, 4.29497e9]
+    text = "".join(_flaser(3, [1.0, 2.0, 3.0], pose=(float(k), 0.0, 0.0), t=t)
+                   for k, t in enumerate(stamps))  # fmt: skip
+    path.write_text(text)
+    log = read_carmen(path)
+    assert not log.timed
+    np.testing.assert_array_equal(log.reference[:, 0], np.arange(6.0))
+
+
+def test_loop_relations_fall_back_to_the_distance_along_the_reference():
+    from wheelbase.mapping.evaluation import relation_pairs
+
+    # a 20 m square driven twice, 0.5 m a scan
+    side = np.arange(0.0, 5.0, 0.5)
+    square = np.vstack([np.column_stack([side, 0 * side]),
+                        np.column_stack([5 + 0 * side, side]),
+                        np.column_stack([5 - side, 5 + 0 * side]),
+                        np.column_stack([0 * side, 5 - side])])  # fmt: skip
+    xy = np.vstack([square, square])
+    heading = np.arctan2(*np.diff(np.vstack([xy, xy[:1]]), axis=0).T[::-1])
+    reference = np.column_stack([xy, heading])
+    timed = relation_pairs(reference, np.arange(len(xy)) * 2.0)  # 40 s a lap
+    untimed = relation_pairs(reference, np.zeros(len(xy)))
+    np.testing.assert_array_equal(timed[0], untimed[0])
+    assert len(timed[1]) == len(untimed[1]) == 40  # each scan of the second lap: the first's
+    np.testing.assert_array_equal(untimed[1][:, 1] - untimed[1][:, 0], 40)

@@ -287,3 +287,14 @@ def test_relocalisation_needs_the_keyframes_own_references():
         LidarSlam(relocalize=True)
     with pytest.raises(ConfigError, match="relocalize_gain"):
         LidarSlam.without_odometry(relocalize_gain=-1.0)
+
+
+@needs_intel
+def test_a_log_without_times_has_no_real_time_factor():
+    import dataclasses
+
+    log = read_carmen(INTEL).subset(slice(12, 30))
+    flat = dataclasses.replace(log, t=np.zeros(log.n_scans))
+    result = LidarSlam().run(flat)
+    assert result.duration_s == 0.0 and math.isnan(result.real_time_factor)
+    np.testing.assert_array_equal(result.poses, LidarSlam().run(log).poses)

@@ -17,6 +17,7 @@ and writes ``metrics.json`` (``chi2_initial``, ``chi2``, ``iterations``, ``solve
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -214,9 +215,10 @@ def register_slam(app: typer.Typer) -> None:
                 require_foxglove()
             paths = _prepare(out, names, force)
             metrics = _lidar_slam(data, paths, frames, mcap, odometry, max_scans or None)
+            factor = metrics["real_time_factor"]
+            speed = f"{factor:.1f}× real time" if math.isfinite(factor) else "no time stamps"
             summary = (f"{metrics['scans']} scans, {metrics['loop_closures']} loop closures, "
-                       f"{metrics['processing_time_s']:.1f} s ({metrics['real_time_factor']:.1f}× "
-                       "real time)")  # fmt: skip
+                       f"{metrics['processing_time_s']:.1f} s ({speed})")  # fmt: skip
             if "relative_translation_error_m" in metrics:
                 summary += (f"; relative error {metrics['relative_translation_error_m']:.3f} m, "
                             f"{metrics['relative_rotation_error_deg']:.2f} deg")  # fmt: skip

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from wheelbase._validate import positive
-from wheelbase.datasets.scans import ScanLog, clean_ranges
+from wheelbase.datasets.scans import ScanLog, clean_ranges, stamps_advance
 from wheelbase.errors import DataError
 from wheelbase.geometry import relative_pose, wrap_angle
 
@@ -165,7 +165,9 @@ def read_carmen(path: str | Path, *, max_range: float = FLASER_NO_RETURN_M) -> S
     t = np.array(times)
     if not np.all(np.isfinite(t)):
         raise DataError(f"{path}: a scan's time stamp is NaN or inf")
-    order = np.argsort(t, kind="stable")
+    # messages a logger wrote slightly out of order are put in time order, but stamps that
+    # are not times (one stamp for every scan, a jump to 2³² s) leave the order recorded
+    order = np.argsort(t, kind="stable") if stamps_advance(t) else np.arange(t.size)
     reference = np.array(refs)[order]
     reference[:, 2] = wrap_angle(reference[:, 2])
     odometry = np.array(odoms)[order]

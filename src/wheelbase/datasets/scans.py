@@ -8,7 +8,33 @@ import numpy as np
 
 from wheelbase.errors import DataError
 
-__all__ = ["ScanLog", "clean_ranges"]
+__all__ = ["ScanLog", "clean_ranges", "stamps_advance"]
+
+ADVANCING_FRACTION = 0.9
+"""Least fraction of the steps between a log's sorted time stamps that must be positive for
+the stamps to be times: CSAIL's, Freiburg campus's and Örebro's corrected logs hold one stamp
+for nearly every scan, the MIT infinite corridor's jumps to 2³² s after its fourth scan."""
+
+
+def stamps_advance(t: np.ndarray) -> bool:
+    """Whether the time stamps ``t`` are times: finite, and at least
+    :data:`ADVANCING_FRACTION` of the steps between them, sorted, positive (a single scan
+    counts as timed).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        The stamps [s].
+
+    Returns
+    -------
+    bool
+    """
+    t = np.asarray(t, dtype=np.float64)
+    if t.size < 2:
+        return True
+    steps = np.diff(np.sort(t))
+    return bool(np.all(np.isfinite(t)) and np.mean(steps > 0) >= ADVANCING_FRACTION)
 
 
 @dataclass(frozen=True)
@@ -18,7 +44,8 @@ class ScanLog:
     Attributes
     ----------
     t : numpy.ndarray, shape (N,)
-        Scan times [s], non-decreasing.
+        Scan times [s], non-decreasing; or the log's stamps as recorded where they are not
+        times (:attr:`timed` False: the scans are then in the order recorded).
     ranges : numpy.ndarray, shape (N, B)
         Ranges [m]; NaN where a reading was invalid (NaN, inf, negative: counted in
         ``invalid_readings``); readings >= ``max_range`` mean "no return".
@@ -70,9 +97,14 @@ class ScanLog:
         return int(self.t.shape[0])
 
     @property
+    def timed(self) -> bool:
+        """Whether the time stamps are times (:func:`stamps_advance`)."""
+        return stamps_advance(self.t)
+
+    @property
     def duration(self) -> float:
-        """Time from the first scan to the last [s]."""
-        return float(self.t[-1] - self.t[0]) if self.n_scans else 0.0
+        """Time from the first scan to the last [s]; 0 where the stamps are not times."""
+        return float(self.t[-1] - self.t[0]) if self.n_scans and self.timed else 0.0
 
     def subset(self, index: slice | np.ndarray) -> ScanLog:
         """The scans selected by ``index`` (a slice or an index array).

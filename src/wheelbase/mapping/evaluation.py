@@ -10,7 +10,10 @@ checked by hand; where only a reference trajectory exists, :func:`relation_pairs
 every scan with the next one at least ``min_distance`` along the reference (local relations)
 and, for each scan, the nearest earlier scan at least ``loop_gap_s`` before it whose reference
 pose is within ``loop_distance`` and ``loop_angle`` (relations across loops: the robot came
-back). The figures are then of the same kind as the published ones, not equal in definition.
+back); where the log's stamps are not times (:func:`~wheelbase.datasets.scans.stamps_advance`:
+CSAIL's corrected log holds one stamp for every scan), at least ``loop_gap_m`` along the
+reference instead. The figures are then of the same kind as the published ones, not equal in
+definition.
 
 **Absolute trajectory error**: the RMS of the position error after the rigid motion that best
 aligns the estimate to the truth (least squares, Umeyama 1991 without scale), as the TUM RGB-D
@@ -47,6 +50,7 @@ def relation_pairs(
     loop_gap_s: float = 30.0,
     loop_distance: float = 1.0,
     loop_angle: float = math.radians(30.0),
+    loop_gap_m: float = 10.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Local and loop relations (i, j) chosen from a reference trajectory (module docstring).
 
@@ -62,6 +66,8 @@ def relation_pairs(
         Loop pairs: at least this much time apart [s].
     loop_distance, loop_angle : float
         Loop pairs: reference poses at most this far apart [m] and turned [rad].
+    loop_gap_m : float
+        Loop pairs where ``t`` are not times: at least this far apart along the reference [m].
 
     Returns
     -------
@@ -73,9 +79,15 @@ def relation_pairs(
     j = np.searchsorted(along, along + min_distance)
     keep = j < len(along)
     local = np.column_stack([np.flatnonzero(keep), j[keep]])
+    from wheelbase.datasets.scans import stamps_advance
+
+    timed = stamps_advance(t)
     loops = []
     for k in range(len(t)):
-        earlier = np.flatnonzero(t <= t[k] - loop_gap_s)
+        if timed:
+            earlier = np.flatnonzero(t <= t[k] - loop_gap_s)
+        else:
+            earlier = np.flatnonzero(along <= along[k] - loop_gap_m)
         if earlier.size == 0:
             continue
         d = np.hypot(*(reference[earlier, :2] - reference[k, :2]).T)

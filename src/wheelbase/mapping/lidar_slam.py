@@ -357,7 +357,7 @@ class LidarSlam:
             raise DataError(f"{log.source or 'the log'} holds no scan")
         session = self.session(log.angles, log.max_range, mount=log.mount, source=log.source,
                                snapshot_every=snapshot_every)  # fmt: skip
-        session.add(log.ranges, log.odometry, log.t)
+        session.add(log.ranges, log.odometry, log.t if log.timed else None)
         return session.result()
 
     def session(
@@ -1024,5 +1024,8 @@ class SlamResult:
 
     @property
     def real_time_factor(self) -> float:
-        """Log duration over processing time (15: fifteen times faster than real time)."""
+        """Log duration over processing time (15: fifteen times faster than real time); NaN
+        for a log whose stamps are not times (no duration)."""
+        if not self.duration_s > 0:
+            return math.nan
         return self.duration_s / max(self.processing_time_s, 1e-12)
