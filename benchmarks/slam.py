@@ -128,14 +128,22 @@ def posegraphs(repeat: int, folder: Path | None = None) -> dict:
     return out
 
 
-def carmen(quick: bool, logs: tuple[str, ...] = ("intel", "aces")) -> dict:
+def carmen(
+    quick: bool, logs: tuple[str, ...] = ("intel", "aces"), folder: Path | None = None
+) -> dict:
+    """``LidarSlam.without_odometry()`` on the named bundled logs, or on every
+    ``NAME-corrected.log.gz`` of ``folder`` (``--carmen``)."""
     from wheelbase.datasets import read_carmen
     from wheelbase.mapping import LidarSlam
     from wheelbase.mapping.evaluation import lidar_metrics
 
+    if folder is None:
+        paths = [DATA / "carmen" / f"{name}-corrected.log.gz" for name in logs]
+    else:
+        paths = sorted(Path(folder).glob("*-corrected.log.gz"))
     out = {}
-    for name in logs:
-        path = DATA / "carmen" / f"{name}-corrected.log.gz"
+    for path in paths:
+        name = path.name.removesuffix("-corrected.log.gz")
         if not path.is_file():
             continue
         log = read_carmen(path)
@@ -145,7 +153,9 @@ def carmen(quick: bool, logs: tuple[str, ...] = ("intel", "aces")) -> dict:
         result = LidarSlam.without_odometry().run(log)
         metrics = lidar_metrics(log, result)
         metrics["cpu_time_s"] = time.process_time() - cpu
-        metrics["cpu_real_time_factor"] = log.duration / metrics["cpu_time_s"]
+        metrics["cpu_real_time_factor"] = (
+            log.duration / metrics["cpu_time_s"] if log.timed else math.nan
+        )
         metrics.pop("position_rmse_m", None)  # against a SLAM solution: not a ground truth
         out[name] = metrics
     return out
@@ -434,6 +444,9 @@ def main() -> None:
                         "occupancy_speed,exploration", help="comma-separated sections")  # fmt: skip
     parser.add_argument("--logs", default="intel,aces",
                         help="comma-separated CARMEN logs of the carmen section")  # fmt: skip
+    parser.add_argument("--carmen", type=Path, default=None,
+                        help="a folder of NAME-corrected.log.gz CARMEN logs for the carmen "
+                        "section (default: the bundled logs of --logs)")  # fmt: skip
     parser.add_argument("--graphs", type=Path, default=None,
                         help="a folder of 2-D g2o files for the posegraphs section "
                         "(default: the bundled four)")  # fmt: skip
@@ -450,7 +463,7 @@ def main() -> None:
     if "landmarks" in chosen and not args.quick:
         report["landmarks"] = landmarks()
     if "carmen" in chosen:
-        report["carmen"] = carmen(args.quick, tuple(args.logs.split(",")))
+        report["carmen"] = carmen(args.quick, tuple(args.logs.split(",")), args.carmen)
     if "simulation" in chosen:
         report["simulation"] = simulation(args.quick)
     if "exploration" in chosen:
