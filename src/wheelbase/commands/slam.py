@@ -127,7 +127,9 @@ def _lidar_slam(data: Path, paths: dict[str, Path], frames: int, mcap: bool,
     plot_map(grid, paths["map.png"], result.poses, result.loops, log.reference,
              f"{log.source}: {result.keyframes.size} keyframes, {len(result.loops)} loop "
              "closures")  # fmt: skip
-    t = log.t - log.t[0]
+    # a log whose stamps are not times is drawn against the scan number
+    t = log.t - log.t[0] if log.timed else np.arange(log.n_scans, dtype=np.float64)
+    xlabel = "time [s]" if log.timed else "scan"
     if log.reference is not None:
         errors = {
             "SLAM": np.hypot(*(align_trajectory(result.poses, log.reference)[:, :2]
@@ -135,11 +137,12 @@ def _lidar_slam(data: Path, paths: dict[str, Path], frames: int, mcap: bool,
             "scan matching online": np.hypot(*(align_trajectory(result.frontend_poses,
                                                log.reference)[:, :2] - log.reference[:, :2]).T),
         }  # fmt: skip
-        plot_error(t, errors, paths["error.png"], f"{log.source}: against the reference")
+        plot_error(t, errors, paths["error.png"], f"{log.source}: against the reference",
+                   xlabel=xlabel)  # fmt: skip
     else:
         steps = np.hypot(*np.diff(result.poses[:, :2], axis=0).T)
         plot_error(t[1:], {"distance between scans": steps}, paths["error.png"],
-                   "no reference in the log", ylabel="step [m]")  # fmt: skip
+                   "no reference in the log", ylabel="step [m]", xlabel=xlabel)  # fmt: skip
     growth = _growth_frames(slam, log, result, frames)
     animate_map([(g, p) for _, g, p in growth], paths["map.gif"], log.source)
     if mcap:

@@ -125,9 +125,9 @@ def plot_map(
 
 def plot_error(
     t: np.ndarray, errors: dict[str, np.ndarray], path: str | Path, title: str = "",
-    ylabel: str = "position error [m]",
+    ylabel: str = "position error [m]", xlabel: str = "time [s]",
 ) -> Path:  # fmt: skip
-    """Errors against time, one line per entry.
+    """Errors against time (or what ``t`` counts), one line per entry.
 
     Parameters
     ----------
@@ -141,6 +141,8 @@ def plot_error(
         Figure title.
     ylabel : str
         Label of the y axis (with its unit).
+    xlabel : str
+        Label of the x axis (``scan`` for a log whose stamps are not times).
 
     Returns
     -------
@@ -150,7 +152,7 @@ def plot_error(
     fig, ax = plt.subplots(figsize=(9, 4))
     for label, values in errors.items():
         ax.plot(t, values, lw=0.9, label=label)
-    ax.set_xlabel("time [s]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     ax.set_title(title)
