@@ -298,3 +298,12 @@ def test_a_log_without_times_has_no_real_time_factor():
     result = LidarSlam().run(flat)
     assert result.duration_s == 0.0 and math.isnan(result.real_time_factor)
     np.testing.assert_array_equal(result.poses, LidarSlam().run(log).poses)
+
+
+def test_the_turn_prior_is_at_least_the_last_turn():
+    from wheelbase.mapping.lidar_slam import turn_prior
+
+    base = (0.2, math.radians(15.0))
+    assert turn_prior(base, math.radians(5.0)) == base  # small turns: the prior as given
+    assert turn_prior(base, -1.1) == (0.2, 1.1)  # a 63° turn back: no surer than the turn
+    assert LidarSlam.without_odometry().turn_prior and not LidarSlam().turn_prior

@@ -77,7 +77,7 @@ from wheelbase.mapping.scan_matching import (
 )
 from wheelbase.mapping.se2 import se2_adjoint, se2_log
 
-__all__ = ["LidarSlam", "SlamResult", "SlamSession"]
+__all__ = ["LidarSlam", "SlamResult", "SlamSession", "turn_prior"]
 
 _LOOP_TABLES_KEPT = 8  # candidate submaps whose tables a session keeps
 
@@ -98,6 +98,17 @@ class LidarSlam:
     prior_std : tuple of float
         Standard deviations of the prediction as a prior of the match (translation [m],
         rotation [rad]).
+    turn_prior : bool
+        Without odometry, the prior's rotation standard deviation is at least the last step's
+        turn (:func:`turn_prior`; :meth:`without_odometry`: on): the constant-velocity
+        prediction knows the next turn no better than the last one. In the FHW museum's log
+        the robot turns back and forth by up to 63° a scan (scan 58: +63° after −32°), the
+        prediction was 95° off and 15° of prior ranked a wrong pose first; the chain broke and
+        the start's part of the map turned 86° (relative error 0.49 m, loop relations 1.8 m;
+        with it 0.052 m and 0.048 m). CSAIL 0.067 → 0.045 m, Intel 0.0322 m (± 0.026 →
+        0.025), ACES 0.0388 m and the MIT infinite corridor 0.17 m unchanged, no other Radish
+        log worse (``benchmarks/README.md``). Halving the predicted turn instead: CSAIL 0.040
+        m, but ACES 0.0399 m; both together broke CSAIL's loops.
     odometry_gate : tuple of float
         With odometry, a match farther than this from the odometry's prediction (translation
         [m], rotation [rad]) is not believed: the prediction is kept (``failed_matches``).
@@ -274,6 +285,7 @@ class LidarSlam:
     robust_sequential: bool = False
     keyframe_normals: bool = False
     last_check: bool = False
+    turn_prior: bool = False
     relocalize: bool = False
     relocalize_keyframes: int = 30
     relocalize_radius: float = 5.0
@@ -316,8 +328,8 @@ class LidarSlam:
         :attr:`robust_sequential` and :attr:`keyframe_normals`), ACES 0.70 ± 2.40 m → 0.084 ±
         0.22 m → 0.041 ± 0.034 m → 0.039 ± 0.031 m; with :attr:`last_check` Intel 0.0335 ±
         0.036 m, ACES unchanged; with :attr:`relocalize` Intel 0.0322 ± 0.026 m, ACES
-        unchanged; and :attr:`loop_gate` 16.27. Kept off with odometry, which bridges a
-        corridor (and the exploration loop's time stays).
+        unchanged; :attr:`loop_gate` 16.27 and :attr:`turn_prior`. Kept off with odometry,
+        which bridges a corridor (and the exploration loop's time stays).
 
         Parameters
         ----------
@@ -332,7 +344,7 @@ class LidarSlam:
                 "local_frontend": False, "two_stage": True,
                 "anchor_by_overlap": True, "surfaces": True, "robust_sequential": True,
                 "keyframe_normals": True, "last_check": True, "relocalize": True,
-                "loop_gate": 16.27,
+                "loop_gate": 16.27, "turn_prior": True,
                 "matcher": ScanMatcher(resolution=0.1, sigma=0.1, linear_window=1.5,
                                        angular_window=math.radians(90.0),
                                        max_correspondence=0.3, huber=0.03)}  # fmt: skip
@@ -791,8 +803,11 @@ class SlamSession:
         else:
             # the same window with odometry: a narrower one (±0.3 m, ±10°, prior 5 cm)
             # was measured worse on the maze (ATE 0.095 m against 0.016 m)
+            prior = slam.prior_std
+            if slam.turn_prior and odometry is None:
+                prior = turn_prior(prior, float(self.velocity[2]))
             result = slam.matcher.match(self.table, self.reference, self.points[k], guess,
-                                        prior_std=slam.prior_std)  # fmt: skip
+                                        prior_std=prior)  # fmt: skip
             if result is not None and slam.last_check and self.kf_refs is not None:
                 result = self._check_last(k, result, guess)
             if result is not None and odometry is not None:
@@ -902,6 +917,24 @@ class SlamSession:
             anchors=np.array(self.anchor, np.int64),
             offsets=offsets,
         )
+
+
+def turn_prior(prior_std: tuple[float, float], last_turn: float) -> tuple[float, float]:
+    """The match's prior (``LidarSlam.turn_prior``): the rotation's standard deviation at least
+    the last step's turn.
+
+    Parameters
+    ----------
+    prior_std : tuple of float
+        Translation [m] and rotation [rad] standard deviations.
+    last_turn : float
+        The last step's turn [rad].
+
+    Returns
+    -------
+    tuple of float
+    """
+    return prior_std[0], max(prior_std[1], abs(last_turn))
 
 
 def _fuse(pose, cov, guess, guess_cov):
