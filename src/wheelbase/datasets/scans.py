@@ -18,7 +18,7 @@ for nearly every scan, the MIT infinite corridor's jumps to 2³² s after its fo
 
 def stamps_advance(t: np.ndarray) -> bool:
     """Whether the time stamps ``t`` are times: finite, and at least
-    :data:`ADVANCING_FRACTION` of the steps between them, sorted, positive (a single scan
+    ``ADVANCING_FRACTION`` of the steps between them, sorted, positive (a single scan
     counts as timed).
 
     Parameters
