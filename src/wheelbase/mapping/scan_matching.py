@@ -482,37 +482,6 @@ class PointReference:
         return cls(points, normals, cKDTree(points))
 
 
-@numba.njit(cache=True)
-def _icp_system(points, world, ref_points, ref_normals, idx, ok, theta, huber):
-    """One Gauss–Newton step of point-to-line ICP: H = Σ w JᵀJ and g = Σ w Jᵀr over the
-    paired points (r = n·(R p + t − q), J = (n_x, n_y, n·∂(R p)/∂θ), Huber weights w), with
-    Σ w r², Σ w, Σ r² and the number of pairs."""
-    c, s = math.cos(theta), math.sin(theta)
-    h = np.zeros((3, 3))
-    g = np.zeros(3)
-    weighted = weights = squares = 0.0
-    count = 0
-    for m in range(points.shape[0]):
-        if not ok[m]:
-            continue
-        j = idx[m]
-        nx, ny = ref_normals[j, 0], ref_normals[j, 1]
-        r = nx * (world[m, 0] - ref_points[j, 0]) + ny * (world[m, 1] - ref_points[j, 1])
-        px, py = points[m, 0], points[m, 1]
-        jac = (nx, ny, nx * (-s * px - c * py) + ny * (c * px - s * py))
-        a = abs(r)
-        w = 1.0 if a <= huber else huber / max(a, 1e-12)
-        for u in range(3):
-            g[u] += w * jac[u] * r
-            for v in range(3):
-                h[u, v] += w * jac[u] * jac[v]
-        weighted += w * r * r
-        weights += w
-        squares += r * r
-        count += 1
-    return h, g, weighted, weights, squares, count
-
-
 @dataclass(frozen=True)
 class ScanMatcher:
     """Correlative search then point-to-line ICP (module docstring).
@@ -688,17 +657,25 @@ class ScanMatcher:
             inliers = float(ok.mean()) if ok.size else 0.0
             if ok.sum() < 6:
                 break
-            h, g, weighted, weights, squares, count = _icp_system(
-                points, world, reference.points, reference.normals, idx, ok, pose[2], self.huber
-            )
+            p, q, nrm = points[ok], reference.points[idx[ok]], reference.normals[idx[ok]]
+            w_pts = world[ok]
+            res = np.einsum("mi,mi->m", nrm, w_pts - q)
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            dpx = -s * p[:, 0] - c * p[:, 1]  # ∂(R p)/∂θ
+            dpy = c * p[:, 0] - s * p[:, 1]
+            jac = np.column_stack([nrm[:, 0], nrm[:, 1], nrm[:, 0] * dpx + nrm[:, 1] * dpy])
+            absr = np.abs(res)
+            w = np.where(absr <= self.huber, 1.0, self.huber / np.maximum(absr, 1e-12))
+            h = (jac * w[:, None]).T @ jac
+            g = (jac * w[:, None]).T @ res
             try:
                 delta = -np.linalg.solve(h + 1e-9 * np.eye(3), g)
             except np.linalg.LinAlgError:
                 break
             pose = pose + delta
             pose[2] = wrap_angle(pose[2])
-            sigma2 = weighted / max(weights, 1e-12)
-            rms = math.sqrt(squares / count)
+            sigma2 = float((w * res * res).sum() / max(w.sum(), 1e-12))
+            rms = math.sqrt(float((res * res).mean()))
             try:
                 cov = sigma2 * np.linalg.inv(h / 1.0)
             except np.linalg.LinAlgError:
