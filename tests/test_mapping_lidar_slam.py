@@ -287,6 +287,10 @@ def test_relocalisation_needs_the_keyframes_own_references():
         LidarSlam(relocalize=True)
     with pytest.raises(ConfigError, match="relocalize_gain"):
         LidarSlam.without_odometry(relocalize_gain=-1.0)
+    with pytest.raises(ConfigError, match="relocalize_window must be"):
+        LidarSlam.without_odometry(relocalize_window=0.6)
+    with pytest.raises(ConfigError, match="turn_prior must be true or false"):
+        LidarSlam(turn_prior="no")
 
 
 @needs_intel

@@ -53,13 +53,14 @@ For each scan, in time order:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from wheelbase._validate import integer, positive
+from wheelbase._validate import flag, integer, nonnegative, positive
 from wheelbase.datasets.g2o import PoseGraph
 from wheelbase.datasets.scans import ScanLog
 from wheelbase.errors import ConfigError, DataError
@@ -232,7 +233,7 @@ class LidarSlam:
         turning on the spot where the scene repeats every ~0.45 m, the first match put scan 1
         half a period from scan 0, and the optimiser holds the first vertex fixed, so the
         closures of scans 106-108 and 188 could not move it. Intel 0.0335 ± 0.036 / 0.0322 ±
-        0.026 m (loops 0.0343 / 0.0300 m) without / with, 7 s of its 42 s; on ACES it moves
+        0.026 m (loops 0.0343 / 0.0300 m) without / with; on ACES it moves
         nothing (scan 315 alone passed the other gates, with an RMS of 49 mm).
     relocalize_keyframes : int
         Keyframes of the map a scan is relocalised in (the nearest).
@@ -308,10 +309,15 @@ class LidarSlam:
             raise ConfigError("relocalize needs keyframe_normals=True")
         positive("relocalize_radius", self.relocalize_radius)
         integer("relocalize_keyframes", self.relocalize_keyframes, 1)
-        for value in self.relocalize_window:
+        window = self.relocalize_window
+        if not (isinstance(window, tuple | list) and len(window) == 2):
+            raise ConfigError(f"relocalize_window must be (metres, radians) (got {window!r})")
+        for value in window:
             positive("relocalize_window", value)
-        if not 0.0 <= self.relocalize_gain < math.inf:
-            raise ConfigError(f"relocalize_gain must be >= 0 (got {self.relocalize_gain})")
+        nonnegative("relocalize_gain", self.relocalize_gain)
+        for item in dataclasses.fields(self):
+            if item.type == "bool":  # the switches: a string such as "no" would read as on
+                flag(item.name, getattr(self, item.name))
 
     @classmethod
     def without_odometry(cls, **overrides: object) -> LidarSlam:
