@@ -62,7 +62,7 @@ import numpy as np
 
 from wheelbase._validate import flag, integer, nonnegative, positive
 from wheelbase.datasets.g2o import PoseGraph
-from wheelbase.datasets.scans import ScanLog
+from wheelbase.datasets.scans import ScanLog, stamps_advance
 from wheelbase.errors import ConfigError, DataError
 from wheelbase.geometry import compose, inverse_pose, relative_pose
 from wheelbase.mapping.occupancy import LogOddsMap, OccupancyMapper
@@ -316,7 +316,7 @@ class LidarSlam:
             positive("relocalize_window", value)
         nonnegative("relocalize_gain", self.relocalize_gain)
         for item in dataclasses.fields(self):
-            if item.type == "bool":  # the switches: a string such as "no" would read as on
+            if isinstance(item.default, bool):  # the switches: "no" would read as on
                 flag(item.name, getattr(self, item.name))
 
     @classmethod
@@ -380,7 +380,7 @@ class LidarSlam:
             raise DataError(f"{log.source or 'the log'} holds no scan")
         session = self.session(log.angles, log.max_range, mount=log.mount, source=log.source,
                                snapshot_every=snapshot_every)  # fmt: skip
-        session.add(log.ranges, log.odometry, log.t if log.timed else None)
+        session.add(log.ranges, log.odometry, log.t)
         return session.result()
 
     def session(
@@ -907,7 +907,9 @@ class SlamSession:
         loop_edge = np.array(self.loop_edge, bool)
         loops = graph.edges[loop_edge] if loop_edge.any() else np.zeros((0, 2), int)
         kf_scan = np.array(self.kf_scan, np.int64)
-        duration = float(self.times[-1] - self.times[0]) if len(self.times) == n else 0.0
+        # stamps that are not times (one for every scan, a jump to 2³² s) give no duration
+        timed = len(self.times) == n and stamps_advance(np.array(self.times))
+        duration = float(self.times[-1] - self.times[0]) if timed else 0.0
         processing = self.processing_time_s + time.perf_counter() - tick
         return SlamResult(
             poses=estimate,
