@@ -24,6 +24,16 @@ its own walkers, boxes and sensor noise):
     ``doorway_blocked``: every seed must end ``blocked`` within 60 s, without a collision.
 ``swap``
     ``corridor_swap``: both robots arrive, no contact (seeds vary the lidar noise).
+``variants``
+    ``crowd_crossing`` changed one way at a time, as a user's own crowd would differ from the
+    bundled one (``--variants`` to pick, ``--variant-seeds`` seeds each, default 6): walkers
+    that go ``straight``, follow the social force (``social_force``, and ``social_force_reacts``
+    where the robot is one more agent to them), ``orca_reacts``, ``fast_small`` (r 0.2 m at
+    1.0 m/s, as fast as the robot), 35 walkers (``walkers_35``), a ``unicycle``, a small
+    car-like robot (``car``: rear bicycle, 0.5 m wheel base, 0.7 × 0.4 m, 0.8 m turning
+    radius), a 60-beam lidar (``beams_60``), MPPI at 10 Hz (``control_10_hz``) and noisy
+    encoders instead of perfect odometry (``encoders``): the crowd section's figures for each.
+    No target: what still collides, in which kind of crowd.
 ``speed``
     The whole loop of ``crowd_crossing`` with 50 walkers (one robot, a 360-beam lidar at
     10 Hz, costmap, tracker, MPPI at 20 Hz): simulated seconds per second of the process's CPU
@@ -44,7 +54,7 @@ from typing import Any
 
 import numpy as np
 
-SECTIONS = ("crowd", "irsim", "boxes", "doorway", "swap", "speed")
+SECTIONS = ("crowd", "irsim", "boxes", "doorway", "swap", "variants", "speed")
 CROWDS = ("20_mppi", "20_dwa", "50_mppi", "50_dwa")
 
 
@@ -59,6 +69,40 @@ def _crowd(walkers: int, law: str) -> dict:
         # from a stop Fox et al.'s one-period window only holds arcs near zero speed
         data["controller"] = {"law": "dwa", "gains": {"trajectory_generator": "standard"}}
     return {k: v for k, v in data.items() if v is not None}
+
+
+def _variant(name: str) -> dict:
+    """``crowd_crossing`` with 20 walkers and MPPI, changed as ``variants`` says (docstring)."""
+    data = _crowd(20, "mppi")
+    agents = data["world"]["agents"][0]
+    lidar = data["sensors"]["lidar"]
+    changes = {
+        "straight": lambda: agents.update(behaviour="straight"),
+        "social_force": lambda: agents.update(behaviour="social_force"),
+        "social_force_reacts": lambda: agents.update(behaviour="social_force",
+                                                     reacts_to_robot=True),
+        "orca_reacts": lambda: agents.update(behaviour="orca", reacts_to_robot=True),
+        "fast_small": lambda: agents.update(radius=0.2, speed=1.0),
+        "walkers_35": lambda: agents.update(count=35),
+        "unicycle": lambda: data.update(robot={"model": "unicycle", "footprint": [0.4, 0.4]}),
+        "car": lambda: data.update(
+            robot={"model": "rear_bicycle", "wheel_base": 0.5, "max_steering_deg": 35,
+                   "footprint": [0.7, 0.4], "center_offset": 0.25, "half_track": 0.18,
+                   "wheel_radius": 0.08},
+            planner={"turning_radius": 0.8},
+        ),
+        "beams_60": lambda: lidar.update(beams=60),
+        "control_10_hz": lambda: data.update(control_rate_hz=10),
+        "encoders": lambda: data.update(odometry={"mode": "encoders",
+                                                  "pulses_per_revolution": 1024}),
+    }  # fmt: skip
+    changes[name]()
+    data["name"] = f"crowd_crossing_{name}"
+    return data
+
+
+VARIANTS = ("straight", "social_force", "social_force_reacts", "orca_reacts", "fast_small",
+            "walkers_35", "unicycle", "car", "beams_60", "control_10_hz", "encoders")  # fmt: skip
 
 
 def _run_chunk(scenario: Any, seeds: list[int]) -> list[dict]:
@@ -175,6 +219,12 @@ def main() -> None:
     parser.add_argument("--sections", default=",".join(SECTIONS))
     parser.add_argument("--crowds", default=",".join(CROWDS),
                         help="crowd runs to make (walkers_law), default all")  # fmt: skip
+    parser.add_argument(
+        "--variants",
+        default=",".join(VARIANTS),
+        help="crowd variants of the variants section, default all",
+    )
+    parser.add_argument("--variant-seeds", type=int, default=6)
     args = parser.parse_args()
     sections = [name for name in args.sections.split(",") if name]
     unknown = sorted(set(sections) - set(SECTIONS))
@@ -184,6 +234,10 @@ def main() -> None:
     unknown = sorted(set(crowds) - set(CROWDS))
     if unknown:
         parser.error(f"unknown crowds {unknown}; allowed: {', '.join(CROWDS)}")
+    variants = [name for name in args.variants.split(",") if name]
+    unknown = sorted(set(variants) - set(VARIANTS))
+    if unknown:
+        parser.error(f"unknown variants {unknown}; allowed: {', '.join(VARIANTS)}")
     out: dict[str, Any] = {"seeds": args.seeds}
     if "crowd" in sections:
         out["crowd"] = {}
@@ -209,6 +263,10 @@ def main() -> None:
             row["status"] == "blocked" and row["duration_s"] <= 60.0 for row in rows
         )
         out["doorway"]["blocked_after_s_max"] = max(row["duration_s"] for row in rows)
+    if "variants" in sections:
+        out["variants"] = {name: summary(run_many(_variant(name), args.variant_seeds,
+                                                  args.workers))
+                           for name in variants}  # fmt: skip
     if "speed" in sections:
         out["speed"] = speed()
     out["targets"] = _targets(out)
