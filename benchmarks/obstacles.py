@@ -45,6 +45,7 @@ its own walkers, boxes and sensor noise):
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import math
 import statistics
@@ -71,38 +72,38 @@ def _crowd(walkers: int, law: str) -> dict:
     return {k: v for k, v in data.items() if v is not None}
 
 
+_CAR = {"model": "rear_bicycle", "wheel_base": 0.5, "max_steering_deg": 35,
+        "footprint": [0.7, 0.4], "center_offset": 0.25, "half_track": 0.18,
+        "wheel_radius": 0.08}  # fmt: skip
+
+VARIANT_CHANGES: dict[str, dict[str, dict]] = {
+    # name: {part of the scenario ("agents": the walkers' group, "lidar", "scenario"): keys}
+    "straight": {"agents": {"behaviour": "straight"}},
+    "social_force": {"agents": {"behaviour": "social_force"}},
+    "social_force_reacts": {"agents": {"behaviour": "social_force", "reacts_to_robot": True}},
+    "orca_reacts": {"agents": {"behaviour": "orca", "reacts_to_robot": True}},
+    "fast_small": {"agents": {"radius": 0.2, "speed": 1.0}},
+    "walkers_35": {"agents": {"count": 35}},
+    "unicycle": {"scenario": {"robot": {"model": "unicycle", "footprint": [0.4, 0.4]}}},
+    "car": {"scenario": {"robot": _CAR, "planner": {"turning_radius": 0.8}}},
+    "beams_60": {"lidar": {"beams": 60}},
+    "control_10_hz": {"scenario": {"control_rate_hz": 10}},
+    "encoders": {"scenario": {"odometry": {"mode": "encoders", "pulses_per_revolution": 1024}}},
+}
+"""The ``variants`` section's changes to ``crowd_crossing`` (module docstring)."""
+
+VARIANTS = tuple(VARIANT_CHANGES)
+
+
 def _variant(name: str) -> dict:
     """``crowd_crossing`` with 20 walkers and MPPI, changed as ``variants`` says (docstring)."""
     data = _crowd(20, "mppi")
-    agents = data["world"]["agents"][0]
-    lidar = data["sensors"]["lidar"]
-    changes = {
-        "straight": lambda: agents.update(behaviour="straight"),
-        "social_force": lambda: agents.update(behaviour="social_force"),
-        "social_force_reacts": lambda: agents.update(behaviour="social_force",
-                                                     reacts_to_robot=True),
-        "orca_reacts": lambda: agents.update(behaviour="orca", reacts_to_robot=True),
-        "fast_small": lambda: agents.update(radius=0.2, speed=1.0),
-        "walkers_35": lambda: agents.update(count=35),
-        "unicycle": lambda: data.update(robot={"model": "unicycle", "footprint": [0.4, 0.4]}),
-        "car": lambda: data.update(
-            robot={"model": "rear_bicycle", "wheel_base": 0.5, "max_steering_deg": 35,
-                   "footprint": [0.7, 0.4], "center_offset": 0.25, "half_track": 0.18,
-                   "wheel_radius": 0.08},
-            planner={"turning_radius": 0.8},
-        ),
-        "beams_60": lambda: lidar.update(beams=60),
-        "control_10_hz": lambda: data.update(control_rate_hz=10),
-        "encoders": lambda: data.update(odometry={"mode": "encoders",
-                                                  "pulses_per_revolution": 1024}),
-    }  # fmt: skip
-    changes[name]()
+    parts = {"agents": data["world"]["agents"][0], "lidar": data["sensors"]["lidar"],
+             "scenario": data}  # fmt: skip
+    for part, keys in VARIANT_CHANGES[name].items():
+        parts[part].update(copy.deepcopy(keys))
     data["name"] = f"crowd_crossing_{name}"
     return data
-
-
-VARIANTS = ("straight", "social_force", "social_force_reacts", "orca_reacts", "fast_small",
-            "walkers_35", "unicycle", "car", "beams_60", "control_10_hz", "encoders")  # fmt: skip
 
 
 def _run_chunk(scenario: Any, seeds: list[int]) -> list[dict]:

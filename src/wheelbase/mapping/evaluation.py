@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from wheelbase.datasets.scans import stamps_advance
 from wheelbase.errors import InputError
 from wheelbase.geometry import relative_pose, wrap_angle
 from wheelbase.planning import OccupancyGrid
@@ -79,8 +80,6 @@ def relation_pairs(
     j = np.searchsorted(along, along + min_distance)
     keep = j < len(along)
     local = np.column_stack([np.flatnonzero(keep), j[keep]])
-    from wheelbase.datasets.scans import stamps_advance
-
     timed = stamps_advance(t)
     loops = []
     for k in range(len(t)):
