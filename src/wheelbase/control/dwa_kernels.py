@@ -29,9 +29,9 @@ from wheelbase.control.obstacle_critics import (
     PerceptionArrays,
     costmap_cost_at,
     costmap_costs,
-    disk_reach,
     track_cost_at,
     track_costs,
+    track_terms,
 )
 from wheelbase.geometry import wrap_angle
 from wheelbase.geometry_numba import wrap_angle_scalar
@@ -182,7 +182,7 @@ def dwa_kernel(
     margin = math.sqrt(2.0) * res + map_relief
     inv_res = 1.0 / res
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
-    reach = disk_reach(disks)
+    terms = track_terms(tracks, disks, dynamic_inflation)
     hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(samples.shape[0]):
         v, w = samples[i, 0], samples[i, 1]
@@ -218,7 +218,7 @@ def dwa_kernel(
                 hit = hit or bad
             if has_tracks:
                 soft, bad = track_cost_at(x, y, c, s, j, tracks, relief, disks, dynamic_inflation,
-                                          steps, reach, order, counts)  # fmt: skip
+                                          steps, terms, order, counts)  # fmt: skip
                 soft_dyn += soft
                 hit = hit or bad
             if hit and first == steps:
@@ -226,7 +226,7 @@ def dwa_kernel(
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for j in range(steps, tracks.shape[0]):
                 soft, bad = track_cost_at(x, y, c, s, j, tracks, relief, disks, dynamic_inflation,
-                                          steps, reach, order, counts)  # fmt: skip
+                                          steps, terms, order, counts)  # fmt: skip
                 soft_dyn += hold_weight * soft
                 hit = hit or bad
         # the forward point, never past the section's end (it would pull the end short of it)

@@ -17,8 +17,8 @@ from wheelbase.control.footprint_field import clearance_at
 from wheelbase.control.obstacle_critics import (
     HOLD_STEP,
     costmap_cost_at,
-    disk_reach,
     track_cost_at,
+    track_terms,
 )
 
 __all__ = ["NORMAL_TABLE", "SERIAL_SAMPLE_STEPS", "mppi_kernel", "mppi_work", "run_kernel"]
@@ -119,8 +119,16 @@ def _normal_pair(seed, call, sample, step, table):
 
 @numba.njit(cache=True, inline="always")
 def _wrap_scalar(a):
-    w = math.atan2(math.sin(a), math.cos(a))
-    return math.pi if w <= -math.pi else w
+    """a [rad] wrapped into (−π, π] by whole turns (a difference of two wrapped angles is
+    one turn away at most: cheaper than atan2(sin a, cos a), which it equals to rounding)."""
+    if not abs(a) < 16.0:  # far out (or not finite): no loop of turns
+        w = math.atan2(math.sin(a), math.cos(a))
+        return math.pi if w <= -math.pi else w
+    while a > math.pi:
+        a -= 2.0 * math.pi
+    while a <= -math.pi:
+        a += 2.0 * math.pi
+    return a
 
 
 @numba.njit(cache=True, inline="always", fastmath=True)
@@ -170,7 +178,7 @@ def mppi_kernel(
     inflation, direction = w[10], info[4]
     has_costmap, has_tracks = cgeo[3] > 0.5, tracks.shape[1] > 0
     w_costmap, w_dynamic, dynamic_inflation = w[12] / steps, w[13] / steps, w[14]
-    reach = disk_reach(disks)
+    terms = track_terms(tracks, disks, dynamic_inflation)
     hold_weight = HOLD_STEP / dt  # a held check stands for HOLD_STEP / dt steps
     for i in numba.prange(n):
         x, y, th = pose[0], pose[1], pose[2]
@@ -248,7 +256,7 @@ def mppi_kernel(
                 collided = collided or hit
             if has_tracks:
                 soft, hit = track_cost_at(x, y, c, s, t, tracks, relief, disks, dynamic_inflation,
-                                          steps, reach, order, counts)  # fmt: skip
+                                          steps, terms, order, counts)  # fmt: skip
                 cost += w_dynamic * soft
                 collided = collided or hit
             if collided and first == steps:
@@ -266,7 +274,7 @@ def mppi_kernel(
         if has_tracks:  # the final pose held (obstacle_critics: a braking ICS test)
             for t in range(steps, tracks.shape[0]):
                 soft, hit = track_cost_at(x, y, c, s, t, tracks, relief, disks, dynamic_inflation,
-                                          steps, reach, order, counts)  # fmt: skip
+                                          steps, terms, order, counts)  # fmt: skip
                 cost += w_dynamic * hold_weight * soft
                 collided = collided or hit
         if goal_mode:

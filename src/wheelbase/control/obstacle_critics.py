@@ -124,6 +124,7 @@ __all__ = [
     "struck_step",
     "track_cost_at",
     "track_costs",
+    "track_terms",
 ]
 
 MAX_INFLATED, INSCRIBED, LETHAL, UNKNOWN = 252, 253, 254, 255
@@ -723,21 +724,35 @@ def costmap_cost_at(x, y, c, s, cost, near, geometry, polygon):
     return soft, hit
 
 
+@numba.njit(cache=True)
+def track_terms(table, disks, inflation):
+    """The pose-independent parts of :func:`track_cost_at`, once per call: for each row of the
+    prediction table and track, the squared distance [m²] beyond which the track can neither
+    touch nor cost ((reach + radius + κσ + r_dyn)², reach from :func:`disk_reach`) and the
+    weight :func:`certainty` of its soft cost. Shape (T + H, J, 2)."""
+    reach = disk_reach(disks)
+    terms = np.empty((table.shape[0], table.shape[1], 2))
+    for step in range(table.shape[0]):
+        for j in range(table.shape[1]):
+            far = reach + table[step, j, 2] + table[step, j, 3] + inflation
+            terms[step, j, 0] = far * far
+            terms[step, j, 1] = certainty(reach + table[step, j, 2] + inflation, table[step, j, 3])
+    return terms
+
+
 @numba.njit(cache=True, inline="always")
-def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach, order, counts):
+def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, terms, order, counts):
     """Soft cost Σ_j gap² [m²] and contact of one pose at rollout step ``step`` against the
     predicted tracks (module docstring); a step past the rollout's is a check of the held final
-    pose. ``reach`` [m] bounds the disks' extent from the pose (:func:`disk_reach`): a track
-    farther than reach + its radius + κσ + r_dyn can neither touch nor cost, and is skipped;
-    only the ``counts[step]`` first tracks of ``order[step]`` are tested at all
-    (:func:`reachable_tracks`)."""
+    pose. ``terms`` are the call's :func:`track_terms`: a track farther than its bound there
+    can neither touch nor cost, and is skipped; only the ``counts[step]`` first tracks of
+    ``order[step]`` are tested at all (:func:`reachable_tracks`)."""
     total = 0.0
     hit = False
     for slot in range(counts[step]):
         j = order[step, slot]
         mx, my = table[step, j, 0], table[step, j, 1]
-        far = reach + table[step, j, 2] + table[step, j, 3] + inflation
-        if (x - mx) * (x - mx) + (y - my) * (y - my) >= far * far:
+        if (x - mx) * (x - mx) + (y - my) * (y - my) >= terms[step, j, 0]:
             continue
         least = 1.0e300
         for k in range(disks.shape[0]):
@@ -753,7 +768,7 @@ def track_cost_at(x, y, c, s, step, table, relief, disks, inflation, held, reach
         if least < zone:
             # r_dyn at contact whatever σ, and the depth of the overlap on top inside it
             gap = inflation * (zone - max(least, 0.0)) / zone + max(-least, 0.0)
-            total += certainty(reach + table[step, j, 2] + inflation, spread) * gap * gap
+            total += terms[step, j, 1] * gap * gap
     return total, hit
 
 
