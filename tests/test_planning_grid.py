@@ -334,3 +334,18 @@ def test_with_origin_moves_the_cells_and_shares_the_derived_maps():
     local = np.array([[1.05, 0.65], [0.25, 0.25]])
     shifted = local + np.array([4.5e9, -2.0])
     np.testing.assert_array_equal(moved.is_occupied(local), grid.is_occupied(shifted))
+
+
+def test_with_origin_shares_the_derived_maps_whichever_computes_them_first():
+    # HybridAStar moves its grid before either copy has a distance field: the planner's
+    # moved copy and the caller's grid computed the same transform twice (a replan's largest
+    # cost after the search in crowd_crossing)
+    occ = np.zeros((20, 30), bool)
+    occ[5:8, 10:12] = True
+    grid = OccupancyGrid.from_array(occ, 0.1, origin=(3.0, -2.0))
+    moved = grid.with_origin((0.0, 0.0)).with_origin((1.0, 1.0))
+    field, prefix = moved.distance_field, moved.occupancy_prefix
+    assert grid.distance_field is field and grid.occupancy_prefix is prefix
+    fresh = OccupancyGrid.from_array(occ, 0.1)
+    np.testing.assert_array_equal(field, fresh.distance_field)
+    np.testing.assert_array_equal(prefix, fresh.occupancy_prefix)

@@ -234,6 +234,9 @@ class OccupancyGrid(FootprintChecks):
         ``inf`` everywhere when the map has no occupied cell. The map border is not an
         obstacle here (leaving the map is checked separately).
         """
+        source = self.__dict__.get("_same_cells")
+        if source is not None:  # a moved copy (with_origin): the source's field serves
+            return source.distance_field
         if not self.occupied.any():
             out = np.full(self.shape, np.inf)
         else:
@@ -246,6 +249,9 @@ class OccupancyGrid(FootprintChecks):
         """Per-row prefix counts of occupied cells, shape ``(rows, cols + 1)`` (int32): the
         number of occupied cells in row ``i`` and columns ``j0..j1`` is
         ``prefix[i, j1 + 1] − prefix[i, j0]``."""
+        source = self.__dict__.get("_same_cells")
+        if source is not None:
+            return source.occupancy_prefix
         out = np.zeros((self.shape[0], self.shape[1] + 1), np.int32)
         np.cumsum(self.occupied, axis=1, out=out[:, 1:])
         out.setflags(write=False)
@@ -277,7 +283,7 @@ class OccupancyGrid(FootprintChecks):
 
     def with_origin(self, origin: ArrayLike) -> OccupancyGrid:
         """The same cells placed at another origin; the derived maps (distance field, prefix
-        counts) are shared, not recomputed.
+        counts) are shared, not recomputed, whichever of the two computes them first.
 
         Planners work in the grid's own frame (``grid.with_origin((0, 0))``): far from the
         world origin (UTM-like coordinates, 4.5e9 m) absolute float64 keeps only micrometres.
@@ -292,9 +298,7 @@ class OccupancyGrid(FootprintChecks):
         OccupancyGrid
         """
         moved = OccupancyGrid(self.occupied, self.resolution, origin, self.unknown)
-        for name in ("distance_field", "occupancy_prefix"):
-            if name in self.__dict__:  # computed already (cached_property)
-                moved.__dict__[name] = self.__dict__[name]
+        moved.__dict__["_same_cells"] = self.__dict__.get("_same_cells", self)
         return moved
 
     def inflate(self, radius: float) -> OccupancyGrid:
