@@ -371,3 +371,28 @@ def test_a_spin_recovery_stops_before_a_corner_swings_into_a_box():
     assert nav.status == "blocked" and nav.recoveries == 1
     # never turned into the box (a square turned by 90 degrees is clear again: every pose)
     assert not grid.in_collision(FOOTPRINT, np.array(poses)).any()
+
+
+def test_the_believed_grid_clears_passing_tracks_then_marks_standing_ones_cell_by_cell():
+    # the compiled painter against the rule written out: a cell changes when its centre lies
+    # within radius + one cell of a track; passing (fast or tentative) tracks clear, then the
+    # standing confirmed ones mark (a standing disc wins where the two overlap)
+    rng = np.random.default_rng(7)
+    cost = np.where(rng.random((50, 60)) < 0.2, 254, 0).astype(np.uint8)
+    origin = (-1.3, 0.7)
+    position = np.column_stack([rng.uniform(-2.0, 5.5, 12), rng.uniform(0.0, 6.0, 12)])
+    velocity = np.zeros((12, 2))
+    velocity[:5, 0] = 1.0  # passing: faster than moving_speed
+    confirmed = np.ones(12, bool)
+    confirmed[5:7] = False  # passing: tentative
+    radius = rng.uniform(0.05, 0.6, 12)
+    view = View(Costmap(cost, origin=origin), TrackerTracks(position, velocity, radius, confirmed))
+    grid = believed_grid(view, 0.2)
+    rows, cols = np.mgrid[0:50, 0:60]
+    cx, cy = origin[0] + (cols + 0.5) * RES, origin[1] + (rows + 0.5) * RES
+    expected = cost >= 254
+    for first, last, value in ((0, 7, False), (7, 12, True)):
+        for k in range(first, last):
+            inside = np.hypot(cx - position[k, 0], cy - position[k, 1]) <= radius[k] + RES
+            expected[inside] = value
+    np.testing.assert_array_equal(grid.occupied, expected)

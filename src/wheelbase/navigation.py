@@ -42,6 +42,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numba
 import numpy as np
 
 from wheelbase._validate import nonnegative, positive
@@ -186,11 +187,14 @@ def believed_grid(view: Any, moving_speed: float) -> Any:
         passing = moving | ~confirmed
         if passing.any() or standing.any():
             lethal = lethal.copy()
-            for which, value in ((passing, False), (standing, True)):
-                for centre, radius in zip(
-                    tracks.position[which], tracks.radius[which], strict=True
-                ):
-                    _paint_disc(lethal, costmap, centre, radius + costmap.resolution, value)
+            # the passing discs are cleared first, then the standing ones marked
+            which = np.concatenate([np.flatnonzero(passing), np.flatnonzero(standing)])
+            centres = np.ascontiguousarray(tracks.position[which], dtype=np.float64)
+            reaches = np.asarray(tracks.radius, dtype=np.float64)[which] + costmap.resolution
+            values = np.arange(len(which)) >= np.count_nonzero(passing)
+            x0, y0 = costmap.origin
+            _paint_discs(lethal, float(x0), float(y0), float(costmap.resolution), centres,
+                         reaches, values)  # fmt: skip
     return OccupancyGrid(lethal, costmap.resolution, costmap.origin)
 
 
@@ -203,20 +207,21 @@ def _select(tracks: Any, keep: np.ndarray) -> Any:
     )
 
 
-def _paint_disc(cells: np.ndarray, costmap: Any, centre: Any, reach: float, value: bool) -> None:
-    """Set the cells whose centres lie within ``reach`` [m] of ``centre`` to ``value``."""
-    res = costmap.resolution
-    x0, y0 = costmap.origin
-    x, y = float(centre[0]), float(centre[1])
+@numba.njit(cache=True)
+def _paint_discs(cells, x0, y0, res, centres, reaches, values):
+    """Set, disc after disc, the cells whose centres lie within ``reaches[k]`` [m] of
+    ``centres[k]`` to ``values[k]`` (``cells`` boolean (rows, cols), lower-left corner of cell
+    (0, 0) at (x0, y0) [m], cells ``res`` [m])."""
     rows, cols = cells.shape
-    c0, c1 = max(int((x - reach - x0) / res), 0), min(int((x + reach - x0) / res) + 1, cols)
-    r0, r1 = max(int((y - reach - y0) / res), 0), min(int((y + reach - y0) / res) + 1, rows)
-    if c0 >= c1 or r0 >= r1:
-        return
-    cx = x0 + (np.arange(c0, c1) + 0.5) * res
-    cy = y0 + (np.arange(r0, r1) + 0.5) * res
-    near = np.hypot(cx[None, :] - x, cy[:, None] - y) <= reach
-    cells[r0:r1, c0:c1][near] = value
+    for k in range(centres.shape[0]):
+        x, y, reach = centres[k, 0], centres[k, 1], reaches[k]
+        c0, c1 = max(int((x - reach - x0) / res), 0), min(int((x + reach - x0) / res) + 1, cols)
+        r0, r1 = max(int((y - reach - y0) / res), 0), min(int((y + reach - y0) / res) + 1, rows)
+        for row in range(r0, r1):
+            cy = y0 + (row + 0.5) * res
+            for col in range(c0, c1):
+                if math.hypot(x0 + (col + 0.5) * res - x, cy - y) <= reach:
+                    cells[row, col] = values[k]
 
 
 @dataclass(frozen=True)

@@ -68,6 +68,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -87,6 +88,33 @@ _TRUSTED_ROOM = 0.5  # room the beams leave, in the other side's lengths, below 
 #                      a side takes the middle of it rather than a square's length
 _CLOSENESS_FLOOR = 0.01  # m: d₀ of the closeness criterion (Zhang et al. 2017)
 _HEADINGS = np.deg2rad(np.arange(0.0, 90.0, 1.0))  # the L-shape search's headings
+_AXES = np.stack([np.cos(_HEADINGS), np.sin(_HEADINGS)], -1)  # e₁ per heading
+
+
+@numba.njit(cache=True)
+def _heading_fit(points, axes, floor):
+    """The L-shape search of step 6 (compiled: a walker's cluster is searched every scan and
+    rejected): the heading index whose rectangle has the greatest closeness Σ 1/max(d, d₀)
+    (the first of equal ones) and its RMS misfit √mean(d²) [m], d = min(d₁, d₂) of each
+    return to the nearer edge along e₁ and along e₂."""
+    n, headings = points.shape[0], axes.shape[0]
+    along = np.empty(n)
+    across = np.empty(n)
+    best, best_closeness, best_misfit = 0, -1.0, 0.0
+    for h in range(headings):
+        ex, ey = axes[h, 0], axes[h, 1]
+        for i in range(n):
+            along[i] = points[i, 0] * ex + points[i, 1] * ey
+            across[i] = points[i, 1] * ex - points[i, 0] * ey
+        a0, a1, b0, b1 = along.min(), along.max(), across.min(), across.max()
+        closeness, squares = 0.0, 0.0
+        for i in range(n):
+            d = min(a1 - along[i], along[i] - a0, b1 - across[i], across[i] - b0)
+            closeness += 1.0 / max(d, floor)
+            squares += d * d
+        if closeness > best_closeness:
+            best, best_closeness, best_misfit = h, closeness, math.sqrt(squares / n)
+    return best, best_misfit
 
 
 @dataclass(frozen=True, eq=False)
@@ -283,19 +311,13 @@ def _rectangle(
     ``occluded`` cluster's faces may go on behind its ends (step 6 of the module docstring);
     None when its RMS misfit is not below ``accept`` [m] (the sides are not worked out then:
     a walker's cluster is fitted each scan, and rejected)."""
-    axis = np.stack([np.cos(_HEADINGS), np.sin(_HEADINGS)], -1)  # e₁ per heading
-    along = points @ axis.T  # (n, H)
-    across = points @ np.stack([-axis[:, 1], axis[:, 0]], -1).T
-    d1 = np.minimum(along.max(0) - along, along - along.min(0))
-    d2 = np.minimum(across.max(0) - across, across - across.min(0))
-    closeness = (1.0 / np.maximum(np.minimum(d1, d2), _CLOSENESS_FLOOR)).sum(0)
-    best = int(np.argmax(closeness))
-    frame = np.array([axis[best], [-axis[best, 1], axis[best, 0]]])  # rows e₁, e₂
-    coords = points @ frame.T
-    low, high = coords.min(0), coords.max(0)
-    misfit = float(np.sqrt(np.mean(np.minimum(d1[:, best], d2[:, best]) ** 2)))
+    best, misfit = _heading_fit(np.ascontiguousarray(points), _AXES, _CLOSENESS_FLOOR)
     if not misfit < accept:
         return None
+    frame = np.array([_AXES[best], [-_AXES[best, 1], _AXES[best, 0]]])  # rows e₁, e₂
+    coords = points @ frame.T
+    low, high = coords.min(0), coords.max(0)
+    d1, d2 = np.minimum(high - coords, coords - low).T  # to the nearer edge along e₁, e₂
     # how far each face may go on past the chain's end, on each axis and side: up to where
     # the next beam, which missed, would have met the face's line
     room = np.zeros((2, 2))  # [axis, side (0: low, 1: high)]
@@ -303,7 +325,7 @@ def _rectangle(
     # which face each return lies on: the nearer of the edges (Zhang's d₁, d₂ at the best
     # heading); an end's face is the one most of the returns next to it lie on (the end
     # itself is extreme along both axes at a corner of the chain)
-    on_first = d2[:, best] < d1[:, best]  # on a face along e₁
+    on_first = d2 < d1  # on a face along e₁
     run = max(_END_STEP, points.shape[0] // 5)
     for end, near, turn in ((0, slice(1, 1 + run), -spacing), (-1, slice(-1 - run, -1), spacing)):
         k = 0 if 2 * np.count_nonzero(on_first[near]) >= on_first[near].size else 1
