@@ -301,19 +301,34 @@ def predict_tracks(
     >>> mean[1, 0].tolist(), round(float(sigma[1, 0]), 3)
     ([3.0, 0.0], 0.52)
     """
-    tau = np.asarray(times, dtype=np.float64)[:, None]  # (T, 1)
-    mean = position[None] + tau[..., None] * velocity[None]
-    pp, pv, vv = covariance[:, :2, :2], covariance[:, :2, 2:], covariance[:, 2:, 2:]
-    cross = pv + np.swapaxes(pv, -1, -2)
-    cov = (
-        pp[None]
-        + tau[..., None, None] * cross[None]
-        + (tau**2)[..., None, None] * vv[None]
-        + (acceleration_noise * tau**3 / 3.0)[..., None, None] * np.eye(2)
-    )  # (T, J, 2, 2)
-    a, b, d = cov[..., 0, 0], 0.5 * (cov[..., 0, 1] + cov[..., 1, 0]), cov[..., 1, 1]
-    top = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b * b, 0.0))
-    return mean, np.sqrt(np.maximum(top, 0.0))
+    tau = np.ascontiguousarray(times, dtype=np.float64).reshape(-1)
+    position = np.ascontiguousarray(position, dtype=np.float64)
+    mean = np.empty((tau.shape[0], position.shape[0], 2))
+    sigma = np.empty((tau.shape[0], position.shape[0]))
+    _predict(position, np.ascontiguousarray(velocity, dtype=np.float64),
+             np.ascontiguousarray(covariance, dtype=np.float64), tau,
+             float(acceleration_noise), mean, sigma)  # fmt: skip
+    return mean, sigma
+
+
+@numba.njit(cache=True)
+def _predict(position, velocity, covariance, tau, noise, mean, sigma):
+    """:func:`predict_tracks` into ``mean`` (T, J, 2) and ``sigma`` (T, J) (compiled: it runs
+    every control call over the horizon's 60-odd times and every track)."""
+    for t in range(tau.shape[0]):
+        dt = tau[t]
+        grown = noise * dt * dt * dt / 3.0
+        for j in range(position.shape[0]):
+            p = covariance[j]
+            mean[t, j, 0] = position[j, 0] + dt * velocity[j, 0]
+            mean[t, j, 1] = position[j, 1] + dt * velocity[j, 1]
+            a = p[0, 0] + dt * (p[0, 2] + p[0, 2]) + dt * dt * p[2, 2] + grown
+            d = p[1, 1] + dt * (p[1, 3] + p[1, 3]) + dt * dt * p[3, 3] + grown
+            upper = p[0, 1] + dt * (p[0, 3] + p[1, 2]) + dt * dt * p[2, 3]
+            lower = p[1, 0] + dt * (p[1, 2] + p[0, 3]) + dt * dt * p[3, 2]
+            b = 0.5 * (upper + lower)
+            top = 0.5 * (a + d) + math.sqrt(max(0.25 * (a - d) ** 2 + b * b, 0.0))
+            sigma[t, j] = math.sqrt(max(top, 0.0))
 
 
 # --------------------------------------------------------------------------- per-call arrays
