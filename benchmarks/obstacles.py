@@ -11,8 +11,9 @@ its own walkers, boxes and sensor noise):
     contact is the robot's fault when it moved towards the walker faster than 5 cm/s),
     ``timeouts``, ``blocked``, the mean time to goal of the arrivals, the least distance to a
     walker (median over seeds), ``discomfort_s`` (mean time within 0.2 m of a walker,
-    CrowdNav's measure) and the tracks' position and velocity RMSE. Targets: >= 99 % arrived
-    and 0 at fault with 20 walkers, >= 97 % and 0 with 50.
+    CrowdNav's measure), the tracks' position and velocity RMSE, the first 20 seeds that did
+    not arrive and every seed with a contact at fault (``at_fault_seeds``, to replay). Targets:
+    >= 99 % arrived and 0 at fault with 20 walkers, >= 97 % and 0 with 50.
 ``irsim``
     ir-sim 2.12's own RVO robot (``pip install -e ".[bench]"``) on the same room, walkers and
     seeds count (its own random placement: ir-sim draws them), 60 s at 0.1 s: arrived and
@@ -154,6 +155,7 @@ def summary(rows: list[dict]) -> dict:
         "replans": mean("replans"),
         "path_length_ratio": mean("path_length_ratio", arrived),
         "failed_seeds": [row["seed"] for row in rows if row["status"] != "arrived"][:20],
+        "at_fault_seeds": [row["seed"] for row in rows if row.get("collision_at_fault")],
     }
 
 
