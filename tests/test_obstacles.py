@@ -173,6 +173,28 @@ def test_fleet_robots_that_start_overlapping_are_refused():
         wheelbase.run(fleet)
 
 
+def test_crowd_worlds_in_lockstep_equal_their_runs_alone():
+    """Seeds stepped together (each its own walkers, tracker, costmap and MPPI) end exactly as
+    each alone: nothing of one world leaks into another (the crowd benchmark counts on it)."""
+    from wheelbase.runner import run_seeds
+
+    scenario = {
+        **BOX_ROUTE,
+        "map": "room20",
+        "start": [2.0, 2.0, 45.0],
+        "goal": [18.0, 18.0, 45.0],
+        "world": {"agents": [{"count": 12, "radius": 0.3, "speed": 0.5,
+                              "region": [4, 4, 16, 16], "behaviour": "wander"}]},
+        "duration": 10,
+    }  # fmt: skip
+    rows = run_seeds(scenario, [5, 2, 9])
+    for row in rows:
+        alone = wheelbase.run({**scenario, "seed": row["seed"]}).metrics
+        for key in ("status", "duration_s", "min_agent_distance_m", "path_length_m", "replans"):
+            assert row[key] == alone[key], (row["seed"], key)
+    assert len({row["min_agent_distance_m"] for row in rows}) == 3  # three different crowds
+
+
 def test_path_boxes_fall_on_the_plan_and_differ_by_seed():
     scenario = {**BOX_ROUTE, "world": {"path_boxes": {"count": [2, 2], "size": [0.4, 0.6]}}}
     boxes = []
